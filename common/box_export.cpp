@@ -1,0 +1,91 @@
+#include "common/box_export.h"
+
+#include <charconv>
+
+#include "common/atomic_file.h"
+
+namespace vobb {
+namespace {
+
+// Corner i = c + sum_k s_k h_k a_k with s_k = +1 where bit k of i is set. The quads list
+// corners counter-clockwise seen from outside for a right-handed frame.
+constexpr int kQuads[6][4] = {{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4},
+                              {2, 6, 7, 3}, {0, 2, 3, 1}, {4, 5, 7, 6}};
+
+void put(std::string* s, double v) {
+  char buf[32];
+  auto res = std::to_chars(buf, buf + sizeof buf, v);
+  s->append(buf, res.ptr);
+}
+
+std::string extension_of(const std::string& path) {
+  const size_t dot = path.find_last_of('.');
+  if (dot == std::string::npos || path.find('/', dot) != std::string::npos) return "";
+  std::string e = path.substr(dot + 1);
+  for (char& c : e) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return e;
+}
+
+}  // namespace
+
+Status export_boxes(const std::vector<Obb>& boxes, const std::vector<std::string>& names,
+                    const std::string& path) {
+  const std::string ext = extension_of(path);
+  std::string s;
+  if (ext == "obj") {
+    s = "# vobb boxes: " + std::to_string(boxes.size()) + "\n";
+    for (size_t b = 0; b < boxes.size(); ++b) {
+      s += "o " + (b < names.size() ? names[b] : "box_" + std::to_string(b)) + "\n";
+      for (const Vec3& p : corners(boxes[b])) {
+        s += "v ";
+        put(&s, p[0]);
+        s += ' ';
+        put(&s, p[1]);
+        s += ' ';
+        put(&s, p[2]);
+        s += '\n';
+      }
+      for (const auto& q : kQuads) {
+        s += "f";
+        for (int c : q) s += " " + std::to_string(8 * b + c + 1);
+        s += '\n';
+      }
+    }
+  } else if (ext == "ply") {
+    s = "ply\nformat ascii 1.0\ncomment vobb boxes\nelement vertex " + std::to_string(8 * boxes.size()) +
+        "\nproperty double x\nproperty double y\nproperty double z\nelement face " +
+        std::to_string(6 * boxes.size()) + "\nproperty list uchar int vertex_indices\nend_header\n";
+    for (const Obb& box : boxes)
+      for (const Vec3& p : corners(box)) {
+        put(&s, p[0]);
+        s += ' ';
+        put(&s, p[1]);
+        s += ' ';
+        put(&s, p[2]);
+        s += '\n';
+      }
+    for (size_t b = 0; b < boxes.size(); ++b)
+      for (const auto& q : kQuads) {
+        s += "4";
+        for (int c : q) s += " " + std::to_string(8 * b + c);
+        s += '\n';
+      }
+  } else {
+    return Status::error(path + ": unknown box export format (use .obj or .ply)");
+  }
+  return write_file_atomic(path, s);
+}
+
+Status export_layer(const Tree& tree, int level, const std::string& path) {
+  if (level < 0 || level > tree.depth)
+    return Status::error("level " + std::to_string(level) + " is outside [0, " + std::to_string(tree.depth) + "]");
+  std::vector<Obb> boxes;
+  std::vector<std::string> names;
+  for (int32_t id : layer(tree, level)) {
+    boxes.push_back(tree.nodes[id].box);
+    names.push_back("node_" + std::to_string(id));
+  }
+  return export_boxes(boxes, names, path);
+}
+
+}  // namespace vobb

@@ -1,0 +1,42 @@
+// vobb::AabbTree — a bounding-volume hierarchy of axis-aligned boxes over primitives
+// (usually the faces of a Mesh).
+//
+// Built once by median splits of the primitive centroids along the longest axis; queried for
+// every primitive whose box overlaps a query box (closed intervals: touching counts).
+// The tree stores primitive indices only; the caller keeps the primitives.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "common/mesh.h"
+
+namespace vobb {
+
+class AabbTree {
+ public:
+  AabbTree() = default;
+  // One box per primitive; primitive i is reported as index i.
+  explicit AabbTree(std::vector<Aabb> boxes);
+  static AabbTree over_faces(const Mesh& mesh);
+
+  // Calls visit(i) for every primitive i whose box overlaps `query`, in a fixed order.
+  void for_each_overlap(const Aabb& query, const std::function<void(int32_t)>& visit) const;
+  const Aabb& primitive_bounds(int32_t i) const { return boxes_[i]; }
+  size_t size() const { return boxes_.size(); }
+
+ private:
+  struct Node {
+    Aabb bounds;
+    int32_t first;  // leaf: offset into order_; inner: index of left child (right = left+1)
+    int32_t count;  // > 0 for a leaf
+  };
+  void build(int32_t node, int32_t begin, int32_t end, const std::vector<Vec3>& centroids);
+
+  std::vector<Aabb> boxes_;
+  std::vector<int32_t> order_;
+  std::vector<Node> nodes_;
+};
+
+}  // namespace vobb

@@ -1,0 +1,126 @@
+#include "common/exact_predicates.h"
+
+#include <mpfr.h>
+
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <vector>
+
+namespace vobb {
+namespace {
+
+constexpr double kEps = std::numeric_limits<double>::epsilon() / 2;  // unit round-off 2^-53
+// Static error bounds for the filtered determinants, as derived by Shewchuk (1997) for the
+// same evaluation order: the floating result is off by at most bound * permanent.
+constexpr double kOrient2dBound = (3.0 + 16.0 * kEps) * kEps;
+constexpr double kOrient3dBound = (7.0 + 56.0 * kEps) * kEps;
+
+int sign_of(const Rational& q) { return sgn(q); }
+
+int orient3d_exact(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+  Rational u[3], v[3], w[3];
+  for (int i = 0; i < 3; ++i) {
+    Rational ai(a[i]);
+    u[i] = Rational(b[i]) - ai;
+    v[i] = Rational(c[i]) - ai;
+    w[i] = Rational(d[i]) - ai;
+  }
+  Rational det = u[0] * (v[1] * w[2] - v[2] * w[1]) + u[1] * (v[2] * w[0] - v[0] * w[2]) +
+                 u[2] * (v[0] * w[1] - v[1] * w[0]);
+  return sign_of(det);
+}
+
+int orient2d_exact(const Vec3& a, const Vec3& b, const Vec3& c, int i, int j) {
+  Rational ax(a[i]), ay(a[j]);
+  Rational det = (Rational(b[i]) - ax) * (Rational(c[j]) - ay) -
+                 (Rational(b[j]) - ay) * (Rational(c[i]) - ax);
+  return sign_of(det);
+}
+
+}  // namespace
+
+int orient3d(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+  const double ux = b[0] - a[0], uy = b[1] - a[1], uz = b[2] - a[2];
+  const double vx = c[0] - a[0], vy = c[1] - a[1], vz = c[2] - a[2];
+  const double wx = d[0] - a[0], wy = d[1] - a[1], wz = d[2] - a[2];
+  const double m0 = vy * wz - vz * wy, m1 = vz * wx - vx * wz, m2 = vx * wy - vy * wx;
+  const double det = ux * m0 + uy * m1 + uz * m2;
+  const double perm = std::abs(ux) * (std::abs(vy * wz) + std::abs(vz * wy)) +
+                      std::abs(uy) * (std::abs(vz * wx) + std::abs(vx * wz)) +
+                      std::abs(uz) * (std::abs(vx * wy) + std::abs(vy * wx));
+  const double bound = kOrient3dBound * perm;
+  if (det > bound) return 1;
+  if (-det > bound) return -1;
+  return orient3d_exact(a, b, c, d);
+}
+
+int orient2d(const Vec3& a, const Vec3& b, const Vec3& c, int i, int j) {
+  const double l = (b[i] - a[i]) * (c[j] - a[j]);
+  const double r = (b[j] - a[j]) * (c[i] - a[i]);
+  const double det = l - r;
+  const double bound = kOrient2dBound * (std::abs(l) + std::abs(r));
+  if (det > bound) return 1;
+  if (-det > bound) return -1;
+  return orient2d_exact(a, b, c, i, j);
+}
+
+bool collinear(const Vec3& a, const Vec3& b, const Vec3& c) {
+  // Collinear in 3D exactly when every coordinate-plane projection is collinear.
+  return orient2d(a, b, c, 0, 1) == 0 && orient2d(a, b, c, 1, 2) == 0 &&
+         orient2d(a, b, c, 2, 0) == 0;
+}
+
+namespace {
+
+Rational triple(const Vec3& a, const Vec3& b, const Vec3& c) {
+  Rational ax(a[0]), ay(a[1]), az(a[2]);
+  Rational bx(b[0]), by(b[1]), bz(b[2]);
+  Rational cx(c[0]), cy(c[1]), cz(c[2]);
+  return ax * (by * cz - bz * cy) + ay * (bz * cx - bx * cz) + az * (bx * cy - by * cx);
+}
+
+// Pairwise summation: keeps operand sizes balanced, which matters for long exact sums.
+Rational pairwise_sum(std::vector<Rational>& terms) {
+  if (terms.empty()) return Rational(0);
+  size_t n = terms.size();
+  while (n > 1) {
+    size_t half = (n + 1) / 2;
+    for (size_t i = 0; i + half < n; ++i) terms[i] += terms[i + half];
+    n = half;
+  }
+  return terms[0];
+}
+
+}  // namespace
+
+Rational exact_signed_volume(const Mesh& mesh, const std::vector<int32_t>& faces) {
+  std::vector<Rational> terms;
+  terms.reserve(faces.size());
+  for (int32_t f : faces) terms.push_back(triple(mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2)));
+  Rational six_v = pairwise_sum(terms);
+  return six_v / 6;
+}
+
+Rational exact_signed_volume(const Mesh& mesh) {
+  std::vector<int32_t> all(mesh.faces.size());
+  for (size_t i = 0; i < all.size(); ++i) all[i] = static_cast<int32_t>(i);
+  return exact_signed_volume(mesh, all);
+}
+
+double to_double_nearest(const Rational& q) {
+  mpfr_t x;
+  mpfr_init2(x, 53);
+  mpfr_set_q(x, q.get_mpq_t(), MPFR_RNDN);
+  double d = mpfr_get_d(x, MPFR_RNDN);
+  mpfr_clear(x);
+  return d;
+}
+
+std::string format_nearest(const Rational& q) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.17g", to_double_nearest(q));
+  return buf;
+}
+
+}  // namespace vobb

@@ -1,0 +1,42 @@
+// Exact geometric predicates on double inputs, and exact rational helpers.
+//
+// Every input double is an exact rational; these functions decide signs of polynomials in
+// those rationals without error. A floating-point filter with a static error bound answers the
+// easy cases; the rest fall back to GMP rationals. Preconditions: all inputs finite.
+// This is the only exactness `common/` needs (solidity, volume, containment); the CGAL-based
+// solver lives in `exact/`.
+#pragma once
+
+#include <gmpxx.h>
+
+#include <string>
+
+#include "common/mesh.h"
+
+namespace vobb {
+
+using Rational = mpq_class;
+
+// Sign of det[b-a, c-a, d-a]: +1 when d lies on the side that the normal of the
+// counter-clockwise triangle (a, b, c) points to, -1 on the other side, 0 when coplanar.
+int orient3d(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d);
+
+// Sign of the 2D cross product (b-a) x (c-a), on coordinates (i, j) of the inputs:
+// +1 counter-clockwise, -1 clockwise, 0 collinear.
+int orient2d(const Vec3& a, const Vec3& b, const Vec3& c, int i, int j);
+
+// True when a, b, c are collinear (or coincide), exactly.
+bool collinear(const Vec3& a, const Vec3& b, const Vec3& c);
+
+// Exact signed volume enclosed by the faces (divergence theorem), positive for an outward
+// oriented closed mesh. Sums pairwise so that operands stay balanced.
+Rational exact_signed_volume(const Mesh& mesh);
+Rational exact_signed_volume(const Mesh& mesh, const std::vector<int32_t>& faces);
+
+// The double nearest to q (ties to even), as MPFR rounds it. mpq_get_d truncates instead.
+double to_double_nearest(const Rational& q);
+
+// "%.17g" of the correctly rounded double: the way every exact value is printed.
+std::string format_nearest(const Rational& q);
+
+}  // namespace vobb

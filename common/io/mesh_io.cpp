@@ -1,0 +1,738 @@
+#include "common/io/mesh_io.h"
+
+#include <sys/stat.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <sstream>
+#include <string_view>
+#include <unordered_map>
+
+#include "common/atomic_file.h"
+#include "vobb/config.h"
+
+namespace vobb {
+
+// Implemented in assimp_reader.cpp when the build has assimp.
+Status load_with_assimp(const std::string& path, const std::string& display, LoadedMesh* out);
+
+namespace {
+
+std::string basename_of(const std::string& path) {
+  const size_t slash = path.find_last_of('/');
+  return slash == std::string::npos ? path : path.substr(slash + 1);
+}
+
+std::string lower(std::string s) {
+  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+std::string extension_of(const std::string& path) {
+  const std::string base = basename_of(path);
+  const size_t dot = base.find_last_of('.');
+  return dot == std::string::npos ? std::string() : lower(base.substr(dot + 1));
+}
+
+// ---- small lexing helpers ----------------------------------------------------------------
+
+bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\v'; }
+
+void split_tokens(std::string_view line, std::vector<std::string_view>* out) {
+  out->clear();
+  size_t i = 0;
+  while (i < line.size()) {
+    while (i < line.size() && is_space(line[i])) ++i;
+    size_t j = i;
+    while (j < line.size() && !is_space(line[j])) ++j;
+    if (j > i) out->push_back(line.substr(i, j - i));
+    i = j;
+  }
+}
+
+bool parse_double(std::string_view tok, double* out) {
+  if (!tok.empty() && tok[0] == '+') tok.remove_prefix(1);
+  const char* end = tok.data() + tok.size();
+  auto res = std::from_chars(tok.data(), end, *out);
+  if (res.ec == std::errc::result_out_of_range) {
+    // Overflowing literals are infinite; the solidity check reports them.
+    *out = (!tok.empty() && tok[0] == '-') ? -std::numeric_limits<double>::infinity()
+                                          : std::numeric_limits<double>::infinity();
+    return res.ptr == end;
+  }
+  return res.ec == std::errc() && res.ptr == end;
+}
+
+bool parse_int(std::string_view tok, long long* out) {
+  if (!tok.empty() && tok[0] == '+') tok.remove_prefix(1);
+  const char* end = tok.data() + tok.size();
+  auto res = std::from_chars(tok.data(), end, *out);
+  return res.ec == std::errc() && res.ptr == end;
+}
+
+// Line cursor over the file text; numbers lines from 1.
+class Lines {
+ public:
+  explicit Lines(std::string_view text) : text_(text) {}
+  // Next line, with '#' comments removed when `strip_comments`. False at end of file.
+  bool next(std::string_view* line, bool strip_comments) {
+    if (pos_ >= text_.size()) return false;
+    size_t e = text_.find('\n', pos_);
+    if (e == std::string_view::npos) e = text_.size();
+    *line = text_.substr(pos_, e - pos_);
+    pos_ = e + 1;
+    ++number_;
+    if (strip_comments) {
+      const size_t h = line->find('#');
+      if (h != std::string_view::npos) *line = line->substr(0, h);
+    }
+    return true;
+  }
+  // Next line holding at least one token.
+  bool next_tokens(std::vector<std::string_view>* toks, bool strip_comments) {
+    std::string_view line;
+    while (next(&line, strip_comments)) {
+      split_tokens(line, toks);
+      if (!toks->empty()) return true;
+    }
+    return false;
+  }
+  size_t number() const { return number_; }
+  size_t offset() const { return pos_; }
+
+ private:
+  std::string_view text_;
+  size_t pos_ = 0;
+  size_t number_ = 0;
+};
+
+class Reader {
+ public:
+  Reader(std::string display, std::string_view text) : display_(std::move(display)), text_(text) {}
+  Status fail(const std::string& why) const { return Status::error(display_ + ": " + why); }
+  Status fail_at(size_t line, const std::string& why) const {
+    return Status::error(display_ + ":" + std::to_string(line) + ": " + why);
+  }
+  const std::string& display() const { return display_; }
+  std::string_view text() const { return text_; }
+
+  // Appends the polygon as a triangle fan, after range-checking its indices. Errors name
+  // the line, or for binary data (line 0) the face record.
+  Status add_polygon(const std::vector<long long>& idx, size_t line, size_t record,
+                     LoadedMesh* out) const {
+    auto err = [&](const std::string& why) {
+      return line ? fail_at(line, why) : fail("face " + std::to_string(record) + ": " + why);
+    };
+    const long long nv = static_cast<long long>(out->mesh.vertices.size());
+    for (long long i : idx)
+      if (i < 0 || i >= nv)
+        return err("vertex index " + std::to_string(i) + " out of range (" + std::to_string(nv) +
+                   " vertices)");
+    if (idx.size() < 3) return err("face with fewer than 3 vertices");
+    if (idx.size() > 3) ++out->polygons_split;
+    for (size_t k = 1; k + 1 < idx.size(); ++k)
+      out->mesh.faces.push_back({static_cast<int32_t>(idx[0]), static_cast<int32_t>(idx[k]),
+                                 static_cast<int32_t>(idx[k + 1])});
+    return Status::ok();
+  }
+
+ private:
+  std::string display_;
+  std::string_view text_;
+};
+
+// A declared count must fit in the bytes that are there: this refuses absurd headers
+// before any allocation. `min_bytes` is the least one record can take.
+bool count_fits(long long count, size_t min_bytes, size_t available) {
+  return count >= 0 && static_cast<unsigned long long>(count) <= available / min_bytes;
+}
+
+constexpr long long kMaxIndex = std::numeric_limits<int32_t>::max();
+
+// ---- OFF --------------------------------------------------------------------------------
+
+Status read_off(const Reader& r, LoadedMesh* out) {
+  Lines lines(r.text());
+  std::vector<std::string_view> t;
+  if (!lines.next_tokens(&t, true)) return r.fail("empty file");
+  std::string_view head = t[0];
+  // Header keywords: [ST][C][N][4][n]OFF; vobb reads the 3D ones.
+  if (head.size() < 3 || head.substr(head.size() - 3) != "OFF")
+    return r.fail_at(lines.number(), "not an OFF file (header '" + std::string(head.substr(0, 20)) + "')");
+  const std::string_view prefix = head.substr(0, head.size() - 3);
+  if (prefix.find('4') != std::string_view::npos || prefix.find('n') != std::string_view::npos)
+    return r.fail_at(lines.number(), "only 3D OFF is supported (header '" + std::string(head) + "')");
+  const bool has_normals = prefix.find('N') != std::string_view::npos;
+  (void)has_normals;
+  size_t first = 1;
+  if (t.size() > 1 && t[1] == "BINARY") return r.fail_at(lines.number(), "binary OFF is not supported");
+  if (t.size() == first) {
+    if (!lines.next_tokens(&t, true)) return r.fail("truncated: missing vertex and face counts");
+    first = 0;
+  }
+  if (t.size() - first < 2) return r.fail_at(lines.number(), "expected vertex and face counts");
+  long long nv, nf;
+  if (!parse_int(t[first], &nv) || !parse_int(t[first + 1], &nf) || nv < 0 || nf < 0)
+    return r.fail_at(lines.number(), "bad vertex or face count");
+  const size_t left = r.text().size() - std::min(r.text().size(), lines.offset());
+  if (!count_fits(nv, 6, left + 1) || nv > kMaxIndex)
+    return r.fail_at(lines.number(), "truncated: header promises " + std::to_string(nv) +
+                                         " vertices but only " + std::to_string(left) + " bytes follow");
+  if (!count_fits(nf, 8, left + 1))
+    return r.fail_at(lines.number(), "truncated: header promises " + std::to_string(nf) +
+                                         " faces but only " + std::to_string(left) + " bytes follow");
+  Mesh& m = out->mesh;
+  m.vertices.reserve(nv);
+  for (long long i = 0; i < nv; ++i) {
+    if (!lines.next_tokens(&t, true))
+      return r.fail("truncated: " + std::to_string(i) + " of " + std::to_string(nv) + " vertices");
+    if (t.size() < 3) return r.fail_at(lines.number(), "vertex needs 3 coordinates");
+    Vec3 p;
+    for (int k = 0; k < 3; ++k)
+      if (!parse_double(t[k], &p[k]))
+        return r.fail_at(lines.number(), "not a number: '" + std::string(t[k].substr(0, 32)) + "'");
+    m.vertices.push_back(p);
+  }
+  std::vector<long long> idx;
+  for (long long i = 0; i < nf; ++i) {
+    if (!lines.next_tokens(&t, true))
+      return r.fail("truncated: " + std::to_string(i) + " of " + std::to_string(nf) + " faces");
+    long long n;
+    if (!parse_int(t[0], &n) || n < 0) return r.fail_at(lines.number(), "bad face size '" + std::string(t[0].substr(0, 32)) + "'");
+    if (static_cast<long long>(t.size()) - 1 < n)
+      return r.fail_at(lines.number(), "face lists " + std::to_string(t.size() - 1) + " of " +
+                                           std::to_string(n) + " indices");
+    idx.resize(n);
+    for (long long k = 0; k < n; ++k)
+      if (!parse_int(t[k + 1], &idx[k]))
+        return r.fail_at(lines.number(), "bad vertex index '" + std::string(t[k + 1].substr(0, 32)) + "'");
+    Status s = r.add_polygon(idx, lines.number(), static_cast<size_t>(i), out);
+    if (!s) return s;
+  }
+  return Status::ok();
+}
+
+// ---- OBJ --------------------------------------------------------------------------------
+
+Status read_obj(const Reader& r, LoadedMesh* out) {
+  Lines lines(r.text());
+  std::vector<std::string_view> t;
+  std::vector<long long> idx;
+  Mesh& m = out->mesh;
+  // Faces may precede later vertices only through relative indices resolved at their line;
+  // absolute indices are range-checked once all vertices are known.
+  struct PendingFace {
+    std::vector<long long> idx;
+    size_t line;
+  };
+  std::vector<PendingFace> faces;
+  while (lines.next_tokens(&t, true)) {
+    if (t[0] == "v") {
+      if (t.size() < 4) return r.fail_at(lines.number(), "vertex needs 3 coordinates");
+      Vec3 p;
+      for (int k = 0; k < 3; ++k)
+        if (!parse_double(t[k + 1], &p[k]))
+          return r.fail_at(lines.number(), "not a number: '" + std::string(t[k + 1].substr(0, 32)) + "'");
+      m.vertices.push_back(p);
+    } else if (t[0] == "f") {
+      idx.clear();
+      for (size_t k = 1; k < t.size(); ++k) {
+        std::string_view v = t[k].substr(0, t[k].find('/'));
+        long long i;
+        if (!parse_int(v, &i) || i == 0)
+          return r.fail_at(lines.number(), "bad vertex index '" + std::string(t[k].substr(0, 32)) + "'");
+        // 1-based, negative counts back from the last vertex read so far.
+        idx.push_back(i > 0 ? i - 1 : static_cast<long long>(m.vertices.size()) + i);
+      }
+      faces.push_back({idx, lines.number()});
+    } else if (t[0] == "l" || t[0] == "p") {
+      return r.fail_at(lines.number(), "line and point elements are not part of a solid");
+    }
+    // vn, vt, g, o, s, usemtl, mtllib and the rest carry nothing vobb needs.
+  }
+  if (m.vertices.empty() && faces.empty()) return r.fail("empty file: no vertices or faces");
+  for (const PendingFace& f : faces) {
+    Status s = r.add_polygon(f.idx, f.line, 0, out);
+    if (!s) return s;
+  }
+  return Status::ok();
+}
+
+// ---- PLY --------------------------------------------------------------------------------
+
+enum class PlyType { kInt8, kUint8, kInt16, kUint16, kInt32, kUint32, kFloat32, kFloat64, kBad };
+
+PlyType ply_type(std::string_view s) {
+  if (s == "char" || s == "int8") return PlyType::kInt8;
+  if (s == "uchar" || s == "uint8") return PlyType::kUint8;
+  if (s == "short" || s == "int16") return PlyType::kInt16;
+  if (s == "ushort" || s == "uint16") return PlyType::kUint16;
+  if (s == "int" || s == "int32") return PlyType::kInt32;
+  if (s == "uint" || s == "uint32") return PlyType::kUint32;
+  if (s == "float" || s == "float32") return PlyType::kFloat32;
+  if (s == "double" || s == "float64") return PlyType::kFloat64;
+  return PlyType::kBad;
+}
+
+size_t ply_size(PlyType t) {
+  switch (t) {
+    case PlyType::kInt8: case PlyType::kUint8: return 1;
+    case PlyType::kInt16: case PlyType::kUint16: return 2;
+    case PlyType::kInt32: case PlyType::kUint32: case PlyType::kFloat32: return 4;
+    case PlyType::kFloat64: return 8;
+    default: return 0;
+  }
+}
+
+struct PlyProperty {
+  std::string name;
+  bool is_list = false;
+  PlyType count_type = PlyType::kBad, type = PlyType::kBad;
+};
+
+struct PlyElement {
+  std::string name;
+  long long count = 0;
+  std::vector<PlyProperty> props;
+};
+
+// Binary cursor with bounds checks; values converted exactly to double.
+class BinaryCursor {
+ public:
+  BinaryCursor(std::string_view data, bool big_endian) : d_(data), big_(big_endian) {}
+  bool read(PlyType t, double* out) {
+    const size_t n = ply_size(t);
+    if (pos_ + n > d_.size()) return false;
+    unsigned char b[8];
+    std::memcpy(b, d_.data() + pos_, n);
+    pos_ += n;
+    if (big_) std::reverse(b, b + n);
+    switch (t) {
+      case PlyType::kInt8: { int8_t v; std::memcpy(&v, b, 1); *out = v; break; }
+      case PlyType::kUint8: { uint8_t v; std::memcpy(&v, b, 1); *out = v; break; }
+      case PlyType::kInt16: { int16_t v; std::memcpy(&v, b, 2); *out = v; break; }
+      case PlyType::kUint16: { uint16_t v; std::memcpy(&v, b, 2); *out = v; break; }
+      case PlyType::kInt32: { int32_t v; std::memcpy(&v, b, 4); *out = v; break; }
+      case PlyType::kUint32: { uint32_t v; std::memcpy(&v, b, 4); *out = v; break; }
+      case PlyType::kFloat32: { float v; std::memcpy(&v, b, 4); *out = v; break; }
+      case PlyType::kFloat64: { double v; std::memcpy(&v, b, 8); *out = v; break; }
+      default: return false;
+    }
+    return true;
+  }
+  size_t remaining() const { return d_.size() - pos_; }
+
+ private:
+  std::string_view d_;
+  bool big_;
+  size_t pos_ = 0;
+};
+
+bool integral_value(double v, long long* out) {
+  if (!(v == std::floor(v)) || std::abs(v) > 9e15) return false;
+  *out = static_cast<long long>(v);
+  return true;
+}
+
+Status read_ply(const Reader& r, LoadedMesh* out) {
+  Lines lines(r.text());
+  std::vector<std::string_view> t;
+  if (!lines.next_tokens(&t, false) || t[0] != "ply") return r.fail("not a PLY file (no 'ply' magic)");
+  std::string format;
+  std::vector<PlyElement> elems;
+  bool ended = false;
+  while (lines.next_tokens(&t, false)) {
+    if (t[0] == "comment" || t[0] == "obj_info") continue;
+    if (t[0] == "format") {
+      if (t.size() < 2) return r.fail_at(lines.number(), "bad format line");
+      format = std::string(t[1]);
+      if (format != "ascii" && format != "binary_little_endian" && format != "binary_big_endian")
+        return r.fail_at(lines.number(), "unknown PLY format '" + format.substr(0, 32) + "'");
+    } else if (t[0] == "element") {
+      long long n;
+      if (t.size() < 3 || !parse_int(t[2], &n) || n < 0) return r.fail_at(lines.number(), "bad element line");
+      elems.push_back({std::string(t[1]), n, {}});
+    } else if (t[0] == "property") {
+      if (elems.empty()) return r.fail_at(lines.number(), "property before any element");
+      PlyProperty p;
+      if (t.size() >= 5 && t[1] == "list") {
+        p.is_list = true;
+        p.count_type = ply_type(t[2]);
+        p.type = ply_type(t[3]);
+        p.name = std::string(t[4]);
+        if (p.count_type == PlyType::kBad || p.type == PlyType::kBad || p.count_type == PlyType::kFloat32 ||
+            p.count_type == PlyType::kFloat64)
+          return r.fail_at(lines.number(), "bad list property types");
+      } else if (t.size() >= 3) {
+        p.type = ply_type(t[1]);
+        p.name = std::string(t[2]);
+        if (p.type == PlyType::kBad) return r.fail_at(lines.number(), "unknown property type '" + std::string(t[1].substr(0, 32)) + "'");
+      } else {
+        return r.fail_at(lines.number(), "bad property line");
+      }
+      elems.back().props.push_back(p);
+    } else if (t[0] == "end_header") {
+      ended = true;
+      break;
+    } else {
+      return r.fail_at(lines.number(), "unknown header line '" + std::string(t[0].substr(0, 32)) + "'");
+    }
+  }
+  if (!ended) return r.fail("truncated: no end_header");
+  if (format.empty()) return r.fail("PLY header has no format line");
+  const size_t data_start = std::min(lines.offset(), r.text().size());
+  const size_t available = r.text().size() - data_start;
+  for (const PlyElement& e : elems)
+    if (!count_fits(e.count, 1, available + 1))
+      return r.fail("truncated: header promises " + std::to_string(e.count) + " " + e.name +
+                    " records but only " + std::to_string(available) + " bytes follow");
+
+  int ix = -1, iy = -1, iz = -1, iface = -1;
+  for (const PlyElement& e : elems) {
+    if (e.name == "vertex")
+      for (size_t k = 0; k < e.props.size(); ++k) {
+        if (e.props[k].is_list) continue;
+        if (e.props[k].name == "x") ix = static_cast<int>(k);
+        if (e.props[k].name == "y") iy = static_cast<int>(k);
+        if (e.props[k].name == "z") iz = static_cast<int>(k);
+      }
+    if (e.name == "face")
+      for (size_t k = 0; k < e.props.size(); ++k)
+        if (e.props[k].is_list && (e.props[k].name == "vertex_indices" || e.props[k].name == "vertex_index"))
+          iface = static_cast<int>(k);
+  }
+  if (ix < 0 || iy < 0 || iz < 0) return r.fail("PLY has no vertex x, y, z properties");
+  if (iface < 0) return r.fail("PLY has no face vertex_indices list");
+
+  Mesh& m = out->mesh;
+  std::vector<long long> idx;
+  std::vector<std::pair<std::vector<long long>, size_t>> polys;
+  const bool ascii = format == "ascii";
+  BinaryCursor bin(r.text().substr(data_start), format == "binary_big_endian");
+  for (const PlyElement& e : elems) {
+    const bool is_vertex = e.name == "vertex", is_face = e.name == "face";
+    if (is_vertex) m.vertices.reserve(e.count);
+    for (long long i = 0; i < e.count; ++i) {
+      Vec3 p = Vec3::Zero();
+      idx.clear();
+      size_t tok = 0;
+      if (ascii && !lines.next_tokens(&t, false))
+        return r.fail("truncated: " + std::to_string(i) + " of " + std::to_string(e.count) + " " + e.name + " records");
+      const size_t line = lines.number();
+      for (size_t k = 0; k < e.props.size(); ++k) {
+        const PlyProperty& prop = e.props[k];
+        auto next_value = [&](PlyType type, double* v) -> Status {
+          if (ascii) {
+            if (tok >= t.size()) return r.fail_at(line, "record has too few values");
+            const std::string_view s = t[tok++];
+            if (!parse_double(s, v)) return r.fail_at(line, "not a number: '" + std::string(s.substr(0, 32)) + "'");
+            return Status::ok();
+          }
+          if (!bin.read(type, v))
+            return r.fail("truncated: binary data ends inside " + e.name + " record " + std::to_string(i));
+          return Status::ok();
+        };
+        double v;
+        if (prop.is_list) {
+          Status s = next_value(prop.count_type, &v);
+          if (!s) return s;
+          long long n;
+          if (!integral_value(v, &n) || n < 0) return r.fail_at(ascii ? line : 0, "bad list length");
+          if (!ascii && static_cast<unsigned long long>(n) * ply_size(prop.type) > bin.remaining())
+            return r.fail("truncated: binary data ends inside " + e.name + " record " + std::to_string(i));
+          for (long long j = 0; j < n; ++j) {
+            s = next_value(prop.type, &v);
+            if (!s) return s;
+            long long id;
+            if (is_face && static_cast<int>(k) == iface) {
+              if (!integral_value(v, &id)) return r.fail_at(ascii ? line : 0, "vertex index is not an integer");
+              idx.push_back(id);
+            }
+          }
+        } else {
+          Status s = next_value(prop.type, &v);
+          if (!s) return s;
+          if (is_vertex && static_cast<int>(k) == ix) p[0] = v;
+          if (is_vertex && static_cast<int>(k) == iy) p[1] = v;
+          if (is_vertex && static_cast<int>(k) == iz) p[2] = v;
+        }
+      }
+      if (is_vertex) m.vertices.push_back(p);
+      if (is_face) polys.emplace_back(idx, ascii ? line : 0);
+    }
+  }
+  for (size_t fi = 0; fi < polys.size(); ++fi) {
+    Status s = r.add_polygon(polys[fi].first, polys[fi].second, fi, out);
+    if (!s) return s;
+  }
+  return Status::ok();
+}
+
+// ---- STL --------------------------------------------------------------------------------
+
+Status read_stl_binary(const Reader& r, LoadedMesh* out) {
+  const std::string_view d = r.text();
+  if (d.size() < 84) return r.fail("truncated: binary STL shorter than its 84-byte header");
+  uint32_t n;
+  std::memcpy(&n, d.data() + 80, 4);
+  if (d.size() < 84 + 50ull * n)
+    return r.fail("truncated: binary STL promises " + std::to_string(n) + " triangles but holds " +
+                  std::to_string((d.size() - 84) / 50));
+  Mesh& m = out->mesh;
+  m.vertices.reserve(3ull * n);
+  for (uint32_t i = 0; i < n; ++i) {
+    const char* rec = d.data() + 84 + 50ull * i + 12;  // skip the normal
+    for (int k = 0; k < 3; ++k) {
+      float v[3];
+      std::memcpy(v, rec + 12 * k, 12);
+      m.vertices.emplace_back(v[0], v[1], v[2]);  // float to double is exact
+    }
+    m.faces.push_back({static_cast<int32_t>(3 * i), static_cast<int32_t>(3 * i + 1), static_cast<int32_t>(3 * i + 2)});
+  }
+  return Status::ok();
+}
+
+Status read_stl_ascii(const Reader& r, LoadedMesh* out) {
+  Lines lines(r.text());
+  std::vector<std::string_view> t;
+  Mesh& m = out->mesh;
+  if (!lines.next_tokens(&t, false) || t[0] != "solid") return r.fail("not an STL file");
+  int corners = -1;  // -1 outside a facet, else vertices seen in the current loop
+  bool ended = false;
+  while (lines.next_tokens(&t, false)) {
+    const std::string_view k = t[0];
+    if (k == "facet") {
+      if (corners >= 0) return r.fail_at(lines.number(), "facet inside a facet");
+      corners = 0;
+    } else if (k == "outer" || k == "endloop") {
+      if (corners < 0) return r.fail_at(lines.number(), "'" + std::string(k) + "' outside a facet");
+    } else if (k == "vertex") {
+      if (corners < 0) return r.fail_at(lines.number(), "vertex outside a facet");
+      if (corners == 3) return r.fail_at(lines.number(), "facet with more than 3 vertices");
+      if (t.size() < 4) return r.fail_at(lines.number(), "vertex needs 3 coordinates");
+      Vec3 p;
+      for (int c = 0; c < 3; ++c)
+        if (!parse_double(t[c + 1], &p[c]))
+          return r.fail_at(lines.number(), "not a number: '" + std::string(t[c + 1].substr(0, 32)) + "'");
+      m.vertices.push_back(p);
+      ++corners;
+    } else if (k == "endfacet") {
+      if (corners != 3) return r.fail_at(lines.number(), "facet without exactly 3 vertices");
+      const int32_t b = static_cast<int32_t>(m.vertices.size()) - 3;
+      m.faces.push_back({b, b + 1, b + 2});
+      corners = -1;
+    } else if (k == "endsolid") {
+      ended = true;
+      break;
+    } else {
+      return r.fail_at(lines.number(), "unexpected '" + std::string(k.substr(0, 32)) + "'");
+    }
+  }
+  if (!ended) return r.fail("truncated: no endsolid");
+  return Status::ok();
+}
+
+Status read_stl(const Reader& r, LoadedMesh* out) {
+  const std::string_view d = r.text();
+  // "solid" starts ASCII files, but some binary headers start with it too: a size that
+  // matches the binary layout exactly decides for binary.
+  if (d.size() >= 84) {
+    uint32_t n;
+    std::memcpy(&n, d.data() + 80, 4);
+    if (d.size() == 84 + 50ull * n) return read_stl_binary(r, out);
+  }
+  if (d.substr(0, 5) == "solid") return read_stl_ascii(r, out);
+  return read_stl_binary(r, out);
+}
+
+Status read_file(const std::string& path, const std::string& display, std::string* content) {
+  struct stat st;
+  if (::stat(path.c_str(), &st) != 0) return Status::error(display + ": cannot open: " + std::strerror(errno));
+  if (S_ISDIR(st.st_mode)) return Status::error(display + ": is a directory, not a mesh file");
+  if (!S_ISREG(st.st_mode)) return Status::error(display + ": not a regular file");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return Status::error(display + ": cannot open: " + std::strerror(errno));
+  content->resize(static_cast<size_t>(st.st_size));
+  in.read(content->data(), static_cast<std::streamsize>(content->size()));
+  if (static_cast<size_t>(in.gcount()) != content->size()) return Status::error(display + ": read error");
+  return Status::ok();
+}
+
+}  // namespace
+
+void weld_vertices(Mesh* mesh, size_t* welded, size_t* unreferenced) {
+  struct Key {
+    uint64_t b[3];
+    bool operator==(const Key& o) const { return b[0] == o.b[0] && b[1] == o.b[1] && b[2] == o.b[2]; }
+  };
+  struct KeyHash {
+    size_t operator()(const Key& k) const {
+      uint64_t h = 1469598103934665603ull;
+      for (uint64_t v : k.b) h = (h ^ v) * 1099511628211ull ^ (v >> 29);
+      return static_cast<size_t>(h);
+    }
+  };
+  const size_t n = mesh->vertices.size();
+  std::vector<char> used(n, 0);
+  for (const Face& f : mesh->faces)
+    for (int32_t i : f) used[i] = 1;
+  std::unordered_map<Key, int32_t, KeyHash> first;
+  first.reserve(n);
+  std::vector<int32_t> remap(n, -1);
+  std::vector<Vec3> kept;
+  kept.reserve(n);
+  *welded = *unreferenced = 0;
+  for (size_t i = 0; i < n; ++i) {
+    if (!used[i]) {
+      ++*unreferenced;
+      continue;
+    }
+    Key k;
+    for (int c = 0; c < 3; ++c) {
+      const double v = mesh->vertices[i][c] == 0.0 ? 0.0 : mesh->vertices[i][c];  // -0 == +0
+      std::memcpy(&k.b[c], &v, 8);
+    }
+    auto [it, inserted] = first.emplace(k, static_cast<int32_t>(kept.size()));
+    if (inserted) kept.push_back(mesh->vertices[i]);
+    else ++*welded;
+    remap[i] = it->second;
+  }
+  for (Face& f : mesh->faces)
+    for (int32_t& i : f) i = remap[i];
+  mesh->vertices = std::move(kept);
+}
+
+Status load_mesh(const std::string& path, LoadedMesh* out) {
+  *out = LoadedMesh();
+  const std::string display = basename_of(path);
+  const std::string ext = extension_of(path);
+  const bool native = ext == "off" || ext == "obj" || ext == "ply" || ext == "stl";
+  if (!native) {
+    struct stat st;
+    if (::stat(path.c_str(), &st) != 0) return Status::error(display + ": cannot open: " + std::strerror(errno));
+    if (S_ISDIR(st.st_mode)) return Status::error(display + ": is a directory, not a mesh file");
+#if VOBB_HAVE_ASSIMP
+    Status s = load_with_assimp(path, display, out);
+    if (!s) return s;
+#else
+    return Status::error(display + ": unknown mesh format '" + ext + "' (this build reads OFF, OBJ, PLY, STL)");
+#endif
+  } else {
+    std::string content;
+    Status s = read_file(path, display, &content);
+    if (!s) return s;
+    if (content.empty()) return Status::error(display + ": empty file");
+    if (content.find('\0') != std::string::npos && ext != "ply" && ext != "stl")
+      return Status::error(display + ": binary data in a text format");
+    Reader r(display, content);
+    out->format = ext;
+    if (ext == "off") s = read_off(r, out);
+    else if (ext == "obj") s = read_obj(r, out);
+    else if (ext == "ply") s = read_ply(r, out);
+    else s = read_stl(r, out);
+    if (!s) return s;
+  }
+  if (out->mesh.vertices.size() > static_cast<size_t>(kMaxIndex))
+    return Status::error(display + ": too many vertices");
+  out->file_vertices = out->mesh.vertices.size();
+  bool finite = true;
+  for (const Vec3& v : out->mesh.vertices) finite = finite && v.allFinite();
+  // Welding compares bit patterns: with NaN around, leave the mesh as read and let the
+  // solidity check name the defect.
+  if (finite) weld_vertices(&out->mesh, &out->welded_vertices, &out->unreferenced_vertices);
+  return Status::ok();
+}
+
+// ---- writers ----------------------------------------------------------------------------
+
+namespace {
+
+void put(std::string* s, double v) {
+  char buf[32];
+  auto res = std::to_chars(buf, buf + sizeof buf, v);  // shortest round-trip form
+  s->append(buf, res.ptr);
+}
+
+template <typename T>
+void put_bin(std::string* s, T v) {
+  char b[sizeof(T)];
+  std::memcpy(b, &v, sizeof(T));
+  s->append(b, sizeof(T));
+}
+
+}  // namespace
+
+Status save_mesh(const Mesh& m, const std::string& path, MeshFormat format) {
+  std::string s;
+  auto vertex_line = [&](const char* prefix, const Vec3& v) {
+    s += prefix;
+    for (int k = 0; k < 3; ++k) {
+      if (k) s += ' ';
+      put(&s, v[k]);
+    }
+    s += '\n';
+  };
+  switch (format) {
+    case MeshFormat::kOff:
+      s = "OFF\n" + std::to_string(m.vertices.size()) + " " + std::to_string(m.faces.size()) + " 0\n";
+      for (const Vec3& v : m.vertices) vertex_line("", v);
+      for (const Face& f : m.faces)
+        s += "3 " + std::to_string(f[0]) + " " + std::to_string(f[1]) + " " + std::to_string(f[2]) + "\n";
+      break;
+    case MeshFormat::kObj:
+      for (const Vec3& v : m.vertices) vertex_line("v ", v);
+      for (const Face& f : m.faces)
+        s += "f " + std::to_string(f[0] + 1) + " " + std::to_string(f[1] + 1) + " " + std::to_string(f[2] + 1) + "\n";
+      break;
+    case MeshFormat::kPlyAscii:
+    case MeshFormat::kPlyBinary: {
+      const bool bin = format == MeshFormat::kPlyBinary;
+      s = std::string("ply\nformat ") + (bin ? "binary_little_endian" : "ascii") + " 1.0\n";
+      s += "element vertex " + std::to_string(m.vertices.size()) + "\n";
+      s += "property double x\nproperty double y\nproperty double z\n";
+      s += "element face " + std::to_string(m.faces.size()) + "\n";
+      s += "property list uchar int vertex_indices\nend_header\n";
+      for (const Vec3& v : m.vertices) {
+        if (bin) for (int k = 0; k < 3; ++k) put_bin(&s, v[k]);
+        else vertex_line("", v);
+      }
+      for (const Face& f : m.faces) {
+        if (bin) {
+          put_bin<uint8_t>(&s, 3);
+          for (int32_t i : f) put_bin(&s, i);
+        } else {
+          s += "3 " + std::to_string(f[0]) + " " + std::to_string(f[1]) + " " + std::to_string(f[2]) + "\n";
+        }
+      }
+      break;
+    }
+    case MeshFormat::kStlAscii:
+      s = "solid vobb\n";
+      for (const Face& f : m.faces) {
+        s += "facet normal 0 0 0\nouter loop\n";
+        for (int32_t i : f) vertex_line("vertex ", m.vertices[i]);
+        s += "endloop\nendfacet\n";
+      }
+      s += "endsolid vobb\n";
+      break;
+    case MeshFormat::kStlBinary: {
+      s.assign(80, ' ');
+      put_bin<uint32_t>(&s, static_cast<uint32_t>(m.faces.size()));
+      for (const Face& f : m.faces) {
+        for (int k = 0; k < 3; ++k) put_bin<float>(&s, 0.0f);
+        for (int32_t i : f)
+          for (int k = 0; k < 3; ++k) put_bin<float>(&s, static_cast<float>(m.vertices[i][k]));
+        put_bin<uint16_t>(&s, 0);
+      }
+      break;
+    }
+  }
+  return write_file_atomic(path, s);
+}
+
+}  // namespace vobb

@@ -1,0 +1,62 @@
+// vobb::Obb — an oriented bounding box: centre, three axes and half extents.
+//
+// The certified solid of a box is the parallelepiped {c + sum_k t_k h_k a_k : t in [-1,1]^3},
+// evaluated exactly from the stored doubles (DESIGN §1). Axes should be unit and
+// right-handed; a box read from a file may have axes that are only nearly orthonormal, and
+// its solid is still that exact parallelepiped.
+#pragma once
+
+#include <array>
+#include <vector>
+
+#include "common/exact_predicates.h"
+#include "common/mesh.h"
+
+namespace vobb {
+
+struct Obb {
+  Vec3 center = Vec3::Zero();
+  std::array<Vec3, 3> axes = {Vec3::UnitX(), Vec3::UnitY(), Vec3::UnitZ()};  // world coords
+  Vec3 half = Vec3::Zero();                                                    // >= 0
+};
+
+// Volume of the parallelepiped, 8 h0 h1 h2 |det[a0 a1 a2]|, in double.
+double volume(const Obb& box);
+
+// The 8 corners; corner i takes sign (-1)^(bit k of i) ... precisely c + sum_k s_k h_k a_k with
+// s_k = +1 when bit k of i is set, else -1.
+std::array<Vec3, 8> corners(const Obb& box);
+
+// Orthonormal right-handed frame from three approximate axes (Gram-Schmidt on a0, a1;
+// a2 = a0 x a1). Precondition: a0 and a1 are finite and not parallel.
+std::array<Vec3, 3> orthonormalize(const std::array<Vec3, 3>& axes);
+
+// The tight box of the given faces' vertices along the given axes (orthonormalized first),
+// padded by a derived round-off margin and then checked exactly: every vertex lies in the
+// returned box's certified solid. Each box face lies within `fit_slack(box)` of some vertex.
+// Precondition: `faces` is not empty and its vertices are finite.
+Obb fit_obb(const Mesh& mesh, const std::vector<int32_t>& faces, const std::array<Vec3, 3>& axes);
+
+// Upper bound on the distance by which fit_obb's faces may stand off the nearest vertex:
+// the padding that makes the box exactly conservative despite double rounding.
+double fit_slack(const Obb& box, double mesh_scale);
+
+// Exact point-in-box test against the certified solid (boundary counts as inside).
+// Build once per box, query per point. A box with zero volume contains no point.
+class ExactBoxContainment {
+ public:
+  explicit ExactBoxContainment(const Obb& box);
+  bool contains(const Vec3& p) const;
+
+ private:
+  Rational c_[3];
+  Rational w_[3][3];  // w_k = u_i x u_j with u = h a: Cramer's rule numerator rows
+  Rational abs_det_;
+  int det_sign_ = 0;
+  // Double shadows of the above for a filter.
+  double wd_[3][3];
+  double cd_[3];
+  double abs_det_d_;
+};
+
+}  // namespace vobb

@@ -1,0 +1,370 @@
+#include "common/solidity.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include "common/bvh.h"
+#include "common/status.h"
+
+namespace vobb {
+
+const char* defect_name(Defect d) {
+  switch (d) {
+    case Defect::kEmpty: return "empty";
+    case Defect::kNonFinite: return "non-finite";
+    case Defect::kDegenerateFace: return "degenerate";
+    case Defect::kNotClosed: return "not-closed";
+    case Defect::kNonManifoldEdge: return "non-manifold";
+    case Defect::kInconsistentOrientation: return "inconsistent-orientation";
+    case Defect::kSelfIntersection: return "self-intersecting";
+    case Defect::kInwardOriented: return "inward-oriented";
+  }
+  return "unknown";
+}
+
+std::string DefectCount::describe() const {
+  const std::string n = std::to_string(count);
+  switch (defect) {
+    case Defect::kEmpty: return "empty: no faces";
+    case Defect::kNonFinite: return "non-finite coordinates (NaN or Inf): " + n + " vertices";
+    case Defect::kDegenerateFace: return "degenerate faces (zero area): " + n + " faces";
+    case Defect::kNotClosed: return "not closed: " + n + " border edges";
+    case Defect::kNonManifoldEdge: return "non-manifold: " + n + " edges shared by more than two faces";
+    case Defect::kInconsistentOrientation:
+      return "inconsistent orientation (flipped faces): " + n + " edges";
+    case Defect::kSelfIntersection: return "self-intersecting: " + n + " pairs of faces";
+    case Defect::kInwardOriented:
+      return "inward oriented: " + n + " shells face the wrong way";
+  }
+  return "unknown defect";
+}
+
+std::string SolidityReport::verdict() const {
+  if (defects.empty()) return "solid";
+  std::string out;
+  for (const DefectCount& d : defects) {
+    if (!out.empty()) out += "; ";
+    out += d.describe();
+  }
+  return out;
+}
+
+namespace {
+
+// ---- exact triangle intersection helpers ------------------------------------------------
+
+// A coordinate plane (i, j) onto which triangle abc projects without degenerating.
+// Precondition: abc is not collinear, so one of the three exists.
+void projection_for(const Vec3& a, const Vec3& b, const Vec3& c, int* i, int* j) {
+  static const int kPlanes[3][2] = {{0, 1}, {1, 2}, {2, 0}};
+  for (const auto& p : kPlanes) {
+    if (orient2d(a, b, c, p[0], p[1]) != 0) {
+      *i = p[0];
+      *j = p[1];
+      return;
+    }
+  }
+  VOBB_ASSERT(false, "projection_for on a collinear triangle");
+}
+
+bool on_segment_2d(const Vec3& p, const Vec3& q, const Vec3& r, int i, int j) {
+  // r is known collinear with pq; test that it lies within pq's extent.
+  return std::min(p[i], q[i]) <= r[i] && r[i] <= std::max(p[i], q[i]) &&
+         std::min(p[j], q[j]) <= r[j] && r[j] <= std::max(p[j], q[j]);
+}
+
+bool segments_intersect_2d(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s, int i,
+                           int j) {
+  const int d1 = orient2d(p, q, r, i, j), d2 = orient2d(p, q, s, i, j);
+  const int d3 = orient2d(r, s, p, i, j), d4 = orient2d(r, s, q, i, j);
+  if (d1 * d2 < 0 && d3 * d4 < 0) return true;
+  if (d1 == 0 && on_segment_2d(p, q, r, i, j)) return true;
+  if (d2 == 0 && on_segment_2d(p, q, s, i, j)) return true;
+  if (d3 == 0 && on_segment_2d(r, s, p, i, j)) return true;
+  if (d4 == 0 && on_segment_2d(r, s, q, i, j)) return true;
+  return false;
+}
+
+bool point_in_triangle_2d(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c, int i,
+                          int j) {
+  const int s = orient2d(a, b, c, i, j);
+  return orient2d(a, b, p, i, j) * s >= 0 && orient2d(b, c, p, i, j) * s >= 0 &&
+         orient2d(c, a, p, i, j) * s >= 0;
+}
+
+bool segment_triangle_coplanar(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b,
+                               const Vec3& c) {
+  int i, j;
+  projection_for(a, b, c, &i, &j);
+  if (point_in_triangle_2d(p, a, b, c, i, j) || point_in_triangle_2d(q, a, b, c, i, j)) return true;
+  return segments_intersect_2d(p, q, a, b, i, j) || segments_intersect_2d(p, q, b, c, i, j) ||
+         segments_intersect_2d(p, q, c, a, i, j);
+}
+
+// Closed segment pq against closed non-degenerate triangle abc.
+bool segment_hits_triangle(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b,
+                           const Vec3& c) {
+  const int op = orient3d(a, b, c, p), oq = orient3d(a, b, c, q);
+  if (op * oq > 0) return false;
+  if (op == 0 && oq == 0) return segment_triangle_coplanar(p, q, a, b, c);
+  // The segment meets the plane in one point; it lies in the triangle iff the line pq passes
+  // on no strictly opposite sides of the triangle's edges.
+  const int s1 = orient3d(p, q, a, b), s2 = orient3d(p, q, b, c), s3 = orient3d(p, q, c, a);
+  const bool pos = s1 > 0 || s2 > 0 || s3 > 0;
+  const bool neg = s1 < 0 || s2 < 0 || s3 < 0;
+  return !(pos && neg);
+}
+
+bool triangles_intersect_coplanar(const Vec3* t, const Vec3* s) {
+  int i, j;
+  projection_for(t[0], t[1], t[2], &i, &j);
+  for (int k = 0; k < 3; ++k) {
+    if (point_in_triangle_2d(s[k], t[0], t[1], t[2], i, j)) return true;
+    if (point_in_triangle_2d(t[k], s[0], s[1], s[2], i, j)) return true;
+  }
+  for (int k = 0; k < 3; ++k)
+    for (int l = 0; l < 3; ++l)
+      if (segments_intersect_2d(t[k], t[(k + 1) % 3], s[l], s[(l + 1) % 3], i, j)) return true;
+  return false;
+}
+
+// Two triangles with no shared vertex.
+bool triangles_intersect(const Vec3* t, const Vec3* s) {
+  int ds[3], dt[3];
+  for (int k = 0; k < 3; ++k) ds[k] = orient3d(t[0], t[1], t[2], s[k]);
+  if ((ds[0] > 0 && ds[1] > 0 && ds[2] > 0) || (ds[0] < 0 && ds[1] < 0 && ds[2] < 0)) return false;
+  if (ds[0] == 0 && ds[1] == 0 && ds[2] == 0) return triangles_intersect_coplanar(t, s);
+  for (int k = 0; k < 3; ++k) dt[k] = orient3d(s[0], s[1], s[2], t[k]);
+  if ((dt[0] > 0 && dt[1] > 0 && dt[2] > 0) || (dt[0] < 0 && dt[1] < 0 && dt[2] < 0)) return false;
+  // Not coplanar: the intersection, if any, is a segment or point whose ends lie on an edge
+  // of one triangle inside the other.
+  for (int k = 0; k < 3; ++k) {
+    if (segment_hits_triangle(t[k], t[(k + 1) % 3], s[0], s[1], s[2])) return true;
+    if (segment_hits_triangle(s[k], s[(k + 1) % 3], t[0], t[1], t[2])) return true;
+  }
+  return false;
+}
+
+// Is direction d - u inside the closed wedge at u spanned by p - u and q - u (angle < 180)?
+bool in_wedge_2d(const Vec3& u, const Vec3& p, const Vec3& q, const Vec3& d, int i, int j) {
+  const int s = orient2d(u, p, q, i, j);
+  return orient2d(u, p, d, i, j) * s >= 0 && orient2d(u, d, q, i, j) * s >= 0;
+}
+
+// Triangles (u, a1, b1) and (u, a2, b2) sharing exactly vertex u.
+bool triangles_meet_beyond_vertex(const Vec3& u, const Vec3& a1, const Vec3& b1, const Vec3& a2,
+                                  const Vec3& b2) {
+  const bool a2_on = orient3d(u, a1, b1, a2) == 0, b2_on = orient3d(u, a1, b1, b2) == 0;
+  int i, j;
+  if (a2_on && b2_on) {  // coplanar: the wedges at u overlap beyond u
+    projection_for(u, a1, b1, &i, &j);
+    return in_wedge_2d(u, a1, b1, a2, i, j) || in_wedge_2d(u, a1, b1, b2, i, j) ||
+           in_wedge_2d(u, a2, b2, a1, i, j) || in_wedge_2d(u, a2, b2, b1, i, j);
+  }
+  if (segment_hits_triangle(a1, b1, u, a2, b2) || segment_hits_triangle(a2, b2, u, a1, b1))
+    return true;
+  // An edge from u that runs inside the other triangle's plane and wedge.
+  if (a2_on || b2_on) {
+    projection_for(u, a1, b1, &i, &j);
+    if (a2_on && in_wedge_2d(u, a1, b1, a2, i, j)) return true;
+    if (b2_on && in_wedge_2d(u, a1, b1, b2, i, j)) return true;
+  }
+  const bool a1_on = orient3d(u, a2, b2, a1) == 0, b1_on = orient3d(u, a2, b2, b1) == 0;
+  if (a1_on || b1_on) {
+    projection_for(u, a2, b2, &i, &j);
+    if (a1_on && in_wedge_2d(u, a2, b2, a1, i, j)) return true;
+    if (b1_on && in_wedge_2d(u, a2, b2, b1, i, j)) return true;
+  }
+  return false;
+}
+
+// ---- union-find over faces --------------------------------------------------------------
+
+struct DisjointSets {
+  std::vector<int32_t> parent;
+  explicit DisjointSets(size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
+  int32_t find(int32_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  }
+  void unite(int32_t a, int32_t b) {
+    a = find(a);
+    b = find(b);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);
+  }
+};
+
+// Solid angle of triangle abc seen from p (Van Oosterom and Strackee), signed.
+double solid_angle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Vec3 x = a - p, y = b - p, z = c - p;
+  const double lx = x.norm(), ly = y.norm(), lz = z.norm();
+  const double num = x.dot(y.cross(z));
+  const double den = lx * ly * lz + x.dot(y) * lz + y.dot(z) * lx + z.dot(x) * ly;
+  return 2.0 * std::atan2(num, den);
+}
+
+}  // namespace
+
+bool faces_intersect(const Mesh& mesh, size_t f, size_t g) {
+  const Face& F = mesh.faces[f];
+  const Face& G = mesh.faces[g];
+  int shared = 0, fi[3], gi[3];
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b)
+      if (F[a] == G[b]) {
+        fi[shared] = a;
+        gi[shared] = b;
+        ++shared;
+      }
+  const Vec3 t[3] = {mesh.vertices[F[0]], mesh.vertices[F[1]], mesh.vertices[F[2]]};
+  const Vec3 s[3] = {mesh.vertices[G[0]], mesh.vertices[G[1]], mesh.vertices[G[2]]};
+  if (shared == 0) return triangles_intersect(t, s);
+  if (shared == 3) return true;  // the same triangle twice
+  if (shared == 2) {
+    // Sharing edge uv: they overlap only if coplanar with the third vertices on one side.
+    const Vec3& u = t[fi[0]];
+    const Vec3& v = t[fi[1]];
+    const Vec3& a = t[3 - fi[0] - fi[1]];
+    const Vec3& b = s[3 - gi[0] - gi[1]];
+    if (orient3d(u, v, a, b) != 0) return false;
+    int i, j;
+    projection_for(u, v, a, &i, &j);
+    return orient2d(u, v, a, i, j) * orient2d(u, v, b, i, j) > 0;
+  }
+  const Vec3& u = t[fi[0]];
+  return triangles_meet_beyond_vertex(u, t[(fi[0] + 1) % 3], t[(fi[0] + 2) % 3],
+                                      s[(gi[0] + 1) % 3], s[(gi[0] + 2) % 3]);
+}
+
+SolidityReport check_solidity(const Mesh& mesh) {
+  SolidityReport r;
+  r.vertices = mesh.vertices.size();
+  r.faces = mesh.faces.size();
+  if (mesh.faces.empty()) {
+    r.defects.push_back({Defect::kEmpty, 0});
+    return r;
+  }
+  // Finite coordinates first: every predicate below assumes them.
+  size_t nonfinite = 0;
+  for (const Vec3& v : mesh.vertices)
+    if (!v.allFinite()) ++nonfinite;
+
+  // Degenerate faces: a repeated index, or three collinear points (exactly).
+  const size_t nf = mesh.faces.size();
+  std::vector<char> degenerate(nf, 0);
+  size_t n_degenerate = 0;
+  for (size_t f = 0; f < nf; ++f) {
+    const Face& F = mesh.faces[f];
+    bool deg = F[0] == F[1] || F[1] == F[2] || F[2] == F[0];
+    if (!deg && nonfinite == 0) deg = collinear(mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2));
+    if (deg) {
+      degenerate[f] = 1;
+      ++n_degenerate;
+    }
+  }
+
+  // Edges: sorted (lo, hi, face, forward) records give border, non-manifold and flipped edges.
+  struct EdgeRec {
+    int32_t lo, hi, face;
+    bool forward;
+  };
+  std::vector<EdgeRec> recs;
+  recs.reserve(3 * nf);
+  for (size_t f = 0; f < nf; ++f) {
+    if (degenerate[f]) continue;
+    const Face& F = mesh.faces[f];
+    for (int k = 0; k < 3; ++k) {
+      const int32_t a = F[k], b = F[(k + 1) % 3];
+      recs.push_back({std::min(a, b), std::max(a, b), static_cast<int32_t>(f), a < b});
+    }
+  }
+  std::sort(recs.begin(), recs.end(), [](const EdgeRec& x, const EdgeRec& y) {
+    if (x.lo != y.lo) return x.lo < y.lo;
+    if (x.hi != y.hi) return x.hi < y.hi;
+    return x.face < y.face;
+  });
+  size_t border = 0, nonmanifold = 0, inconsistent = 0;
+  DisjointSets shells(nf);
+  for (size_t i = 0; i < recs.size();) {
+    size_t j = i;
+    while (j < recs.size() && recs[j].lo == recs[i].lo && recs[j].hi == recs[i].hi) ++j;
+    const size_t count = j - i;
+    ++r.edges;
+    for (size_t k = i + 1; k < j; ++k) shells.unite(recs[i].face, recs[k].face);
+    if (count == 1) ++border;
+    else if (count > 2) ++nonmanifold;
+    else if (recs[i].forward == recs[i + 1].forward) ++inconsistent;
+    i = j;
+  }
+  std::vector<int32_t> shell_of(nf, -1);
+  std::vector<std::vector<int32_t>> shell_faces;
+  for (size_t f = 0; f < nf; ++f) {
+    if (degenerate[f]) continue;
+    const int32_t root = shells.find(static_cast<int32_t>(f));
+    if (shell_of[root] < 0) {
+      shell_of[root] = static_cast<int32_t>(shell_faces.size());
+      shell_faces.emplace_back();
+    }
+    shell_faces[shell_of[root]].push_back(static_cast<int32_t>(f));
+  }
+  r.shells = shell_faces.size();
+
+  if (nonfinite) r.defects.push_back({Defect::kNonFinite, nonfinite});
+  if (n_degenerate) r.defects.push_back({Defect::kDegenerateFace, n_degenerate});
+  if (border) r.defects.push_back({Defect::kNotClosed, border});
+  if (nonmanifold) r.defects.push_back({Defect::kNonManifoldEdge, nonmanifold});
+  if (inconsistent) r.defects.push_back({Defect::kInconsistentOrientation, inconsistent});
+  if (nonfinite) return r;  // nothing geometric can be decided on NaN
+
+  // Self-intersections among the non-degenerate faces, candidates from a box tree.
+  {
+    AabbTree tree = AabbTree::over_faces(mesh);
+    size_t pairs = 0;
+    for (size_t f = 0; f < nf; ++f) {
+      if (degenerate[f]) continue;
+      tree.for_each_overlap(tree.primitive_bounds(static_cast<int32_t>(f)), [&](int32_t g) {
+        if (static_cast<size_t>(g) <= f || degenerate[g]) return;
+        if (faces_intersect(mesh, f, g)) ++pairs;
+      });
+    }
+    if (pairs) r.defects.push_back({Defect::kSelfIntersection, pairs});
+  }
+
+  // Exact volume, and orientation: with closed, manifold, consistent shells, each shell must
+  // face the way its nesting depth says (winding number 0 outside, 1 inside the solid).
+  if (n_degenerate == 0 && border == 0 && nonmanifold == 0 && inconsistent == 0) {
+    std::vector<Rational> shell_volume(shell_faces.size());
+    Rational total = 0;
+    for (size_t s = 0; s < shell_faces.size(); ++s) {
+      shell_volume[s] = exact_signed_volume(mesh, shell_faces[s]);
+      total += shell_volume[s];
+    }
+    r.volume = total;
+    r.volume_known = true;
+    size_t wrong = 0;
+    if (shell_faces.size() == 1) {
+      wrong = sgn(total) > 0 ? 0 : 1;
+    } else {
+      for (size_t s = 0; s < shell_faces.size(); ++s) {
+        // Winding number of the other shells at a vertex of this one. The vertex is off
+        // every other shell (no intersections), so the sum is an integer up to round-off.
+        const Vec3& p = mesh.corner(shell_faces[s][0], 0);
+        double omega = 0.0;
+        for (size_t t = 0; t < shell_faces.size(); ++t) {
+          if (t == s) continue;
+          for (int32_t f : shell_faces[t])
+            omega += solid_angle(p, mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2));
+        }
+        const long w = std::lround(omega / (4.0 * M_PI));
+        const int sign = sgn(shell_volume[s]);
+        const bool ok = (w == 0 && sign > 0) || (w == 1 && sign < 0);
+        if (!ok) ++wrong;
+      }
+    }
+    if (wrong) r.defects.push_back({Defect::kInwardOriented, wrong});
+  }
+  return r;
+}
+
+}  // namespace vobb

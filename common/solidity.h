@@ -1,0 +1,61 @@
+// Solidity checks: is a Mesh a solid in the sense of DESIGN §1?
+//
+// A solid is closed, edge-manifold, consistently and outward oriented, free of
+// self-intersections and of degenerate faces, with finite coordinates. Every geometric test
+// uses exact predicates (exact_predicates.h), so the verdict does not depend on rounding.
+// Nested shells are allowed (a solid with cavities) when each shell's orientation matches its
+// nesting depth: an outer boundary faces out, a cavity's boundary faces into the cavity.
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "common/exact_predicates.h"
+#include "common/mesh.h"
+
+namespace vobb {
+
+enum class Defect {
+  kEmpty,              // no faces
+  kNonFinite,          // NaN or Inf coordinates (count: vertices)
+  kDegenerateFace,     // repeated vertex or zero area (count: faces)
+  kNotClosed,          // border edges (count: edges)
+  kNonManifoldEdge,    // edges with more than two faces (count: edges)
+  kInconsistentOrientation,  // edges whose two faces run the same way (count: edges)
+  kSelfIntersection,   // pairs of faces that meet beyond their shared vertices (count: pairs)
+  kInwardOriented,     // shells whose orientation does not match their nesting (count: shells)
+};
+
+const char* defect_name(Defect d);
+
+struct DefectCount {
+  Defect defect;
+  size_t count;
+  std::string describe() const;  // e.g. "not closed: 14 border edges"
+};
+
+struct SolidityReport {
+  size_t vertices = 0;
+  size_t faces = 0;
+  size_t edges = 0;   // distinct undirected edges
+  size_t shells = 0;  // edge-connected components of faces
+  std::vector<DefectCount> defects;  // in the order the checks ran
+  // The exact enclosed volume; meaningful only when `volume_known`.
+  Rational volume;
+  bool volume_known = false;
+
+  bool solid() const { return defects.empty(); }
+  // "solid", or the defects joined by "; ".
+  std::string verdict() const;
+};
+
+// Runs every check that the mesh's state allows (geometric checks need finite coordinates,
+// orientation checks need a closed, manifold, consistent mesh). Deterministic.
+SolidityReport check_solidity(const Mesh& mesh);
+
+// Exact test of whether two non-degenerate faces of `mesh` meet anywhere other than at the
+// vertices they share (by index). Exposed for tests.
+bool faces_intersect(const Mesh& mesh, size_t f, size_t g);
+
+}  // namespace vobb

@@ -1,0 +1,85 @@
+#include "common/tree.h"
+
+#include <algorithm>
+
+namespace vobb {
+
+std::vector<int32_t> layer(const Tree& tree, int level) {
+  std::vector<int32_t> out;
+  for (const TreeNode& n : tree.nodes)
+    if (n.level == level || (n.level < level && n.is_leaf())) out.push_back(n.id);
+  return out;
+}
+
+Status validate_tree(const Tree& tree, const std::string& display) {
+  auto fail = [&](const std::string& why) { return Status::error(display + ": " + why); };
+  const int32_t n = static_cast<int32_t>(tree.nodes.size());
+  if (n == 0) return fail("tree has no nodes");
+  if (tree.arity < 2) return fail("arity must be at least 2");
+  int max_level = 0;
+  for (int32_t i = 0; i < n; ++i) {
+    const TreeNode& node = tree.nodes[i];
+    const std::string at = "node " + std::to_string(i) + ": ";
+    if (node.id != i) return fail(at + "id " + std::to_string(node.id) + " out of order");
+    if (i == 0 && (node.parent != -1 || node.level != 0)) return fail("node 0 must be the root (parent -1, level 0)");
+    if (i > 0) {
+      if (node.parent < 0 || node.parent >= n || node.parent == i) return fail(at + "bad parent");
+      const TreeNode& p = tree.nodes[node.parent];
+      if (std::find(p.children.begin(), p.children.end(), i) == p.children.end())
+        return fail(at + "parent does not list it as a child");
+      if (node.level != p.level + 1) return fail(at + "level is not its parent's plus one");
+    }
+    if (static_cast<int>(node.children.size()) > tree.arity) return fail(at + "more children than the arity");
+    for (int32_t c : node.children)
+      if (c <= 0 || c >= n || tree.nodes[c].parent != i) return fail(at + "bad child " + std::to_string(c));
+    if (!node.box.center.allFinite() || !node.box.half.allFinite() || (node.box.half.array() < 0).any())
+      return fail(at + "box has non-finite or negative values");
+    for (const Vec3& a : node.box.axes)
+      if (!a.allFinite()) return fail(at + "box has non-finite axes");
+    if (!std::is_sorted(node.faces.begin(), node.faces.end()) ||
+        std::adjacent_find(node.faces.begin(), node.faces.end()) != node.faces.end())
+      return fail(at + "faces are not sorted and distinct");
+    if (node.is_leaf() && node.faces.empty()) return fail(at + "leaf without faces");
+    max_level = std::max(max_level, node.level);
+  }
+  if (max_level != tree.depth) return fail("depth " + std::to_string(tree.depth) + " but the deepest leaf is at level " + std::to_string(max_level));
+  // Leaves partition the faces; inner faces are the union of the children's.
+  std::vector<int32_t> owner(tree.mesh_triangles, -1);
+  for (const TreeNode& node : tree.nodes) {
+    if (node.is_leaf()) {
+      for (int32_t f : node.faces) {
+        if (f < 0 || static_cast<size_t>(f) >= tree.mesh_triangles)
+          return fail("node " + std::to_string(node.id) + ": face " + std::to_string(f) + " out of range");
+        if (owner[f] >= 0) return fail("face " + std::to_string(f) + " is in two leaves");
+        owner[f] = node.id;
+      }
+    } else {
+      std::vector<int32_t> u;
+      for (int32_t c : node.children) u.insert(u.end(), tree.nodes[c].faces.begin(), tree.nodes[c].faces.end());
+      std::sort(u.begin(), u.end());
+      if (u != node.faces) return fail("node " + std::to_string(node.id) + ": faces are not the union of its children's");
+    }
+  }
+  for (size_t f = 0; f < owner.size(); ++f)
+    if (owner[f] < 0) return fail("face " + std::to_string(f) + " is in no leaf");
+  return Status::ok();
+}
+
+ContainmentReport check_conservative(const Mesh& mesh, const Tree& tree, size_t max_examples) {
+  ContainmentReport r;
+  for (const TreeNode& node : tree.nodes) {
+    ExactBoxContainment inside(node.box);
+    for (int32_t f : node.faces) {
+      ++r.checked_pairs;
+      bool ok = true;
+      for (int k = 0; k < 3 && ok; ++k) ok = inside.contains(mesh.corner(f, k));
+      if (!ok) {
+        ++r.violations;
+        if (r.first.size() < max_examples) r.first.emplace_back(node.id, f);
+      }
+    }
+  }
+  return r;
+}
+
+}  // namespace vobb

@@ -1,0 +1,55 @@
+// vobb::Tree — a k-ary hierarchy of OBBs over a mesh's faces (DESIGN §1, §7).
+//
+// nodes[i].id == i and nodes[0] is the root at level 0. A leaf lists its faces; an inner
+// node's faces are the union of its leaves' faces. Layer i is the cut at level i: the nodes
+// at level i plus every leaf above level i, so every layer bounds every face once.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "common/mesh.h"
+#include "common/obb.h"
+#include "common/status.h"
+
+namespace vobb {
+
+struct TreeNode {
+  int32_t id = 0;
+  int32_t parent = -1;  // -1 for the root
+  int32_t level = 0;
+  Obb box;
+  std::vector<int32_t> children;
+  std::vector<int32_t> faces;  // sorted ascending
+  bool is_leaf() const { return children.empty(); }
+};
+
+struct Tree {
+  std::string method;      // "obbtree", "variational", ...
+  int arity = 2;           // the most children a node may have
+  int depth = 0;           // the deepest leaf's level
+  size_t mesh_triangles = 0;
+  std::string mesh_sha256;  // see sha256.h
+  std::vector<TreeNode> nodes;
+};
+
+// Node ids of layer `level` (0 <= level <= depth), ascending.
+std::vector<int32_t> layer(const Tree& tree, int level);
+
+// Structural check: ids, parent/child links, levels, arity, depth, and that the leaves
+// partition the faces [0, mesh_triangles) with each inner node's faces the union of its
+// children's. Messages are one line prefixed with `display`.
+Status validate_tree(const Tree& tree, const std::string& display);
+
+// Conservativeness by exact predicates: each face of each node lies in that node's box.
+struct ContainmentReport {
+  size_t checked_pairs = 0;  // (node, face) pairs tested
+  size_t violations = 0;     // (node, face) pairs with a vertex outside the box
+  std::vector<std::pair<int32_t, int32_t>> first;  // up to `max_examples` (node, face)
+  bool ok() const { return violations == 0; }
+};
+ContainmentReport check_conservative(const Mesh& mesh, const Tree& tree, size_t max_examples = 8);
+
+}  // namespace vobb

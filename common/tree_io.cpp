@@ -1,0 +1,209 @@
+#include "common/tree_io.h"
+
+#include <fstream>
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "common/atomic_file.h"
+
+namespace vobb {
+namespace {
+
+using Json = nlohmann::ordered_json;
+
+std::string basename_of(const std::string& path) {
+  const size_t slash = path.find_last_of('/');
+  return slash == std::string::npos ? path : path.substr(slash + 1);
+}
+
+Json vec_json(const Vec3& v) { return Json::array({v[0], v[1], v[2]}); }
+
+void put_box(Json* j, const Obb& b) {
+  (*j)["center"] = vec_json(b.center);
+  (*j)["axes"] = Json::array({vec_json(b.axes[0]), vec_json(b.axes[1]), vec_json(b.axes[2])});
+  (*j)["half_extents"] = vec_json(b.half);
+}
+
+bool get_vec(const Json& j, Vec3* out) {
+  if (!j.is_array() || j.size() != 3) return false;
+  for (int k = 0; k < 3; ++k) {
+    if (!j[k].is_number()) return false;
+    (*out)[k] = j[k].get<double>();
+  }
+  return true;
+}
+
+// Reads center/axes/half_extents; returns the name of the first bad field, or "" if fine.
+std::string get_box(const Json& j, Obb* b) {
+  if (!j.is_object()) return "box is not an object";
+  if (!j.contains("center") || !get_vec(j["center"], &b->center)) return "bad or missing 'center'";
+  if (!j.contains("half_extents") || !get_vec(j["half_extents"], &b->half)) return "bad or missing 'half_extents'";
+  if (!j.contains("axes") || !j["axes"].is_array() || j["axes"].size() != 3) return "bad or missing 'axes'";
+  for (int k = 0; k < 3; ++k)
+    if (!get_vec(j["axes"][k], &b->axes[k])) return "bad or missing 'axes'";
+  if (!b->center.allFinite() || !b->half.allFinite()) return "non-finite box values";
+  for (const Vec3& a : b->axes)
+    if (!a.allFinite()) return "non-finite box axes";
+  if ((b->half.array() < 0).any()) return "negative half extent";
+  return "";
+}
+
+bool get_int(const Json& j, const char* key, long long* out) {
+  if (!j.contains(key) || !j[key].is_number_integer()) return false;
+  *out = j[key].get<long long>();
+  return true;
+}
+
+bool get_int_list(const Json& j, std::vector<int32_t>* out) {
+  if (!j.is_array()) return false;
+  out->clear();
+  out->reserve(j.size());
+  for (const Json& v : j) {
+    if (!v.is_number_integer()) return false;
+    const long long x = v.get<long long>();
+    if (x < INT32_MIN || x > INT32_MAX) return false;
+    out->push_back(static_cast<int32_t>(x));
+  }
+  return true;
+}
+
+Status slurp(const std::string& path, std::string* text) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return Status::error(basename_of(path) + ": cannot open");
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  *text = ss.str();
+  if (in.bad()) return Status::error(basename_of(path) + ": read error");
+  return Status::ok();
+}
+
+}  // namespace
+
+std::string tree_to_json(const Tree& tree) {
+  Json j;
+  j["format"] = "vobb-tree";
+  j["version"] = 1;
+  j["mesh"] = {{"triangles", tree.mesh_triangles}, {"sha256", tree.mesh_sha256}};
+  j["method"] = tree.method;
+  j["arity"] = tree.arity;
+  j["depth"] = tree.depth;
+  Json nodes = Json::array();
+  for (const TreeNode& n : tree.nodes) {
+    Json jn;
+    jn["id"] = n.id;
+    jn["parent"] = n.parent;
+    jn["level"] = n.level;
+    put_box(&jn, n.box);
+    jn["children"] = n.children;
+    jn["faces"] = n.faces;
+    nodes.push_back(std::move(jn));
+  }
+  j["nodes"] = std::move(nodes);
+  return j.dump() + "\n";
+}
+
+Status write_tree(const Tree& tree, const std::string& path) {
+  return write_file_atomic(path, tree_to_json(tree));
+}
+
+Status parse_tree(const std::string& text, const std::string& display, Tree* tree) {
+  auto fail = [&](const std::string& why) { return Status::error(display + ": " + why); };
+  const Json j = Json::parse(text, nullptr, /*allow_exceptions=*/false);
+  if (j.is_discarded()) return fail("not valid JSON");
+  if (!j.is_object() || !j.contains("format") || j["format"] != "vobb-tree")
+    return fail("not a vobb tree file (\"format\" is not \"vobb-tree\")");
+  long long version, arity, depth, triangles;
+  if (!get_int(j, "version", &version) || version != 1) return fail("unsupported version (expected 1)");
+  if (!get_int(j, "arity", &arity) || arity < 2 || arity > 1 << 20) return fail("bad or missing 'arity'");
+  if (!get_int(j, "depth", &depth) || depth < 0 || depth > 1 << 20) return fail("bad or missing 'depth'");
+  if (!j.contains("mesh") || !j["mesh"].is_object() || !get_int(j["mesh"], "triangles", &triangles) || triangles < 0)
+    return fail("bad or missing 'mesh.triangles'");
+  if (triangles > INT32_MAX) return fail("too many triangles");
+  Tree t;
+  t.arity = static_cast<int>(arity);
+  t.depth = static_cast<int>(depth);
+  t.mesh_triangles = static_cast<size_t>(triangles);
+  if (j["mesh"].contains("sha256") && j["mesh"]["sha256"].is_string()) t.mesh_sha256 = j["mesh"]["sha256"];
+  if (j.contains("method") && j["method"].is_string()) t.method = j["method"];
+  if (!j.contains("nodes") || !j["nodes"].is_array()) return fail("bad or missing 'nodes'");
+  const Json& nodes = j["nodes"];
+  t.nodes.resize(nodes.size());
+  std::vector<char> has_faces(nodes.size(), 0);
+  for (size_t i = 0; i < nodes.size(); ++i) {
+    const Json& jn = nodes[i];
+    const std::string at = "node " + std::to_string(i) + ": ";
+    if (!jn.is_object()) return fail(at + "not an object");
+    TreeNode& n = t.nodes[i];
+    long long id, parent, level;
+    if (!get_int(jn, "id", &id) || !get_int(jn, "parent", &parent) || !get_int(jn, "level", &level))
+      return fail(at + "bad or missing 'id', 'parent' or 'level'");
+    if (id != static_cast<long long>(i)) return fail(at + "id " + std::to_string(id) + " out of order");
+    if (parent < -1 || parent > INT32_MAX || level < 0 || level > INT32_MAX) return fail(at + "bad 'parent' or 'level'");
+    n.id = static_cast<int32_t>(id);
+    n.parent = static_cast<int32_t>(parent);
+    n.level = static_cast<int32_t>(level);
+    const std::string bad = get_box(jn, &n.box);
+    if (!bad.empty()) return fail(at + bad);
+    if (jn.contains("children") && !get_int_list(jn["children"], &n.children)) return fail(at + "bad 'children'");
+    if (jn.contains("faces")) {
+      if (!get_int_list(jn["faces"], &n.faces)) return fail(at + "bad 'faces'");
+      has_faces[i] = 1;
+    }
+  }
+  // Fill in inner nodes that left out their faces, children first.
+  const int32_t count = static_cast<int32_t>(t.nodes.size());
+  for (int32_t i = count - 1; i >= 0; --i) {
+    TreeNode& n = t.nodes[i];
+    if (has_faces[i] || n.is_leaf()) continue;
+    for (int32_t c : n.children) {
+      if (c <= i || c >= count) return fail("node " + std::to_string(i) + ": bad child " + std::to_string(c));
+      n.faces.insert(n.faces.end(), t.nodes[c].faces.begin(), t.nodes[c].faces.end());
+    }
+    std::sort(n.faces.begin(), n.faces.end());
+  }
+  Status s = validate_tree(t, display);
+  if (!s) return s;
+  *tree = std::move(t);
+  return Status::ok();
+}
+
+Status read_tree(const std::string& path, Tree* tree) {
+  std::string text;
+  Status s = slurp(path, &text);
+  if (!s) return s;
+  return parse_tree(text, basename_of(path), tree);
+}
+
+Status write_boxes(const std::vector<Obb>& boxes, const std::string& path) {
+  Json arr = Json::array();
+  for (const Obb& b : boxes) {
+    Json jb;
+    put_box(&jb, b);
+    arr.push_back(std::move(jb));
+  }
+  Json j;
+  j["boxes"] = std::move(arr);
+  return write_file_atomic(path, j.dump() + "\n");
+}
+
+Status read_boxes(const std::string& path, std::vector<Obb>* boxes) {
+  std::string text;
+  Status s = slurp(path, &text);
+  if (!s) return s;
+  const std::string display = basename_of(path);
+  const Json j = Json::parse(text, nullptr, false);
+  if (j.is_discarded()) return Status::error(display + ": not valid JSON");
+  if (!j.is_object() || !j.contains("boxes") || !j["boxes"].is_array())
+    return Status::error(display + ": no \"boxes\" array");
+  boxes->clear();
+  for (size_t i = 0; i < j["boxes"].size(); ++i) {
+    Obb b;
+    const std::string bad = get_box(j["boxes"][i], &b);
+    if (!bad.empty()) return Status::error(display + ": box " + std::to_string(i) + ": " + bad);
+    boxes->push_back(b);
+  }
+  return Status::ok();
+}
+
+}  // namespace vobb
