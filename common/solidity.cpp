@@ -16,6 +16,7 @@ const char* defect_name(Defect d) {
     case Defect::kDegenerateFace: return "degenerate";
     case Defect::kNotClosed: return "not-closed";
     case Defect::kNonManifoldEdge: return "non-manifold";
+    case Defect::kNonManifoldVertex: return "non-manifold-vertex";
     case Defect::kInconsistentOrientation: return "inconsistent-orientation";
     case Defect::kSelfIntersection: return "self-intersecting";
     case Defect::kInwardOriented: return "inward-oriented";
@@ -31,6 +32,8 @@ std::string DefectCount::describe() const {
     case Defect::kDegenerateFace: return "degenerate faces (zero area): " + n + " faces";
     case Defect::kNotClosed: return "not closed: " + n + " border edges";
     case Defect::kNonManifoldEdge: return "non-manifold: " + n + " edges shared by more than two faces";
+    case Defect::kNonManifoldVertex:
+      return "non-manifold vertices: " + n + " vertices where separate fans of faces meet";
     case Defect::kInconsistentOrientation:
       return "inconsistent orientation (flipped faces): " + n + " edges";
     case Defect::kSelfIntersection: return "self-intersecting: " + n + " pairs of faces";
@@ -286,6 +289,13 @@ SolidityReport check_solidity(const Mesh& mesh) {
   });
   size_t border = 0, nonmanifold = 0, inconsistent = 0;
   DisjointSets shells(nf);
+  // Corners (face, k) joined across the manifold edges around their vertex: a vertex whose
+  // corners form more than one group sits where separate fans meet.
+  DisjointSets fans(3 * nf);
+  auto corner_of = [&](int32_t face, int32_t vertex) {
+    const Face& F = mesh.faces[face];
+    return 3 * face + (F[0] == vertex ? 0 : F[1] == vertex ? 1 : 2);
+  };
   for (size_t i = 0; i < recs.size();) {
     size_t j = i;
     while (j < recs.size() && recs[j].lo == recs[i].lo && recs[j].hi == recs[i].hi) ++j;
@@ -295,6 +305,9 @@ SolidityReport check_solidity(const Mesh& mesh) {
     if (count == 1) ++border;
     else if (count > 2) ++nonmanifold;
     else if (recs[i].forward == recs[i + 1].forward) ++inconsistent;
+    if (count == 2)
+      for (int32_t v : {recs[i].lo, recs[i].hi})
+        fans.unite(corner_of(recs[i].face, v), corner_of(recs[i + 1].face, v));
     i = j;
   }
   std::vector<int32_t> shell_of(nf, -1);
@@ -314,6 +327,21 @@ SolidityReport check_solidity(const Mesh& mesh) {
   if (n_degenerate) r.defects.push_back({Defect::kDegenerateFace, n_degenerate});
   if (border) r.defects.push_back({Defect::kNotClosed, border});
   if (nonmanifold) r.defects.push_back({Defect::kNonManifoldEdge, nonmanifold});
+  if (border == 0 && nonmanifold == 0) {
+    std::vector<int32_t> fan_of(mesh.vertices.size(), -1);
+    std::vector<char> pinched(mesh.vertices.size(), 0);
+    for (size_t f = 0; f < nf; ++f) {
+      if (degenerate[f]) continue;
+      for (int k = 0; k < 3; ++k) {
+        const int32_t v = mesh.faces[f][k];
+        const int32_t root = fans.find(static_cast<int32_t>(3 * f + k));
+        if (fan_of[v] < 0) fan_of[v] = root;
+        else if (fan_of[v] != root) pinched[v] = 1;
+      }
+    }
+    const size_t n_pinched = static_cast<size_t>(std::count(pinched.begin(), pinched.end(), 1));
+    if (n_pinched) r.defects.push_back({Defect::kNonManifoldVertex, n_pinched});
+  }
   if (inconsistent) r.defects.push_back({Defect::kInconsistentOrientation, inconsistent});
   if (nonfinite) return r;  // nothing geometric can be decided on NaN
 
@@ -330,10 +358,11 @@ SolidityReport check_solidity(const Mesh& mesh) {
     }
     if (pairs) r.defects.push_back({Defect::kSelfIntersection, pairs});
   }
+  if (!r.defects.empty()) return r;  // volume and nesting mean nothing on a broken surface
 
-  // Exact volume, and orientation: with closed, manifold, consistent shells, each shell must
-  // face the way its nesting depth says (winding number 0 outside, 1 inside the solid).
-  if (n_degenerate == 0 && border == 0 && nonmanifold == 0 && inconsistent == 0) {
+  // Exact volume, and orientation: with closed, manifold, consistent, disjoint shells, each
+  // shell must face the way its nesting depth says (winding number 0 outside, 1 inside).
+  {
     std::vector<Rational> shell_volume(shell_faces.size());
     Rational total = 0;
     for (size_t s = 0; s < shell_faces.size(); ++s) {

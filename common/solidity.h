@@ -1,6 +1,6 @@
 // Solidity checks: is a Mesh a solid in the sense of DESIGN §1?
 //
-// A solid is closed, edge-manifold, consistently and outward oriented, free of
+// A solid is closed, 2-manifold (at edges and at vertices), consistently and outward oriented, free of
 // self-intersections and of degenerate faces, with finite coordinates. Every geometric test
 // uses exact predicates (exact_predicates.h), so the verdict does not depend on rounding.
 // Nested shells are allowed (a solid with cavities) when each shell's orientation matches its
@@ -22,6 +22,7 @@ enum class Defect {
   kDegenerateFace,     // repeated vertex or zero area (count: faces)
   kNotClosed,          // border edges (count: edges)
   kNonManifoldEdge,    // edges with more than two faces (count: edges)
+  kNonManifoldVertex,  // vertices whose faces form several fans, e.g. two cones tip to tip
   kInconsistentOrientation,  // edges whose two faces run the same way (count: edges)
   kSelfIntersection,   // pairs of faces that meet beyond their shared vertices (count: pairs)
   kInwardOriented,     // shells whose orientation does not match their nesting (count: shells)

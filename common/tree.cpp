@@ -46,19 +46,20 @@ Status validate_tree(const Tree& tree, const std::string& display) {
   // Leaves partition the faces; inner faces are the union of the children's.
   std::vector<int32_t> owner(tree.mesh_triangles, -1);
   for (const TreeNode& node : tree.nodes) {
-    if (node.is_leaf()) {
-      for (int32_t f : node.faces) {
-        if (f < 0 || static_cast<size_t>(f) >= tree.mesh_triangles)
-          return fail("node " + std::to_string(node.id) + ": face " + std::to_string(f) + " out of range");
-        if (owner[f] >= 0) return fail("face " + std::to_string(f) + " is in two leaves");
-        owner[f] = node.id;
-      }
-    } else {
-      std::vector<int32_t> u;
-      for (int32_t c : node.children) u.insert(u.end(), tree.nodes[c].faces.begin(), tree.nodes[c].faces.end());
-      std::sort(u.begin(), u.end());
-      if (u != node.faces) return fail("node " + std::to_string(node.id) + ": faces are not the union of its children's");
+    if (!node.is_leaf()) continue;
+    for (int32_t f : node.faces) {
+      if (f < 0 || static_cast<size_t>(f) >= tree.mesh_triangles)
+        return fail("node " + std::to_string(node.id) + ": face " + std::to_string(f) + " out of range");
+      if (owner[f] >= 0) return fail("face " + std::to_string(f) + " is in two leaves");
+      owner[f] = node.id;
     }
+  }
+  for (const TreeNode& node : tree.nodes) {
+    if (node.is_leaf()) continue;
+    std::vector<int32_t> u;
+    for (int32_t c : node.children) u.insert(u.end(), tree.nodes[c].faces.begin(), tree.nodes[c].faces.end());
+    std::sort(u.begin(), u.end());
+    if (u != node.faces) return fail("node " + std::to_string(node.id) + ": faces are not the union of its children's");
   }
   for (size_t f = 0; f < owner.size(); ++f)
     if (owner[f] < 0) return fail("face " + std::to_string(f) + " is in no leaf");

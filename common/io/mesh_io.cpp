@@ -387,11 +387,6 @@ Status read_ply(const Reader& r, LoadedMesh* out) {
   if (format.empty()) return r.fail("PLY header has no format line");
   const size_t data_start = std::min(lines.offset(), r.text().size());
   const size_t available = r.text().size() - data_start;
-  for (const PlyElement& e : elems)
-    if (!count_fits(e.count, 1, available + 1))
-      return r.fail("truncated: header promises " + std::to_string(e.count) + " " + e.name +
-                    " records but only " + std::to_string(available) + " bytes follow");
-
   int ix = -1, iy = -1, iz = -1, iface = -1;
   for (const PlyElement& e : elems) {
     if (e.name == "vertex")
@@ -408,6 +403,11 @@ Status read_ply(const Reader& r, LoadedMesh* out) {
   }
   if (ix < 0 || iy < 0 || iz < 0) return r.fail("PLY has no vertex x, y, z properties");
   if (iface < 0) return r.fail("PLY has no face vertex_indices list");
+  for (const PlyElement& e : elems)
+    if (!count_fits(e.count, 1, available + 1))
+      return r.fail("truncated: header promises " + std::to_string(e.count) + " " + e.name +
+                    " records but only " + std::to_string(available) + " bytes follow");
+
 
   Mesh& m = out->mesh;
   std::vector<long long> idx;

@@ -1,0 +1,118 @@
+// End-to-end tests of the `vobb` command line: exit codes, one-line errors, no partial
+// output, and the bad-input corpus in tests/data/bad.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include "common/tree_io.h"
+#include "test_common.h"
+
+namespace vobb {
+namespace {
+
+struct CliRun {
+  int code;
+  std::string out, err;
+};
+
+CliRun vobb_cli(const std::string& args) {
+  const std::string err_path = test::temp_path("stderr.txt");
+  const std::string cmd = std::string(VOBB_CLI) + " " + args + " 2>" + err_path;
+  CliRun r;
+  FILE* p = ::popen(cmd.c_str(), "r");
+  char buf[4096];
+  size_t n;
+  while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) r.out.append(buf, n);
+  const int status = ::pclose(p);
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::ifstream e(err_path);
+  std::stringstream ss;
+  ss << e.rdbuf();
+  r.err = ss.str();
+  std::remove(err_path.c_str());
+  return r;
+}
+
+size_t line_count(const std::string& s) { return std::count(s.begin(), s.end(), '\n'); }
+
+// Every file in the corpus: exit 2, exactly one line on stderr naming the file and the
+// defect phrase from EXPECTED.tsv; `build` on it writes no tree file.
+TEST(CliBadInput, CorpusGivesExitTwoAndOneClearLine) {
+  const std::string dir = test::data_dir() + "/bad";
+  std::ifstream list(dir + "/EXPECTED.tsv");
+  ASSERT_TRUE(list);
+  std::string line;
+  int cases = 0;
+  while (std::getline(list, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    const size_t tab = line.find('\t');
+    const std::string file = line.substr(0, tab), phrase = line.substr(tab + 1);
+    SCOPED_TRACE(file);
+    const CliRun info = vobb_cli("info " + dir + "/" + file);
+    EXPECT_EQ(info.code, 2);
+    EXPECT_EQ(line_count(info.err), 1u) << info.err;
+    EXPECT_NE(info.err.find(file), std::string::npos) << info.err;
+    EXPECT_NE(info.err.find(phrase), std::string::npos) << info.err;
+    const std::string out = test::temp_path("bad_tree.json");
+    const CliRun build = vobb_cli("build " + dir + "/" + file + " -o " + out + " --method obbtree");
+    EXPECT_EQ(build.code, 2);
+    EXPECT_EQ(line_count(build.err), 1u) << build.err;
+    EXPECT_FALSE(test::exists(out)) << "a tree was written for a bad mesh";
+    ++cases;
+  }
+  EXPECT_GE(cases, 15);
+}
+
+TEST(CliBadInput, MissingFileDirectoryAndUsage) {
+  CliRun r = vobb_cli("info /nonexistent/mesh.off");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(line_count(r.err), 1u);
+  EXPECT_NE(r.err.find("mesh.off: cannot open"), std::string::npos) << r.err;
+  r = vobb_cli("info " + test::data_dir());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("is a directory"), std::string::npos) << r.err;
+  for (const char* args : {"", "frobnicate", "info", "build x.off", "build x.off -o t.json --depth -1",
+                           "build x.off -o t.json --arity 1", "export t.json -o b.obj"}) {
+    r = vobb_cli(args);
+    EXPECT_EQ(r.code, 2) << args;
+    EXPECT_EQ(line_count(r.err), 1u) << args << ": " << r.err;
+  }
+}
+
+TEST(Cli, BuildExportAndInfoOnAnAnalyticMesh) {
+  const std::string mesh = test::temp_path("torus.off");
+  {
+    std::ofstream f(mesh);
+    // A unit cube written by hand: 8 vertices, 12 faces.
+    f << "OFF\n8 12 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n0 0 1\n1 0 1\n0 1 1\n1 1 1\n"
+         "3 0 4 6\n3 0 6 2\n3 1 3 7\n3 1 7 5\n3 0 1 5\n3 0 5 4\n3 2 6 7\n3 2 7 3\n3 0 2 3\n3 0 3 1\n"
+         "3 4 5 7\n3 4 7 6\n";
+  }
+  CliRun r = vobb_cli("info " + mesh + " --json --rational");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("\"verdict\": \"solid\""), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\"volume_rational\": \"1\""), std::string::npos) << r.out;
+  const std::string tree = test::temp_path("cube_tree.json");
+  r = vobb_cli("build " + mesh + " -o " + tree + " --method obbtree --depth 3");
+  ASSERT_EQ(r.code, 0) << r.err;
+  Tree t;
+  ASSERT_TRUE(read_tree(tree, &t));
+  EXPECT_EQ(t.mesh_triangles, 12u);
+  EXPECT_EQ(t.mesh_sha256.size(), 64u);
+  const std::string boxes = test::temp_path("layer.obj");
+  r = vobb_cli("export " + tree + " --level 2 -o " + boxes);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(test::exists(boxes));
+  r = vobb_cli("export " + tree + " --level 9 -o " + boxes);
+  EXPECT_EQ(r.code, 2);
+  r = vobb_cli("build " + mesh + " -o " + tree + " --method variational");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("not available"), std::string::npos);
+  for (const std::string& p : {mesh, tree, boxes}) std::remove(p.c_str());
+}
+
+}  // namespace
+}  // namespace vobb

@@ -1,0 +1,50 @@
+#include "common/bvh.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+
+namespace vobb {
+namespace {
+
+TEST(AabbTree, OverlapQueriesMatchBruteForce) {
+  std::mt19937_64 rng(1);
+  std::uniform_real_distribution<double> u(0, 10), s(0, 1);
+  for (int n : {0, 1, 3, 17, 500}) {
+    std::vector<Aabb> boxes(n);
+    for (Aabb& b : boxes) {
+      const Vec3 lo(u(rng), u(rng), u(rng));
+      b.lo = lo;
+      b.hi = lo + Vec3(s(rng), s(rng), s(rng));
+    }
+    AabbTree tree(boxes);
+    for (int q = 0; q < 100; ++q) {
+      Aabb query;
+      query.lo = Vec3(u(rng), u(rng), u(rng));
+      query.hi = query.lo + 2 * Vec3(s(rng), s(rng), s(rng));
+      std::vector<int32_t> got, want;
+      tree.for_each_overlap(query, [&](int32_t i) { got.push_back(i); });
+      for (int i = 0; i < n; ++i)
+        if (boxes[i].overlaps(query)) want.push_back(i);
+      std::sort(got.begin(), got.end());
+      ASSERT_EQ(got, want);
+    }
+  }
+}
+
+TEST(AabbTree, TouchingBoxesOverlap) {
+  Aabb a, b;
+  a.lo = Vec3(0, 0, 0);
+  a.hi = Vec3(1, 1, 1);
+  b.lo = Vec3(1, 0, 0);
+  b.hi = Vec3(2, 1, 1);
+  EXPECT_TRUE(a.overlaps(b));
+  AabbTree tree({a});
+  int hits = 0;
+  tree.for_each_overlap(b, [&](int32_t) { ++hits; });
+  EXPECT_EQ(hits, 1);
+}
+
+}  // namespace
+}  // namespace vobb

@@ -1,0 +1,92 @@
+#include "common/exact_predicates.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+namespace vobb {
+namespace {
+
+int reference_orient3d(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+  Rational u[3], v[3], w[3];
+  for (int i = 0; i < 3; ++i) {
+    u[i] = Rational(b[i]) - Rational(a[i]);
+    v[i] = Rational(c[i]) - Rational(a[i]);
+    w[i] = Rational(d[i]) - Rational(a[i]);
+  }
+  return sgn(u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) +
+             u[2] * (v[0] * w[1] - v[1] * w[0]));
+}
+
+TEST(Orient3d, SignsOfSimpleCases) {
+  const Vec3 a(0, 0, 0), b(1, 0, 0), c(0, 1, 0);
+  EXPECT_EQ(orient3d(a, b, c, Vec3(0.3, 0.3, 1)), 1);
+  EXPECT_EQ(orient3d(a, b, c, Vec3(0.3, 0.3, -1)), -1);
+  EXPECT_EQ(orient3d(a, b, c, Vec3(5, -7, 0)), 0);
+  EXPECT_EQ(orient3d(a, b, c, Vec3(0, 0, std::ldexp(1.0, -1074))), 1);  // smallest subnormal
+}
+
+// Points exactly on the plane z = x + y with large coordinates, where the double evaluation
+// rounds: the filter must hand these to the exact path, which must say 0; one unit off the
+// plane must give opposite signs. Checked against an independent rational evaluation.
+TEST(Orient3d, NearDegenerateLargeCoordinatesMatchRationalReference) {
+  std::mt19937_64 rng(7);
+  std::uniform_int_distribution<int64_t> big(-(int64_t(1) << 51), int64_t(1) << 51);
+  for (int trial = 0; trial < 2000; ++trial) {
+    Vec3 p[4];
+    for (auto& q : p) {
+      const double x = static_cast<double>(big(rng)), y = static_cast<double>(big(rng));
+      q = Vec3(x, y, x + y);  // |x + y| < 2^52: exact
+    }
+    ASSERT_EQ(orient3d(p[0], p[1], p[2], p[3]), 0);
+    const Vec3 up = p[3] + Vec3(0, 0, 1), down = p[3] - Vec3(0, 0, 1);
+    const int su = orient3d(p[0], p[1], p[2], up), sd = orient3d(p[0], p[1], p[2], down);
+    ASSERT_EQ(su, reference_orient3d(p[0], p[1], p[2], up));
+    ASSERT_EQ(sd, reference_orient3d(p[0], p[1], p[2], down));
+    if (su != 0) {
+      ASSERT_EQ(su, -sd);
+    }
+  }
+}
+
+TEST(Orient3d, RandomPointsMatchRationalReference) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (int trial = 0; trial < 5000; ++trial) {
+    Vec3 p[4];
+    for (auto& q : p) q = Vec3(u(rng), u(rng), u(rng)) * std::pow(10.0, trial % 7 - 3);
+    // Every 3rd case lies near the plane of the first three.
+    if (trial % 3 == 0) p[3] = p[0] + 0.25 * (p[1] - p[0]) + 0.5 * (p[2] - p[0]);
+    ASSERT_EQ(orient3d(p[0], p[1], p[2], p[3]), reference_orient3d(p[0], p[1], p[2], p[3]));
+  }
+}
+
+TEST(Orient2d, CollinearityIsExact) {
+  EXPECT_TRUE(collinear(Vec3(0, 0, 0), Vec3(1, 1, 1), Vec3(3, 3, 3)));
+  EXPECT_FALSE(collinear(Vec3(0, 0, 0), Vec3(1, 1, 1), Vec3(3, 3, std::nextafter(3.0, 4.0))));
+  // In binary, 0.9 is not exactly 3 * 0.3 nor 0.3 exactly 3 * 0.1: nearly collinear, and the
+  // rational cross product decides.
+  const Vec3 a(0, 0, 0), b(0.1, 0.3, 0), c(0.3, 0.9, 0);
+  const Rational cross = Rational(b[0]) * Rational(c[1]) - Rational(b[1]) * Rational(c[0]);
+  EXPECT_NE(cross, 0);
+  EXPECT_FALSE(collinear(a, b, c));
+  EXPECT_TRUE(collinear(a, Vec3(0.1, 0.2, 0), Vec3(0.3, 0.6, 0)));  // y = 2x exactly
+  EXPECT_EQ(orient2d(Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), 0, 1), 1);
+  EXPECT_EQ(orient2d(Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, -1, 0), 0, 1), -1);
+}
+
+TEST(ToDoubleNearest, RoundsToNearestNotTowardZero) {
+  EXPECT_EQ(to_double_nearest(Rational(1, 3)), 1.0 / 3.0);  // IEEE division rounds to nearest
+  // 1 + 2^-53 + 2^-80 lies just above the midpoint of 1 and 1 + 2^-52: nearest is the latter,
+  // while truncation (mpq_get_d) gives 1.
+  Rational q = 1;
+  q += Rational(1) / (Rational(mpz_class(1) << 53));
+  q += Rational(1) / (Rational(mpz_class(1) << 80));
+  EXPECT_EQ(to_double_nearest(q), 1.0 + std::ldexp(1.0, -52));
+  EXPECT_EQ(q.get_d(), 1.0);
+  EXPECT_EQ(format_nearest(Rational(1, 10)), "0.10000000000000001");
+}
+
+}  // namespace
+}  // namespace vobb

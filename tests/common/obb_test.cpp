@@ -1,0 +1,131 @@
+#include "common/obb.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numeric>
+#include <random>
+
+#include "data/analytic_meshes.h"
+
+namespace vobb {
+namespace {
+
+std::array<Vec3, 3> random_axes(std::mt19937_64& rng) {
+  std::normal_distribution<double> n;
+  return orthonormalize({Vec3(n(rng), n(rng), n(rng)), Vec3(n(rng), n(rng), n(rng)), Vec3::Zero()});
+}
+
+Mesh random_soup(std::mt19937_64& rng, int faces, double scale, const Vec3& offset) {
+  std::uniform_real_distribution<double> u(-1, 1);
+  Mesh m;
+  for (int f = 0; f < faces; ++f) {
+    for (int k = 0; k < 3; ++k) m.vertices.push_back(offset + scale * Vec3(u(rng), u(rng), u(rng)));
+    m.faces.push_back({3 * f, 3 * f + 1, 3 * f + 2});
+  }
+  return m;
+}
+
+TEST(Obb, VolumeAndCorners) {
+  Obb b;
+  b.center = Vec3(1, 2, 3);
+  b.half = Vec3(0.5, 1, 2);
+  EXPECT_EQ(volume(b), 8.0);
+  const auto c = corners(b);
+  EXPECT_EQ(c[0], Vec3(0.5, 1, 1));
+  EXPECT_EQ(c[7], Vec3(1.5, 3, 5));
+}
+
+TEST(Orthonormalize, GivesRightHandedUnitFrame) {
+  std::mt19937_64 rng(3);
+  for (int i = 0; i < 100; ++i) {
+    const auto a = random_axes(rng);
+    // Gram-Schmidt in double: a few ulps off orthonormal.
+    const double tol = 8 * std::numeric_limits<double>::epsilon();
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(a[k].norm(), 1.0, tol);
+    EXPECT_NEAR(a[0].dot(a[1]), 0.0, tol);
+    EXPECT_NEAR(a[0].cross(a[1]).dot(a[2]), 1.0, tol);
+  }
+}
+
+// fit_obb: every vertex inside the certified solid (exactly), and every one of the six box
+// faces within fit_slack's padding plus the same again for rounding of some vertex: tight.
+TEST(FitObb, ConservativeAndTightOnRandomSoups) {
+  std::mt19937_64 rng(5);
+  const Vec3 offsets[] = {Vec3::Zero(), Vec3(1e6, -2e6, 3e6), Vec3(1e-6, 0, 0)};
+  const double scales[] = {1.0, 1e-6, 1e6};
+  for (const Vec3& off : offsets)
+    for (double scale : scales) {
+      Mesh m = random_soup(rng, 40, scale, off);
+      std::vector<int32_t> faces(m.faces.size());
+      std::iota(faces.begin(), faces.end(), 0);
+      for (int t = 0; t < 10; ++t) {
+        const Obb box = fit_obb(m, faces, random_axes(rng));
+        ExactBoxContainment inside(box);
+        double mesh_scale = 0;
+        for (const Vec3& v : m.vertices) {
+          ASSERT_TRUE(inside.contains(v));
+          mesh_scale = std::max(mesh_scale, v.cwiseAbs().maxCoeff());
+        }
+        const double slack = fit_slack(box, mesh_scale);
+        for (int k = 0; k < 3; ++k) {
+          double hi = -INFINITY, lo = INFINITY;
+          for (const Vec3& v : m.vertices) {
+            const double s = (v - box.center).dot(box.axes[k]);
+            hi = std::max(hi, s);
+            lo = std::min(lo, s);
+          }
+          EXPECT_LE(box.half[k] - hi, 2 * slack) << "face +" << k << " not touched";
+          EXPECT_LE(box.half[k] + lo, 2 * slack) << "face -" << k << " not touched";
+          EXPECT_GT(box.half[k] - hi, -2 * slack);
+        }
+      }
+    }
+}
+
+TEST(FitObb, SingleFaceGetsAThinButValidBox) {
+  Mesh m;
+  m.vertices = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
+  m.faces = {{0, 1, 2}};
+  const Obb box = fit_obb(m, {0}, {Vec3::UnitX(), Vec3::UnitY(), Vec3::UnitZ()});
+  EXPECT_GT(box.half[2], 0.0);
+  EXPECT_LE(box.half[2], 2 * fit_slack(box, 1.0));
+  ExactBoxContainment inside(box);
+  for (const Vec3& v : m.vertices) EXPECT_TRUE(inside.contains(v));
+}
+
+TEST(ExactBoxContainment, BoundaryIsInsideAndOneUlpBeyondIsOutside) {
+  Obb b;
+  b.center = Vec3(0.1, 0.2, 0.3);
+  b.half = Vec3(0.5, 0.25, 1.0);
+  ExactBoxContainment inside(b);
+  // Axis-aligned: the face x = 0.1 + 0.5 is the exact rational sum, which may not be a double;
+  // test with a centre and extents whose sums are exact instead.
+  Obb e;
+  e.center = Vec3(1, 2, 3);
+  e.half = Vec3(0.5, 0.25, 1);
+  ExactBoxContainment in_e(e);
+  EXPECT_TRUE(in_e.contains(Vec3(1.5, 2.25, 4)));  // a corner
+  EXPECT_FALSE(in_e.contains(Vec3(std::nextafter(1.5, 2.0), 2, 3)));
+  EXPECT_FALSE(in_e.contains(Vec3(1, 2, std::nextafter(2.0, 0.0))));
+  EXPECT_TRUE(inside.contains(b.center));
+  Obb flat = e;
+  flat.half[1] = 0;
+  EXPECT_FALSE(ExactBoxContainment(flat).contains(e.center));  // zero volume contains nothing
+}
+
+// A box rotated by the 3-4-5 rotation about z: its axes (3/5, 4/5, 0) round in double, and the
+// certified solid is the parallelepiped of the rounded axes. Points strictly inside by a
+// margin far above rounding are inside; points as far outside are out.
+TEST(ExactBoxContainment, RotatedBox) {
+  Obb b;
+  b.axes = {Vec3(0.6, 0.8, 0), Vec3(-0.8, 0.6, 0), Vec3(0, 0, 1)};
+  b.half = Vec3(2, 1, 1);
+  ExactBoxContainment inside(b);
+  EXPECT_TRUE(inside.contains(1.999 * b.axes[0] + 0.999 * b.axes[1]));
+  EXPECT_FALSE(inside.contains(2.001 * b.axes[0]));
+  EXPECT_FALSE(inside.contains(1.001 * b.axes[1]));
+}
+
+}  // namespace
+}  // namespace vobb

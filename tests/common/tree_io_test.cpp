@@ -1,0 +1,132 @@
+#include "common/tree_io.h"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "data/analytic_meshes.h"
+#include "test_common.h"
+
+namespace vobb {
+namespace {
+
+// A two-level tree over the octahedron: root, two leaves of four faces each.
+Tree small_tree() {
+  const Mesh m = analytic::octahedron().mesh;
+  const std::array<Vec3, 3> frame = {Vec3(0.6, 0.8, 0), Vec3(-0.8, 0.6, 0), Vec3(0, 0, 1)};
+  Tree t;
+  t.method = "test";
+  t.arity = 2;
+  t.depth = 1;
+  t.mesh_triangles = m.faces.size();
+  t.mesh_sha256 = "abc";
+  TreeNode root;
+  root.faces = {0, 1, 2, 3, 4, 5, 6, 7};
+  root.children = {1, 2};
+  root.box = fit_obb(m, root.faces, frame);
+  TreeNode a, b;
+  a.id = 1;
+  b.id = 2;
+  a.parent = b.parent = 0;
+  a.level = b.level = 1;
+  a.faces = {0, 1, 2, 3};
+  b.faces = {4, 5, 6, 7};
+  a.box = fit_obb(m, a.faces, frame);
+  b.box = fit_obb(m, b.faces, frame);
+  t.nodes = {root, a, b};
+  return t;
+}
+
+void expect_same(const Tree& x, const Tree& y) {
+  EXPECT_EQ(x.method, y.method);
+  EXPECT_EQ(x.arity, y.arity);
+  EXPECT_EQ(x.depth, y.depth);
+  EXPECT_EQ(x.mesh_triangles, y.mesh_triangles);
+  EXPECT_EQ(x.mesh_sha256, y.mesh_sha256);
+  ASSERT_EQ(x.nodes.size(), y.nodes.size());
+  for (size_t i = 0; i < x.nodes.size(); ++i) {
+    const TreeNode &a = x.nodes[i], &b = y.nodes[i];
+    EXPECT_EQ(a.id, b.id);
+    EXPECT_EQ(a.parent, b.parent);
+    EXPECT_EQ(a.level, b.level);
+    EXPECT_EQ(a.children, b.children);
+    EXPECT_EQ(a.faces, b.faces);
+    EXPECT_EQ(a.box.center, b.box.center);  // bit for bit
+    EXPECT_EQ(a.box.half, b.box.half);
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(a.box.axes[k], b.box.axes[k]);
+  }
+}
+
+TEST(TreeIo, RoundTripIsBitExactAndDeterministic) {
+  const Tree t = small_tree();
+  const std::string path = test::temp_path("tree.json");
+  ASSERT_TRUE(write_tree(t, path));
+  Tree back;
+  const Status s = read_tree(path, &back);
+  ASSERT_TRUE(s) << s.message();
+  expect_same(t, back);
+  EXPECT_EQ(tree_to_json(t), tree_to_json(back));
+  std::remove(path.c_str());
+}
+
+TEST(TreeIo, LayersFollowTheDesignDefinition) {
+  Tree t = small_tree();
+  EXPECT_EQ(layer(t, 0), std::vector<int32_t>({0}));
+  EXPECT_EQ(layer(t, 1), std::vector<int32_t>({1, 2}));
+}
+
+TEST(TreeIo, UnknownKeysIgnoredAndInnerFacesFilledIn) {
+  std::string j = tree_to_json(small_tree());
+  // Drop the root's faces and add a key nobody knows.
+  const size_t at = j.find("\"faces\":[0,1,2,3,4,5,6,7]");
+  ASSERT_NE(at, std::string::npos);
+  j.replace(at, std::string("\"faces\":[0,1,2,3,4,5,6,7]").size(), "\"colour\":\"red\"");
+  Tree t;
+  const Status s = parse_tree(j, "t.json", &t);
+  ASSERT_TRUE(s) << s.message();
+  EXPECT_EQ(t.nodes[0].faces, std::vector<int32_t>({0, 1, 2, 3, 4, 5, 6, 7}));
+}
+
+TEST(TreeIo, RefusesBrokenTreesWithOneLine) {
+  const std::string good = tree_to_json(small_tree());
+  auto refused = [](const std::string& text, const std::string& phrase) {
+    Tree t;
+    const Status s = parse_tree(text, "t.json", &t);
+    EXPECT_FALSE(s) << "accepted: " << text.substr(0, 80);
+    EXPECT_NE(s.message().find(phrase), std::string::npos) << s.message();
+    EXPECT_EQ(s.message().find('\n'), std::string::npos);
+    EXPECT_EQ(s.message().rfind("t.json: ", 0), 0u);
+  };
+  auto edit = [&](const std::string& from, const std::string& to) {
+    std::string s = good;
+    const size_t at = s.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    return s.replace(at, from.size(), to);
+  };
+  refused("", "not valid JSON");
+  refused(good.substr(0, good.size() / 2), "not valid JSON");
+  refused("{\"format\":\"other\"}", "not a vobb tree");
+  refused(edit("\"version\":1", "\"version\":2"), "version");
+  refused(edit("\"faces\":[4,5,6,7]", "\"faces\":[3,5,6,7]"), "two leaves");
+  refused(edit("\"faces\":[4,5,6,7]", "\"faces\":[5,6,7]"), "union");
+  refused(edit("\"faces\":[4,5,6,7]", "\"faces\":[4,5,6,70]"), "out of range");
+  refused(edit("\"center\":[", "\"centre\":["), "center");
+  refused(edit("\"depth\":1", "\"depth\":3"), "deepest leaf");
+  refused(edit("\"parent\":0", "\"parent\":2"), "bad child 1");
+}
+
+TEST(BoxFile, RoundTrip) {
+  const Tree t = small_tree();
+  std::vector<Obb> boxes = {t.nodes[0].box, t.nodes[1].box};
+  const std::string path = test::temp_path("boxes.json");
+  ASSERT_TRUE(write_boxes(boxes, path));
+  std::vector<Obb> back;
+  ASSERT_TRUE(read_boxes(path, &back));
+  ASSERT_EQ(back.size(), 2u);
+  EXPECT_EQ(back[1].center, boxes[1].center);
+  EXPECT_EQ(back[1].half, boxes[1].half);
+  std::remove(path.c_str());
+}
+
+}  // namespace
+}  // namespace vobb
