@@ -297,11 +297,14 @@ SolidityReport check_solidity(const Mesh& mesh) {
     return 3 * face + (F[0] == vertex ? 0 : F[1] == vertex ? 1 : 2);
   };
   for (size_t i = 0; i < recs.size();) {
-    size_t j = i;
-    while (j < recs.size() && recs[j].lo == recs[i].lo && recs[j].hi == recs[i].hi) ++j;
+    const EdgeRec& first = recs[i];
+    size_t j = i + 1;
+    while (j < recs.size() && recs[j].lo == first.lo && recs[j].hi == first.hi) {
+      shells.unite(first.face, recs[j].face);
+      ++j;
+    }
     const size_t count = j - i;
     ++r.edges;
-    for (size_t k = i + 1; k < j; ++k) shells.unite(recs[i].face, recs[k].face);
     if (count == 1) ++border;
     else if (count > 2) ++nonmanifold;
     else if (recs[i].forward == recs[i + 1].forward) ++inconsistent;

@@ -167,8 +167,6 @@ Status read_off(const Reader& r, LoadedMesh* out) {
   const std::string_view prefix = head.substr(0, head.size() - 3);
   if (prefix.find('4') != std::string_view::npos || prefix.find('n') != std::string_view::npos)
     return r.fail_at(lines.number(), "only 3D OFF is supported (header '" + std::string(head) + "')");
-  const bool has_normals = prefix.find('N') != std::string_view::npos;
-  (void)has_normals;
   size_t first = 1;
   if (t.size() > 1 && t[1] == "BINARY") return r.fail_at(lines.number(), "binary OFF is not supported");
   if (t.size() == first) {
