@@ -1,8 +1,7 @@
 #include "common/box_export.h"
 
-#include <charconv>
-
 #include "common/atomic_file.h"
+#include "common/text_util.h"
 
 namespace vobb {
 namespace {
@@ -11,20 +10,6 @@ namespace {
 // corners counter-clockwise seen from outside for a right-handed frame.
 constexpr int kQuads[6][4] = {{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4},
                               {2, 6, 7, 3}, {0, 2, 3, 1}, {4, 5, 7, 6}};
-
-void put(std::string* s, double v) {
-  char buf[32];
-  auto res = std::to_chars(buf, buf + sizeof buf, v);
-  s->append(buf, res.ptr);
-}
-
-std::string extension_of(const std::string& path) {
-  const size_t dot = path.find_last_of('.');
-  if (dot == std::string::npos || path.find('/', dot) != std::string::npos) return "";
-  std::string e = path.substr(dot + 1);
-  for (char& c : e) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return e;
-}
 
 }  // namespace
 
@@ -38,11 +23,7 @@ Status export_boxes(const std::vector<Obb>& boxes, const std::vector<std::string
       s += "o " + (b < names.size() ? names[b] : "box_" + std::to_string(b)) + "\n";
       for (const Vec3& p : corners(boxes[b])) {
         s += "v ";
-        put(&s, p[0]);
-        s += ' ';
-        put(&s, p[1]);
-        s += ' ';
-        put(&s, p[2]);
+        append_xyz(&s, p);
         s += '\n';
       }
       for (const auto& q : kQuads) {
@@ -57,11 +38,7 @@ Status export_boxes(const std::vector<Obb>& boxes, const std::vector<std::string
         std::to_string(6 * boxes.size()) + "\nproperty list uchar int vertex_indices\nend_header\n";
     for (const Obb& box : boxes)
       for (const Vec3& p : corners(box)) {
-        put(&s, p[0]);
-        s += ' ';
-        put(&s, p[1]);
-        s += ' ';
-        put(&s, p[2]);
+        append_xyz(&s, p);
         s += '\n';
       }
     for (size_t b = 0; b < boxes.size(); ++b)

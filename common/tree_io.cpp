@@ -6,16 +6,12 @@
 #include <sstream>
 
 #include "common/atomic_file.h"
+#include "common/text_util.h"
 
 namespace vobb {
 namespace {
 
 using Json = nlohmann::ordered_json;
-
-std::string basename_of(const std::string& path) {
-  const size_t slash = path.find_last_of('/');
-  return slash == std::string::npos ? path : path.substr(slash + 1);
-}
 
 Json vec_json(const Vec3& v) { return Json::array({v[0], v[1], v[2]}); }
 

@@ -14,6 +14,7 @@
 #include <unordered_map>
 
 #include "common/atomic_file.h"
+#include "common/text_util.h"
 #include "vobb/config.h"
 
 namespace vobb {
@@ -22,22 +23,6 @@ namespace vobb {
 Status load_with_assimp(const std::string& path, const std::string& display, LoadedMesh* out);
 
 namespace {
-
-std::string basename_of(const std::string& path) {
-  const size_t slash = path.find_last_of('/');
-  return slash == std::string::npos ? path : path.substr(slash + 1);
-}
-
-std::string lower(std::string s) {
-  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return s;
-}
-
-std::string extension_of(const std::string& path) {
-  const std::string base = basename_of(path);
-  const size_t dot = base.find_last_of('.');
-  return dot == std::string::npos ? std::string() : lower(base.substr(dot + 1));
-}
 
 // ---- small lexing helpers ----------------------------------------------------------------
 
@@ -650,12 +635,6 @@ Status load_mesh(const std::string& path, LoadedMesh* out) {
 
 namespace {
 
-void put(std::string* s, double v) {
-  char buf[32];
-  auto res = std::to_chars(buf, buf + sizeof buf, v);  // shortest round-trip form
-  s->append(buf, res.ptr);
-}
-
 template <typename T>
 void put_bin(std::string* s, T v) {
   char b[sizeof(T)];
@@ -669,10 +648,7 @@ Status save_mesh(const Mesh& m, const std::string& path, MeshFormat format) {
   std::string s;
   auto vertex_line = [&](const char* prefix, const Vec3& v) {
     s += prefix;
-    for (int k = 0; k < 3; ++k) {
-      if (k) s += ' ';
-      put(&s, v[k]);
-    }
+    append_xyz(&s, v);
     s += '\n';
   };
   switch (format) {

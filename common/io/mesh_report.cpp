@@ -3,13 +3,10 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "common/text_util.h"
+
 namespace vobb {
 namespace {
-
-std::string basename_of(const std::string& path) {
-  const size_t slash = path.find_last_of('/');
-  return slash == std::string::npos ? path : path.substr(slash + 1);
-}
 
 std::string num(double v) {
   char buf[40];

@@ -1,0 +1,20 @@
+// Small text helpers shared by the readers and writers: file-name parts for one-line error
+// messages, and the shortest round-trip form of a double.
+#pragma once
+
+#include <string>
+
+#include "common/mesh.h"
+
+namespace vobb {
+
+// "dir/dino.off" -> "dino.off": error messages name the file, not the whole path.
+std::string basename_of(const std::string& path);
+// Lower-cased extension without the dot; "" when there is none.
+std::string extension_of(const std::string& path);
+// Appends the shortest decimal form that reads back as the same double (std::to_chars).
+void append_double(std::string* s, double v);
+// Appends "x y z" with append_double, and no newline.
+void append_xyz(std::string* s, const Vec3& v);
+
+}  // namespace vobb
