@@ -8,10 +8,11 @@
 namespace vobb {
 namespace {
 
+// Bounding-box coordinates are the file's own doubles: shortest form that reads back exactly.
 std::string num(double v) {
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
-  return buf;
+  std::string s;
+  append_double(&s, v);
+  return s;
 }
 
 }  // namespace

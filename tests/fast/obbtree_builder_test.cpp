@@ -94,7 +94,9 @@ TEST_P(ObbTreeReal, Depth8IsConservativeWith511Nodes) {
   size_t single_face_leaves_above = 0;
   for (const TreeNode& n : t.nodes)
     if (n.is_leaf() && n.level < 8) ++single_face_leaves_above;
-  if (single_face_leaves_above == 0) EXPECT_EQ(t.nodes.size(), 511u);
+  if (single_face_leaves_above == 0) {
+    EXPECT_EQ(t.nodes.size(), 511u);
+  }
   EXPECT_EQ(t.depth, 8);
   expect_valid_conservative(lm.mesh, t, 8);
 }
