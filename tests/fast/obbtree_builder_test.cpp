@@ -24,8 +24,11 @@ void expect_valid_conservative(const Mesh& m, const Tree& t, int depth) {
     for (const TreeNode& node : t.nodes) n += node.faces.size();
     return n;
   }());
-  for (const TreeNode& node : t.nodes)
-    if (node.level < depth && node.faces.size() > 1) EXPECT_FALSE(node.is_leaf()) << node.id;
+  for (const TreeNode& node : t.nodes) {
+    if (node.level < depth && node.faces.size() > 1) {
+      EXPECT_FALSE(node.is_leaf()) << node.id;
+    }
+  }
 }
 
 TEST(ObbTree, AnalyticMeshesGiveValidConservativeTrees) {
