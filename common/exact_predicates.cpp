@@ -15,6 +15,11 @@ constexpr double kEps = std::numeric_limits<double>::epsilon() / 2;  // unit rou
 // same evaluation order: the floating result is off by at most bound * permanent.
 constexpr double kOrient2dBound = (3.0 + 16.0 * kEps) * kEps;
 constexpr double kOrient3dBound = (7.0 + 56.0 * kEps) * kEps;
+// Shewchuk's bounds assume no underflow. A product that underflows is off by at most 2^-1075
+// in absolute terms (subtractions of subnormals are exact); in orient3d such an error in a
+// minor is then multiplied by |u|. Adding 2^-1020 (|u|_1 + 1), itself never subnormal, covers
+// that with a factor of 2^50 to spare; it only sends determinants near 1e-307 to GMP.
+const double kUnderflowSlack = std::ldexp(1.0, -1020);
 
 int sign_of(const Rational& q) { return sgn(q); }
 
@@ -49,7 +54,8 @@ int orient3d(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
   const double perm = std::abs(ux) * (std::abs(vy * wz) + std::abs(vz * wy)) +
                       std::abs(uy) * (std::abs(vz * wx) + std::abs(vx * wz)) +
                       std::abs(uz) * (std::abs(vx * wy) + std::abs(vy * wx));
-  const double bound = kOrient3dBound * perm;
+  const double bound = kOrient3dBound * perm +
+                      kUnderflowSlack * (std::abs(ux) + std::abs(uy) + std::abs(uz) + 1.0);
   if (det > bound) return 1;
   if (-det > bound) return -1;
   return orient3d_exact(a, b, c, d);
@@ -59,7 +65,7 @@ int orient2d(const Vec3& a, const Vec3& b, const Vec3& c, int i, int j) {
   const double l = (b[i] - a[i]) * (c[j] - a[j]);
   const double r = (b[j] - a[j]) * (c[i] - a[i]);
   const double det = l - r;
-  const double bound = kOrient2dBound * (std::abs(l) + std::abs(r));
+  const double bound = kOrient2dBound * (std::abs(l) + std::abs(r)) + kUnderflowSlack;
   if (det > bound) return 1;
   if (-det > bound) return -1;
   return orient2d_exact(a, b, c, i, j);

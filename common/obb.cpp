@@ -7,6 +7,9 @@
 namespace vobb {
 namespace {
 constexpr double kEps = std::numeric_limits<double>::epsilon();
+// Below this, products in the containment filter may underflow (2^-1022 is the least normal;
+// the filter multiplies three such factors at most): such cases take the exact path.
+const double kFilterFloor = std::ldexp(1.0, -600);
 }
 
 double volume(const Obb& box) {
@@ -111,13 +114,18 @@ bool ExactBoxContainment::contains(const Vec3& p) const {
   // Filter: t_k det = (p - c) . w_k. In double, the difference p - c is off by eps|p - c|,
   // the stored w is off by 2 eps |w| (rounded from exact), the dot product adds 3 eps: the
   // result is off by at most 8 eps sum_i |p_i - c_i| |w_i|; the determinant shadow by 2 eps.
-  bool certain = true;
+  // The filter's relative bounds fail where values underflow; tiny boxes go exact.
+  bool certain = abs_det_d_ > kFilterFloor;
   for (int k = 0; k < 3 && certain; ++k) {
     double dot = 0.0, mag = 0.0;
     for (int i = 0; i < 3; ++i) {
       const double d = p[i] - cd_[i];
       dot += d * wd_[k][i];
       mag += std::abs(d * wd_[k][i]);
+    }
+    if (mag < kFilterFloor) {
+      certain = false;
+      break;
     }
     const double err = 8.0 * kEps * mag + 2.0 * kEps * abs_det_d_;
     if (std::abs(dot) + err < abs_det_d_) continue;          // surely inside slab k

@@ -13,6 +13,7 @@ const char* defect_name(Defect d) {
   switch (d) {
     case Defect::kEmpty: return "empty";
     case Defect::kNonFinite: return "non-finite";
+    case Defect::kHugeCoordinate: return "huge-coordinate";
     case Defect::kDegenerateFace: return "degenerate";
     case Defect::kNotClosed: return "not-closed";
     case Defect::kNonManifoldEdge: return "non-manifold";
@@ -29,6 +30,7 @@ std::string DefectCount::describe() const {
   switch (defect) {
     case Defect::kEmpty: return "empty: no faces";
     case Defect::kNonFinite: return "non-finite coordinates (NaN or Inf): " + n + " vertices";
+    case Defect::kHugeCoordinate: return "coordinates beyond +-2^299 (about 1e90): " + n + " vertices";
     case Defect::kDegenerateFace: return "degenerate faces (zero area): " + n + " faces";
     case Defect::kNotClosed: return "not closed: " + n + " border edges";
     case Defect::kNonManifoldEdge: return "non-manifold: " + n + " edges shared by more than two faces";
@@ -249,9 +251,11 @@ SolidityReport check_solidity(const Mesh& mesh) {
     return r;
   }
   // Finite coordinates first: every predicate below assumes them.
-  size_t nonfinite = 0;
-  for (const Vec3& v : mesh.vertices)
+  size_t nonfinite = 0, huge = 0;
+  for (const Vec3& v : mesh.vertices) {
     if (!v.allFinite()) ++nonfinite;
+    else if (v.cwiseAbs().maxCoeff() > kMaxCoordinate) ++huge;
+  }
 
   // Degenerate faces: a repeated index, or three collinear points (exactly).
   const size_t nf = mesh.faces.size();
@@ -260,7 +264,7 @@ SolidityReport check_solidity(const Mesh& mesh) {
   for (size_t f = 0; f < nf; ++f) {
     const Face& F = mesh.faces[f];
     bool deg = F[0] == F[1] || F[1] == F[2] || F[2] == F[0];
-    if (!deg && nonfinite == 0) deg = collinear(mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2));
+    if (!deg && nonfinite == 0 && huge == 0) deg = collinear(mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2));
     if (deg) {
       degenerate[f] = 1;
       ++n_degenerate;
@@ -327,6 +331,7 @@ SolidityReport check_solidity(const Mesh& mesh) {
   r.shells = shell_faces.size();
 
   if (nonfinite) r.defects.push_back({Defect::kNonFinite, nonfinite});
+  if (huge) r.defects.push_back({Defect::kHugeCoordinate, huge});
   if (n_degenerate) r.defects.push_back({Defect::kDegenerateFace, n_degenerate});
   if (border) r.defects.push_back({Defect::kNotClosed, border});
   if (nonmanifold) r.defects.push_back({Defect::kNonManifoldEdge, nonmanifold});
@@ -346,7 +351,7 @@ SolidityReport check_solidity(const Mesh& mesh) {
     if (n_pinched) r.defects.push_back({Defect::kNonManifoldVertex, n_pinched});
   }
   if (inconsistent) r.defects.push_back({Defect::kInconsistentOrientation, inconsistent});
-  if (nonfinite) return r;  // nothing geometric can be decided on NaN
+  if (nonfinite || huge) return r;  // nothing geometric can be decided on NaN or near overflow
 
   // Self-intersections among the non-degenerate faces, candidates from a box tree.
   {

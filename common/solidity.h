@@ -19,6 +19,7 @@ namespace vobb {
 enum class Defect {
   kEmpty,              // no faces
   kNonFinite,          // NaN or Inf coordinates (count: vertices)
+  kHugeCoordinate,     // |coordinate| > kMaxCoordinate (count: vertices)
   kDegenerateFace,     // repeated vertex or zero area (count: faces)
   kNotClosed,          // border edges (count: edges)
   kNonManifoldEdge,    // edges with more than two faces (count: edges)
@@ -29,6 +30,11 @@ enum class Defect {
 };
 
 const char* defect_name(Defect d);
+
+// Largest accepted |coordinate|, 2^299 (about 1e90): the double computations downstream
+// (triple products in predicate filters, second moments, cross products of box axes scaled
+// by extents) must stay finite, and (2 * 2^299)^3 * 6 < 2^1024.
+constexpr double kMaxCoordinate = 0x1p299;
 
 struct DefectCount {
   Defect defect;

@@ -529,7 +529,18 @@ Status read_stl(const Reader& r, LoadedMesh* out) {
     std::memcpy(&n, d.data() + 80, 4);
     if (d.size() == 84 + 50ull * n) return read_stl_binary(r, out);
   }
-  if (d.substr(0, 5) == "solid") return read_stl_ascii(r, out);
+  if (d.substr(0, 5) == "solid") {
+    // A binary file whose header starts with "solid" and that carries trailing bytes: if the
+    // ASCII parse fails but the binary layout fits, read it as binary.
+    Status s = read_stl_ascii(r, out);
+    if (s || d.size() < 84) return s;
+    uint32_t n;
+    std::memcpy(&n, d.data() + 80, 4);
+    if (d.size() < 84 + 50ull * n) return s;
+    *out = LoadedMesh();
+    out->format = "stl";
+    return read_stl_binary(r, out);
+  }
   return read_stl_binary(r, out);
 }
 

@@ -62,6 +62,24 @@ TEST(Orient3d, RandomPointsMatchRationalReference) {
   }
 }
 
+// Subnormal coordinates: products underflow, which Shewchuk's relative bound does not cover
+// (a review found the filter confidently wrong here before the underflow slack was added).
+TEST(Orient3d, SubnormalCoordinatesMatchRationalReference) {
+  const Vec3 a(-0x1.e7fe8b008553dp+0, -0x1.4c6b934abf8d8p-3, 0x0.0000000000231p-1022);
+  const Vec3 b(-0x1.9fda85c67d136p-1, -0x1.15f63946305dcp-2, -0x0.000000000006ap-1022);
+  const Vec3 c(-0x1.7a44ae1818522p+0, -0x1.606abb225c768p-1, -0x0.0000000000987p-1022);
+  const Vec3 d(0x1.4ead9ea3923f2p+0, -0x1.1957d21b5d73ep-1, -0x0.00000000006fp-1022);
+  EXPECT_EQ(orient3d(a, b, c, d), reference_orient3d(a, b, c, d));
+  std::mt19937_64 rng(13);
+  std::uniform_real_distribution<double> u(-2, 2);
+  std::uniform_int_distribution<int> tiny(-5000, 5000);
+  for (int trial = 0; trial < 200000; ++trial) {
+    Vec3 p[4];
+    for (auto& q : p) q = Vec3(u(rng), u(rng), tiny(rng) * std::ldexp(1.0, -1074));
+    ASSERT_EQ(orient3d(p[0], p[1], p[2], p[3]), reference_orient3d(p[0], p[1], p[2], p[3])) << trial;
+  }
+}
+
 TEST(Orient2d, CollinearityIsExact) {
   EXPECT_TRUE(collinear(Vec3(0, 0, 0), Vec3(1, 1, 1), Vec3(3, 3, 3)));
   EXPECT_FALSE(collinear(Vec3(0, 0, 0), Vec3(1, 1, 1), Vec3(3, 3, std::nextafter(3.0, 4.0))));

@@ -131,6 +131,14 @@ TEST(Solidity, NonFiniteCoordinates) {
   }
 }
 
+TEST(Solidity, HugeCoordinatesAreRefusedBeforeTheyOverflow) {
+  Mesh m = analytic::tetrahedron(1e308).mesh;
+  const DefectCount d = only_defect(m);
+  EXPECT_EQ(d.defect, Defect::kHugeCoordinate);
+  EXPECT_EQ(d.count, 3u);
+  EXPECT_TRUE(check_solidity(analytic::tetrahedron(1e89).mesh).solid());
+}
+
 // Pairs of faces: touching along a shared edge or vertex is fine; folding over, piercing or
 // touching elsewhere is an intersection.
 TEST(FacesIntersect, SharedEdgeAndVertexCases) {

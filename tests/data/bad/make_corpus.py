@@ -56,6 +56,8 @@ files["not_off_header.off"] = "PLY\n8 12 0\n"
 cav_v = [tuple(4 * x for x in v) for v in V] + [tuple(1 + 2 * x for x in v) for v in V]
 cav_f = F + [tuple(i + 8 for i in f) for f in F]  # cavity facing out: wrong
 files["cavity_facing_out.off"] = off(cav_v, cav_f)
+files["huge_coordinates.off"] = off([(0, 0, 0), (1e308, 0, 0), (0, 1e308, 0), (0, 0, 1e308)],
+                                    [(0, 2, 1), (0, 1, 3), (0, 3, 2), (1, 2, 3)])
 files["lines_only.obj"] = "v 0 0 0\nv 1 0 0\nl 1 2\n"
 files["no_faces.stl"] = "solid empty\nendsolid empty\n"
 files["bad_ply_header.ply"] = "ply\nformat ascii 1.0\nelement vertex 8\nproperty float x\nend_header\n"
