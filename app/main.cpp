@@ -2,6 +2,7 @@
 // and prints. Exit codes (DESIGN §7): 0 ok, 1 a check failed, 2 bad input or usage, with a
 // one-line reason on stderr naming the file and the defect.
 #include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
 #include <chrono>
 #include <cstdio>
 #include <string>
@@ -10,12 +11,14 @@
 #include "common/io/mesh_report.h"
 #include "common/sha256.h"
 #include "common/tree_io.h"
+#include "exact/certify.h"
 #include "fast/obbtree_builder.h"
 #include "vobb/config.h"
 
 namespace {
 
 constexpr int kExitOk = 0;
+constexpr int kExitCheckFailed = 1;
 constexpr int kExitBadInput = 2;
 
 int refuse(const vobb::Status& s) {
@@ -71,6 +74,84 @@ int run_export(const std::string& tree_path, int level, const std::string& out) 
   return kExitOk;
 }
 
+// Loads a solid mesh and a tree and checks that the tree indexes this mesh.
+vobb::Status load_mesh_and_tree(const std::string& mesh_path, const std::string& tree_path,
+                                vobb::LoadedMesh* mesh, vobb::Tree* tree) {
+  vobb::Status s = vobb::load_solid(mesh_path, mesh);
+  if (!s) return s;
+  s = vobb::read_tree(tree_path, tree);
+  if (!s) return s;
+  if (tree->mesh_triangles != mesh->mesh.faces.size())
+    return vobb::Status::error(tree_path + ": tree indexes " + std::to_string(tree->mesh_triangles) +
+                               " triangles but the mesh has " + std::to_string(mesh->mesh.faces.size()));
+  if (!tree->mesh_sha256.empty() && tree->mesh_sha256 != vobb::mesh_sha256(mesh->mesh))
+    return vobb::Status::error(tree_path + ": built for another mesh (sha256 differs)");
+  return vobb::Status::ok();
+}
+
+int run_certify(const std::string& mesh_path, const std::string& tree_path, bool json, bool rational,
+                const std::string& path, bool quiet) {
+  vobb::LoadedMesh mesh;
+  vobb::Tree tree;
+  vobb::Status s = load_mesh_and_tree(mesh_path, tree_path, &mesh, &tree);
+  if (!s) return refuse(s);
+  vobb::exact::CertifyOptions opt;
+  opt.path = path == "clip" ? vobb::exact::OmvPath::kClip
+             : path == "nef" ? vobb::exact::OmvPath::kNef
+             : path == "both" ? vobb::exact::OmvPath::kBoth
+                              : vobb::exact::OmvPath::kAuto;
+  if (!quiet) opt.progress = [](const std::string& line) { std::fprintf(stderr, "certify: %s\n", line.c_str()); };
+  const vobb::exact::Certificate c = vobb::exact::certify(mesh.mesh, tree, opt);
+  if (json) {
+    nlohmann::ordered_json j;
+    nlohmann::ordered_json levels = nlohmann::ordered_json::array();
+    for (const auto& l : c.layers) {
+      nlohmann::ordered_json jl;
+      jl["level"] = l.level;
+      jl["boxes"] = l.boxes;
+      jl["omv"] = vobb::to_double_nearest(l.omv);
+      jl["sum_obv"] = vobb::to_double_nearest(l.sum_obv);
+      jl["overlap"] = vobb::to_double_nearest(l.overlap());
+      jl["upper_bound_holds"] = l.upper_bound_holds();
+      jl["overlapping_boxes"] = l.overlapping_boxes;
+      jl["omv_path"] = l.omv_path;
+      if (l.omv_path == "both") jl["paths_agree"] = l.paths_agree;
+      jl["seconds"] = l.seconds;
+      if (rational) {
+        jl["omv_rational"] = l.omv.get_str();
+        jl["sum_obv_rational"] = l.sum_obv.get_str();
+      }
+      levels.push_back(jl);
+    }
+    j["levels"] = levels;
+    j["weighted_error"] = vobb::to_double_nearest(c.weighted_error);
+    if (rational) j["weighted_error_rational"] = c.weighted_error.get_str();
+    nlohmann::ordered_json first = nlohmann::ordered_json::array();
+    for (const auto& [node, face] : c.containment.first) first.push_back({{"node", node}, {"face", face}});
+    j["containment"] = {{"ok", c.containment.ok()}, {"violations", c.containment.violations},
+                        {"checked_pairs", c.containment.checked_pairs}, {"first", first}};
+    j["seconds"] = c.seconds;
+    std::printf("%s\n", j.dump(2).c_str());
+  } else {
+    std::printf("%5s %7s %24s %24s %24s %6s\n", "level", "boxes", "OMV", "sum OBV", "overlap", "bound");
+    for (const auto& l : c.layers)
+      std::printf("%5d %7zu %24s %24s %24s %6s\n", l.level, l.boxes, vobb::format_nearest(l.omv).c_str(),
+                  vobb::format_nearest(l.sum_obv).c_str(), vobb::format_nearest(l.overlap()).c_str(),
+                  l.upper_bound_holds() ? "holds" : "FAILS");
+    std::printf("weighted error e: %s\n", vobb::format_nearest(c.weighted_error).c_str());
+    if (rational) std::printf("e (rational): %s\n", c.weighted_error.get_str().c_str());
+    std::printf("containment: %s (%zu violations in %zu node-face pairs)", c.containment.ok() ? "ok" : "FAILED",
+                c.containment.violations, c.containment.checked_pairs);
+    for (const auto& [node, face] : c.containment.first) std::printf(" [node %d face %d]", node, face);
+    std::printf("\nseconds: %.3f\n", c.seconds);
+  }
+  if (!c.ok()) {
+    std::fprintf(stderr, "vobb: %s: certification failed\n", tree_path.c_str());
+    return kExitCheckFailed;
+  }
+  return kExitOk;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -96,6 +177,17 @@ int main(int argc, char** argv) {
   build->add_option("--arity", arity, "Most children per node")
       ->capture_default_str()->check(CLI::Range(2, 64));
 
+  std::string omv_path = "auto";
+  bool quiet = false;
+  CLI::App* cert = app.add_subcommand("certify", "Exact OMV, sum of OBV and containment per layer");
+  cert->add_option("MESH", mesh, "The solid mesh the tree was built for")->required();
+  cert->add_option("TREE", tree_path, "Tree file")->required();
+  cert->add_flag("--json", json, "Print JSON");
+  cert->add_flag("--rational", rational, "Also print exact values as rationals");
+  cert->add_option("--path", omv_path, "Exact path for OMV: auto, clip, nef, or both (and compare)")
+      ->capture_default_str()->check(CLI::IsMember({"auto", "clip", "nef", "both"}));
+  cert->add_flag("--quiet", quiet, "No per-layer progress on stderr");
+
   CLI::App* exp = app.add_subcommand("export", "Write the boxes of one layer as OBJ or PLY");
   exp->add_option("TREE", tree_path, "Tree file")->required();
   exp->add_option("--level", level, "Layer to export")->required();
@@ -119,5 +211,6 @@ int main(int argc, char** argv) {
   if (info->parsed()) return run_info(mesh, json, rational);
   if (build->parsed()) return run_build(mesh, out, method, depth, arity);
   if (exp->parsed()) return run_export(tree_path, level, out);
+  if (cert->parsed()) return run_certify(mesh, tree_path, json, rational, omv_path, quiet);
   return kExitBadInput;
 }

@@ -59,16 +59,21 @@ void AabbTree::build(int32_t node, int32_t begin, int32_t end, const std::vector
 }
 
 void AabbTree::for_each_overlap(const Aabb& query, const std::function<void(int32_t)>& visit) const {
+  for_each_accepted([&](const Aabb& b) { return b.overlaps(query); }, visit);
+}
+
+void AabbTree::for_each_accepted(const std::function<bool(const Aabb&)>& accept,
+                                 const std::function<void(int32_t)>& visit) const {
   if (nodes_.empty()) return;
   int32_t stack[128];
   int top = 0;
   stack[top++] = 0;
   while (top > 0) {
     const Node& n = nodes_[stack[--top]];
-    if (!n.bounds.overlaps(query)) continue;
+    if (!accept(n.bounds)) continue;
     if (n.count > 0) {
       for (int32_t i = n.first; i < n.first + n.count; ++i)
-        if (boxes_[order_[i]].overlaps(query)) visit(order_[i]);
+        if (accept(boxes_[order_[i]])) visit(order_[i]);
     } else {
       stack[top++] = n.first + 1;
       stack[top++] = n.first;

@@ -23,6 +23,11 @@ class AabbTree {
 
   // Calls visit(i) for every primitive i whose box overlaps `query`, in a fixed order.
   void for_each_overlap(const Aabb& query, const std::function<void(int32_t)>& visit) const;
+  // General form: descends into every node, and reports every primitive, whose box passes
+  // `accept`. `accept` must be conservative: true for any box that may hold a wanted
+  // primitive.
+  void for_each_accepted(const std::function<bool(const Aabb&)>& accept,
+                         const std::function<void(int32_t)>& visit) const;
   const Aabb& primitive_bounds(int32_t i) const { return boxes_[i]; }
   size_t size() const { return boxes_.size(); }
 

@@ -86,8 +86,9 @@ Rational triple(const Vec3& a, const Vec3& b, const Vec3& c) {
   return ax * (by * cz - bz * cy) + ay * (bz * cx - bx * cz) + az * (bx * cy - by * cx);
 }
 
-// Pairwise summation: keeps operand sizes balanced, which matters for long exact sums.
-Rational pairwise_sum(std::vector<Rational>& terms) {
+}  // namespace
+
+Rational sum_pairwise(std::vector<Rational>& terms) {
   if (terms.empty()) return Rational(0);
   size_t n = terms.size();
   while (n > 1) {
@@ -98,13 +99,11 @@ Rational pairwise_sum(std::vector<Rational>& terms) {
   return terms[0];
 }
 
-}  // namespace
-
 Rational exact_signed_volume(const Mesh& mesh, const std::vector<int32_t>& faces) {
   std::vector<Rational> terms;
   terms.reserve(faces.size());
   for (int32_t f : faces) terms.push_back(triple(mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2)));
-  Rational six_v = pairwise_sum(terms);
+  Rational six_v = sum_pairwise(terms);
   return six_v / 6;
 }
 

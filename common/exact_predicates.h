@@ -10,6 +10,7 @@
 #include <gmpxx.h>
 
 #include <string>
+#include <vector>
 
 #include "common/mesh.h"
 
@@ -32,6 +33,10 @@ bool collinear(const Vec3& a, const Vec3& b, const Vec3& c);
 // oriented closed mesh. Sums pairwise so that operands stay balanced.
 Rational exact_signed_volume(const Mesh& mesh);
 Rational exact_signed_volume(const Mesh& mesh, const std::vector<int32_t>& faces);
+
+// Sum of the terms, added pairwise so that operands stay balanced (long exact sums of
+// rationals with different denominators grow slowly this way). Consumes the vector.
+Rational sum_pairwise(std::vector<Rational>& terms);
 
 // The double nearest to q (ties to even), as MPFR rounds it. mpq_get_d truncates instead.
 double to_double_nearest(const Rational& q);

@@ -211,6 +211,32 @@ double solid_angle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
 
 }  // namespace
 
+std::vector<std::vector<int32_t>> face_components(const Mesh& mesh) {
+  const size_t nf = mesh.faces.size();
+  std::vector<std::pair<std::pair<int32_t, int32_t>, int32_t>> edges;
+  edges.reserve(3 * nf);
+  for (size_t f = 0; f < nf; ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int32_t a = mesh.faces[f][k], b = mesh.faces[f][(k + 1) % 3];
+      edges.push_back({{std::min(a, b), std::max(a, b)}, static_cast<int32_t>(f)});
+    }
+  std::sort(edges.begin(), edges.end());
+  DisjointSets sets(nf);
+  for (size_t i = 1; i < edges.size(); ++i)
+    if (edges[i].first == edges[i - 1].first) sets.unite(edges[i].second, edges[i - 1].second);
+  std::vector<int32_t> index(nf, -1);
+  std::vector<std::vector<int32_t>> out;
+  for (size_t f = 0; f < nf; ++f) {
+    const int32_t root = sets.find(static_cast<int32_t>(f));
+    if (index[root] < 0) {
+      index[root] = static_cast<int32_t>(out.size());
+      out.emplace_back();
+    }
+    out[index[root]].push_back(static_cast<int32_t>(f));
+  }
+  return out;
+}
+
 bool faces_intersect(const Mesh& mesh, size_t f, size_t g) {
   const Face& F = mesh.faces[f];
   const Face& G = mesh.faces[g];

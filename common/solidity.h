@@ -61,6 +61,10 @@ struct SolidityReport {
 // orientation checks need a closed, manifold, consistent mesh). Deterministic.
 SolidityReport check_solidity(const Mesh& mesh);
 
+// Edge-connected components of the faces (the shells of a solid), each a sorted face list,
+// in order of their smallest face id.
+std::vector<std::vector<int32_t>> face_components(const Mesh& mesh);
+
 // Exact test of whether two non-degenerate faces of `mesh` meet anywhere other than at the
 // vertices they share (by index). Exposed for tests.
 bool faces_intersect(const Mesh& mesh, size_t f, size_t g);

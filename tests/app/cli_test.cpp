@@ -108,6 +108,35 @@ TEST(Cli, BuildExportAndInfoOnAnAnalyticMesh) {
   EXPECT_TRUE(test::exists(boxes));
   r = vobb_cli("export " + tree + " --level 9 -o " + boxes);
   EXPECT_EQ(r.code, 2);
+  // certify: a good tree passes (exit 0) with JSON per DESIGN §7; a shrunken box fails
+  // (exit 1); a tree for another mesh is bad input (exit 2).
+  r = vobb_cli("certify " + mesh + " " + tree + " --json --quiet");
+  ASSERT_EQ(r.code, 0) << r.err;
+  for (const char* key : {"\"levels\"", "\"omv\"", "\"sum_obv\"", "\"overlap\"", "\"upper_bound_holds\": true",
+                          "\"weighted_error\"", "\"containment\"", "\"seconds\""})
+    EXPECT_NE(r.out.find(key), std::string::npos) << key;
+  {
+    Tree shrunk;
+    ASSERT_TRUE(read_tree(tree, &shrunk));
+    shrunk.nodes.back().box.half *= 0.5;
+    const std::string bad = test::temp_path("shrunk.json");
+    ASSERT_TRUE(write_tree(shrunk, bad));
+    r = vobb_cli("certify " + mesh + " " + bad + " --quiet");
+    EXPECT_EQ(r.code, 1) << r.out << r.err;
+    EXPECT_NE(r.out.find("containment: FAILED"), std::string::npos) << r.out;
+    std::remove(bad.c_str());
+  }
+  r = vobb_cli("certify " + test::data_dir() + "/bad/open_cube.off " + tree + " --quiet");
+  EXPECT_EQ(r.code, 2);
+  const std::string tet = test::temp_path("tet.off");
+  {
+    std::ofstream f(tet);
+    f << "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n";
+  }
+  r = vobb_cli("certify " + tet + " " + tree + " --quiet");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("but the mesh has 4"), std::string::npos) << r.err;
+  std::remove(tet.c_str());
   r = vobb_cli("build " + mesh + " -o " + tree + " --method variational");
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("not available"), std::string::npos);

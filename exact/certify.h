@@ -1,0 +1,55 @@
+// Certification of a finished tree (DESIGN §1, §7): per layer the exact OMV, the exact
+// sum of OBV, their difference (the overlap term) and whether sum OBV >= OMV holds as
+// rationals; for the whole tree the weighted error e = sum_i (D - i + 1) OMV(layer i) and the
+// exact containment check (every face of every node inside its box).
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "common/exact_predicates.h"
+#include "common/mesh.h"
+#include "common/tree.h"
+
+namespace vobb::exact {
+
+enum class OmvPath {
+  kAuto,  // OBV by clipping in each box's frame; OMV = sum OBV without overlaps, else Nef
+  kClip,  // path (b) for every layer
+  kNef,   // path (a) for every layer
+  kBoth,  // both, and a check that they are equal
+};
+
+struct LayerCertificate {
+  int level = 0;
+  size_t boxes = 0;
+  size_t overlapping_boxes = 0;  // boxes that may meet another box of the layer (by bounds)
+  Rational omv;
+  Rational sum_obv;
+  Rational overlap() const { return sum_obv - omv; }
+  bool upper_bound_holds() const { return sum_obv >= omv; }
+  std::string omv_path;        // "clip", "nef", "none" (no overlaps: OMV = sum OBV), "both"
+  bool paths_agree = true;     // kBoth only: Nef's OMV == clipping's OMV
+  double seconds = 0.0;
+};
+
+struct Certificate {
+  std::vector<LayerCertificate> layers;
+  Rational weighted_error;
+  ContainmentReport containment;
+  double seconds = 0.0;
+  bool ok() const;  // containment, every upper bound, and (kBoth) path agreement
+};
+
+struct CertifyOptions {
+  OmvPath path = OmvPath::kAuto;
+  // Called with one line per finished stage (per layer), so long runs show they are alive.
+  std::function<void(const std::string&)> progress;
+};
+
+// Precondition: the mesh is solid and the tree validated against it (validate_tree, same
+// triangle count). Creates no GL context.
+Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& options);
+
+}  // namespace vobb::exact

@@ -1,0 +1,68 @@
+// Exact outer volumes (DESIGN §1, §3).
+//
+//   OBV(X, O) = vol(O \ X)             for one box;
+//   OMV(X, Z) = vol((U_j O_j) \ X)     for a set of boxes, overlaps counted once.
+//
+// Boxes are their certified solids: the parallelepipeds of the stored doubles, exactly.
+// Two independent paths compute the same rationals:
+//  - ClipSolver (path b): everything rests on the signed prism decomposition of X along a
+//    direction d: 1_X = sum_T sign(n_T . -d) 1[prism of T swept along d], so for a convex C,
+//    vol(C ∩ X) = sum_T sign vol(C ∩ prism_T). OBV works in the box's own frame, where most
+//    faces are closed forms (box_obv.cpp). OMV = sum OBV - sum vol(S \ X) over the disjoint
+//    convex cells S in which a box meets earlier boxes (half-space splits; d = -z there, each
+//    prism a convex clip). Only faces whose column meets a cell are visited; a layer whose
+//    boxes overlap nothing does no union work.
+//  - NefSolver (path a): CGAL Nef polyhedra, (U_j O_j) - X, then the volume.
+// Precondition for both: the mesh is a solid (check_solidity passed). Neither creates a GL
+// context nor reads a file.
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "common/bvh.h"
+#include "common/exact_predicates.h"
+#include "common/mesh.h"
+#include "common/obb.h"
+
+namespace vobb::exact {
+
+class ConvexCell;
+
+class ClipSolver {
+ public:
+  explicit ClipSolver(const Mesh& mesh);  // keeps a reference: the mesh must outlive it
+  ~ClipSolver();
+  Rational obv(const Obb& box) const;
+  Rational omv(const std::vector<Obb>& boxes) const;
+  // The same, given the exact sum of the boxes' OBV (certify has it already).
+  Rational omv(const std::vector<Obb>& boxes, const Rational& sum_obv) const;
+  // Per box: may it meet another box? By exact-conservative bounds: false means surely not.
+  std::vector<char> may_overlap(const std::vector<Obb>& boxes) const;
+  // vol(cell ∩ X).
+  Rational inside_volume(const ConvexCell& cell) const;
+  // Disjoint convex cells whose union is the set of points covered by two or more boxes
+  // (each box's part inside earlier boxes); `overlapped[j]` says whether box j may meet
+  // another box (by conservative bounds; false means it surely meets none).
+  std::vector<ConvexCell> overlap_cells(const std::vector<Obb>& boxes, std::vector<char>* overlapped) const;
+
+ private:
+  struct Prism;
+  const Mesh& mesh_;
+  AabbTree faces_;
+  std::vector<Prism> prisms_;  // one per face; vertical faces have sign 0
+};
+
+class NefSolver {
+ public:
+  explicit NefSolver(const Mesh& mesh);  // builds Nef(X) once (the costly part)
+  ~NefSolver();
+  Rational obv(const Obb& box) const;
+  Rational omv(const std::vector<Obb>& boxes) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace vobb::exact
