@@ -6,11 +6,6 @@
 namespace vobb {
 namespace {
 
-// Corner i = c + sum_k s_k h_k a_k with s_k = +1 where bit k of i is set. The quads list
-// corners counter-clockwise seen from outside for a right-handed frame.
-constexpr int kQuads[6][4] = {{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4},
-                              {2, 6, 7, 3}, {0, 2, 3, 1}, {4, 5, 7, 6}};
-
 }  // namespace
 
 Status export_boxes(const std::vector<Obb>& boxes, const std::vector<std::string>& names,
@@ -26,7 +21,7 @@ Status export_boxes(const std::vector<Obb>& boxes, const std::vector<std::string
         append_xyz(&s, p);
         s += '\n';
       }
-      for (const auto& q : kQuads) {
+      for (const auto& q : kBoxQuads) {
         s += "f";
         for (int c : q) s += " " + std::to_string(8 * b + c + 1);
         s += '\n';
@@ -42,7 +37,7 @@ Status export_boxes(const std::vector<Obb>& boxes, const std::vector<std::string
         s += '\n';
       }
     for (size_t b = 0; b < boxes.size(); ++b)
-      for (const auto& q : kQuads) {
+      for (const auto& q : kBoxQuads) {
         s += "4";
         for (int c : q) s += " " + std::to_string(8 * b + c);
         s += '\n';

@@ -87,25 +87,38 @@ Obb fit_obb(const Mesh& mesh, const std::vector<int32_t>& faces, const std::arra
   return box;
 }
 
-ExactBoxContainment::ExactBoxContainment(const Obb& box) {
-  Rational u[3][3];
+ExactBoxFrame::ExactBoxFrame(const Obb& box) {
   for (int k = 0; k < 3; ++k) {
-    c_[k] = box.center[k];
-    cd_[k] = box.center[k];
+    c[k] = box.center[k];
     for (int i = 0; i < 3; ++i) u[k][i] = Rational(box.half[k]) * Rational(box.axes[k][i]);
   }
-  // w_k = u_{k+1} x u_{k+2}, so that (p - c) . w_k = t_k det[u0 u1 u2].
   for (int k = 0; k < 3; ++k) {
     const Rational* a = u[(k + 1) % 3];
     const Rational* b = u[(k + 2) % 3];
-    w_[k][0] = a[1] * b[2] - a[2] * b[1];
-    w_[k][1] = a[2] * b[0] - a[0] * b[2];
-    w_[k][2] = a[0] * b[1] - a[1] * b[0];
-    for (int i = 0; i < 3; ++i) wd_[k][i] = w_[k][i].get_d();
+    w[k][0] = a[1] * b[2] - a[2] * b[1];
+    w[k][1] = a[2] * b[0] - a[0] * b[2];
+    w[k][2] = a[0] * b[1] - a[1] * b[0];
   }
-  Rational det = u[0][0] * w_[0][0] + u[0][1] * w_[0][1] + u[0][2] * w_[0][2];
-  det_sign_ = sgn(det);
-  abs_det_ = abs(det);
+  det = u[0][0] * w[0][0] + u[0][1] * w[0][1] + u[0][2] * w[0][2];
+}
+
+void ExactBoxFrame::corner(int index, Rational out[3]) const {
+  for (int i = 0; i < 3; ++i) {
+    out[i] = c[i];
+    for (int k = 0; k < 3; ++k) {
+      if ((index >> k) & 1) out[i] += u[k][i];
+      else out[i] -= u[k][i];
+    }
+  }
+}
+
+ExactBoxContainment::ExactBoxContainment(const Obb& box) : frame_(box) {
+  for (int k = 0; k < 3; ++k) {
+    cd_[k] = box.center[k];
+    for (int i = 0; i < 3; ++i) wd_[k][i] = frame_.w[k][i].get_d();
+  }
+  det_sign_ = sgn(frame_.det);
+  abs_det_ = abs(frame_.det);
   abs_det_d_ = abs_det_.get_d();
 }
 
@@ -135,7 +148,7 @@ bool ExactBoxContainment::contains(const Vec3& p) const {
   if (certain) return true;
   for (int k = 0; k < 3; ++k) {
     Rational dot = 0;
-    for (int i = 0; i < 3; ++i) dot += (Rational(p[i]) - c_[i]) * w_[k][i];
+    for (int i = 0; i < 3; ++i) dot += (Rational(p[i]) - frame_.c[i]) * frame_.w[k][i];
     if (abs(dot) > abs_det_) return false;
   }
   return true;

@@ -23,9 +23,14 @@ struct Obb {
 // Volume of the parallelepiped, 8 h0 h1 h2 |det[a0 a1 a2]|, in double.
 double volume(const Obb& box);
 
-// The 8 corners; corner i takes sign (-1)^(bit k of i) ... precisely c + sum_k s_k h_k a_k with
-// s_k = +1 when bit k of i is set, else -1.
+// The 8 corners: corner i is c + sum_k s_k h_k a_k with s_k = +1 when bit k of i is set,
+// else -1.
 std::array<Vec3, 8> corners(const Obb& box);
+
+// The 6 faces of a box as quads of corner indices (numbered as in corners()), counter-
+// clockwise seen from outside when the axes are right-handed; reverse them for left-handed.
+inline constexpr int kBoxQuads[6][4] = {{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4},
+                                        {2, 6, 7, 3}, {0, 2, 3, 1}, {4, 5, 7, 6}};
 
 // Orthonormal right-handed frame from three approximate axes (Gram-Schmidt on a0, a1;
 // a2 = a0 x a1). Precondition: a0 and a1 are finite and not parallel.
@@ -41,6 +46,20 @@ Obb fit_obb(const Mesh& mesh, const std::vector<int32_t>& faces, const std::arra
 // the padding that makes the box exactly conservative despite double rounding.
 double fit_slack(const Obb& box, double mesh_scale);
 
+// The certified solid's frame in exact rationals: centre c, edge vectors u_k = h_k a_k, and
+// Cramer rows w_k = u_{k+1} x u_{k+2}, so that for any point p, (p - c) . w_k = t_k det
+// with det = det[u0 u1 u2] and t the parallelepiped coordinates. The solid is
+// {p : |(p - c) . w_k| <= |det| for k = 0, 1, 2}; det == 0 for a flat box.
+struct ExactBoxFrame {
+  explicit ExactBoxFrame(const Obb& box);
+  // Corner i exactly, numbered as in corners().
+  void corner(int i, Rational out[3]) const;
+  Rational c[3];
+  Rational u[3][3];
+  Rational w[3][3];
+  Rational det;
+};
+
 // Exact point-in-box test against the certified solid (boundary counts as inside).
 // Build once per box, query per point. A box with zero volume contains no point.
 class ExactBoxContainment {
@@ -49,8 +68,7 @@ class ExactBoxContainment {
   bool contains(const Vec3& p) const;
 
  private:
-  Rational c_[3];
-  Rational w_[3][3];  // w_k = u_i x u_j with u = h a: Cramer's rule numerator rows
+  ExactBoxFrame frame_;
   Rational abs_det_;
   int det_sign_ = 0;
   // Double shadows of the above for a filter.

@@ -1,12 +1,9 @@
 #include "data/analytic_meshes.h"
 
+#include "common/obb.h"
+
 namespace vobb::analytic {
 namespace {
-
-// Corner i of a box has coordinate bit k of i along axis k; the quads run counter-clockwise
-// seen from outside.
-constexpr int kQuads[6][4] = {{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4},
-                              {2, 6, 7, 3}, {0, 2, 3, 1}, {4, 5, 7, 6}};
 
 void add_quad(Mesh* m, int a, int b, int c, int d) {
   m->faces.push_back({a, b, c});
@@ -18,7 +15,7 @@ void add_box_shell(Mesh* m, const Vec3& lo, const Vec3& hi, bool inward) {
   const int base = static_cast<int>(m->vertices.size());
   for (int i = 0; i < 8; ++i)
     m->vertices.emplace_back(i & 1 ? hi[0] : lo[0], i & 2 ? hi[1] : lo[1], i & 4 ? hi[2] : lo[2]);
-  for (const auto& q : kQuads) {
+  for (const auto& q : kBoxQuads) {
     if (inward) add_quad(m, base + q[3], base + q[2], base + q[1], base + q[0]);
     else add_quad(m, base + q[0], base + q[1], base + q[2], base + q[3]);
   }

@@ -85,22 +85,13 @@ Rational column_integral6(std::vector<Q3> poly, const Rational& R) {
 }  // namespace
 
 Rational ClipSolver::obv(const Obb& box) const {
-  Rational u[3][3], c[3];
-  for (int k = 0; k < 3; ++k) {
-    c[k] = box.center[k];
-    for (int i = 0; i < 3; ++i) u[k][i] = Rational(box.half[k]) * Rational(box.axes[k][i]);
-  }
-  Rational w[3][3];
+  const ExactBoxFrame frame(box);
+  const Rational(&c)[3] = frame.c;
+  const Rational(&w)[3][3] = frame.w;
+  const Rational& det = frame.det;
   double wd[3][3];
-  for (int k = 0; k < 3; ++k) {
-    const Rational* a = u[(k + 1) % 3];
-    const Rational* b = u[(k + 2) % 3];
-    w[k][0] = a[1] * b[2] - a[2] * b[1];
-    w[k][1] = a[2] * b[0] - a[0] * b[2];
-    w[k][2] = a[0] * b[1] - a[1] * b[0];
+  for (int k = 0; k < 3; ++k)
     for (int i = 0; i < 3; ++i) wd[k][i] = w[k][i].get_d();
-  }
-  const Rational det = u[0][0] * w[0][0] + u[0][1] * w[0][1] + u[0][2] * w[0][2];
   if (sgn(det) == 0) return Rational(0);  // a flat box has no volume, inside or out
   const Rational R = abs(det);
   const double Rd = R.get_d();

@@ -9,11 +9,6 @@
 namespace vobb::exact {
 namespace {
 
-// Box corner i has sign + on axis k where bit k of i is set; quads counter-clockwise seen
-// from outside for a right-handed frame.
-constexpr int kQuads[6][4] = {{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4},
-                              {2, 6, 7, 3}, {0, 2, 3, 1}, {4, 5, 7, 6}};
-
 Rational det3(const Rational* a, const Rational* b, const Rational* c) {
   return a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
          a[2] * (b[0] * c[1] - b[1] * c[0]);
@@ -72,20 +67,10 @@ Side ConvexCell::classify(const HalfSpace& h) const {
 }
 
 std::array<HalfSpace, 6> box_half_spaces(const Obb& box) {
-  Rational u[3][3], c[3];
-  for (int k = 0; k < 3; ++k) {
-    c[k] = box.center[k];
-    for (int i = 0; i < 3; ++i) u[k][i] = Rational(box.half[k]) * Rational(box.axes[k][i]);
-  }
-  Rational w[3][3];
-  for (int k = 0; k < 3; ++k) {
-    const Rational* a = u[(k + 1) % 3];
-    const Rational* b = u[(k + 2) % 3];
-    w[k][0] = a[1] * b[2] - a[2] * b[1];
-    w[k][1] = a[2] * b[0] - a[0] * b[2];
-    w[k][2] = a[0] * b[1] - a[1] * b[0];
-  }
-  const Rational det = u[0][0] * w[0][0] + u[0][1] * w[0][1] + u[0][2] * w[0][2];
+  const ExactBoxFrame f(box);
+  const Rational& det = f.det;
+  const Rational(&w)[3][3] = f.w;
+  const Rational(&c)[3] = f.c;
   VOBB_ASSERT(sgn(det) != 0, "box_half_spaces on a box of zero volume");
   const int sigma = sgn(det);
   const Rational abs_det = abs(det);
@@ -110,22 +95,12 @@ std::array<HalfSpace, 6> box_half_spaces(const Obb& box) {
 
 ConvexCell ConvexCell::from_box(const Obb& box) {
   ConvexCell cell;
-  Rational u[3][3];
-  for (int k = 0; k < 3; ++k)
-    for (int i = 0; i < 3; ++i) u[k][i] = Rational(box.half[k]) * Rational(box.axes[k][i]);
-  const int orientation = sgn(det3(u[0], u[1], u[2]));
+  const ExactBoxFrame f(box);
+  const int orientation = sgn(f.det);
   if (orientation == 0) return cell;  // a flat box encloses no volume: the empty cell
   cell.v_.resize(8);
-  for (int c = 0; c < 8; ++c)
-    for (int i = 0; i < 3; ++i) {
-      Rational x = box.center[i];
-      for (int k = 0; k < 3; ++k) {
-        if ((c >> k) & 1) x += u[k][i];
-        else x -= u[k][i];
-      }
-      cell.v_[c].x[i] = x;
-    }
-  for (const auto& q : kQuads) {
+  for (int c = 0; c < 8; ++c) f.corner(c, cell.v_[c].x);
+  for (const auto& q : kBoxQuads) {
     if (orientation > 0) cell.faces_.push_back({q[0], q[1], q[2], q[3]});
     else cell.faces_.push_back({q[3], q[2], q[1], q[0]});  // left-handed axes mirror the box
   }

@@ -20,11 +20,6 @@ using Point = Kernel::Point_3;
 using Polyhedron = CGAL::Polyhedron_3<Kernel>;
 using Nef = CGAL::Nef_polyhedron_3<Kernel>;
 
-// Box corner i has sign + on axis k where bit k of i is set; quads counter-clockwise seen
-// from outside for a right-handed frame.
-constexpr int kQuads[6][4] = {{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4},
-                              {2, 6, 7, 3}, {0, 2, 3, 1}, {4, 5, 7, 6}};
-
 Rational to_rational(const Kernel::FT& x) {
   // With CGAL_DO_NOT_USE_BOOST_MP and gmpxx present, Epeck's exact number type is mpq_class.
   static_assert(std::is_same_v<std::decay_t<decltype(CGAL::exact(x))>, Rational>,
@@ -40,24 +35,17 @@ Nef nef_from_soup(const std::vector<Point>& points, const std::vector<std::vecto
 
 // The certified solid of a box, or the empty set for a box of zero volume.
 Nef nef_box(const Obb& box) {
-  Rational u[3][3];
-  for (int k = 0; k < 3; ++k)
-    for (int i = 0; i < 3; ++i) u[k][i] = Rational(box.half[k]) * Rational(box.axes[k][i]);
-  const Rational det = u[0][0] * (u[1][1] * u[2][2] - u[1][2] * u[2][1]) -
-                       u[0][1] * (u[1][0] * u[2][2] - u[1][2] * u[2][0]) +
-                       u[0][2] * (u[1][0] * u[2][1] - u[1][1] * u[2][0]);
+  const ExactBoxFrame f(box);
+  const Rational& det = f.det;
   if (sgn(det) == 0) return Nef(Nef::EMPTY);
   std::vector<Point> pts;
   for (int c = 0; c < 8; ++c) {
     Rational x[3];
-    for (int i = 0; i < 3; ++i) {
-      x[i] = box.center[i];
-      for (int k = 0; k < 3; ++k) x[i] += ((c >> k) & 1) ? u[k][i] : Rational(-u[k][i]);
-    }
+    f.corner(c, x);
     pts.emplace_back(Kernel::FT(x[0]), Kernel::FT(x[1]), Kernel::FT(x[2]));
   }
   std::vector<std::vector<std::size_t>> quads;
-  for (const auto& q : kQuads) {
+  for (const auto& q : kBoxQuads) {
     if (sgn(det) > 0) quads.push_back({std::size_t(q[0]), std::size_t(q[1]), std::size_t(q[2]), std::size_t(q[3])});
     else quads.push_back({std::size_t(q[3]), std::size_t(q[2]), std::size_t(q[1]), std::size_t(q[0])});
   }
