@@ -1,0 +1,19 @@
+// Exact point classification against a solid: inside, outside, or on its surface.
+//
+// A segment from the point to a far point is tested against every face whose box it meets,
+// with exact predicates; the parity of proper crossings decides. When the segment touches an
+// edge or a vertex, or runs in a face's plane, another far point is tried (a fixed sequence,
+// so the answer is deterministic). Precondition: the mesh is a solid.
+#pragma once
+
+#include "common/bvh.h"
+#include "common/mesh.h"
+
+namespace vobb {
+
+enum class Location { kOutside, kInside, kOnSurface };
+
+// `faces` must be AabbTree::over_faces(mesh).
+Location locate_point(const Mesh& mesh, const AabbTree& faces, const Vec3& p);
+
+}  // namespace vobb
