@@ -4,6 +4,8 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 #include <chrono>
+#include <cmath>
+#include <memory>
 #include <cstdio>
 #include <string>
 
@@ -12,6 +14,8 @@
 #include "common/sha256.h"
 #include "common/tree_io.h"
 #include "exact/certify.h"
+#include "exact/outer_volume.h"
+#include "fast/cpu_estimator.h"
 #include "fast/obbtree_builder.h"
 #include "vobb/config.h"
 
@@ -152,6 +156,57 @@ int run_certify(const std::string& mesh_path, const std::string& tree_path, bool
   return kExitOk;
 }
 
+int run_obv(const std::string& mesh_path, const std::string& boxes_path, const std::vector<int>& ms,
+            const std::string& backend, bool json) {
+  if (backend == "gl")
+    return refuse(vobb::Status::error("backend 'gl' is not available in this build yet (use cpu, exact or all)"));
+  vobb::LoadedMesh mesh;
+  vobb::Status s = vobb::load_solid(mesh_path, &mesh);
+  if (!s) return refuse(s);
+  std::vector<vobb::Obb> boxes;
+  s = vobb::read_boxes(boxes_path, &boxes);
+  if (!s) return refuse(s);
+  const bool want_exact = backend == "exact" || backend == "all";
+  const bool want_cpu = backend == "cpu" || backend == "all";
+  std::unique_ptr<vobb::exact::ClipSolver> exact;
+  if (want_exact) exact = std::make_unique<vobb::exact::ClipSolver>(mesh.mesh);
+  vobb::CpuObvEstimator cpu(mesh.mesh);
+  nlohmann::ordered_json out = nlohmann::ordered_json::array();
+  if (!json) std::printf("%5s %8s %5s %24s %24s %12s %10s\n", "box", "backend", "m", "OBV", "exact", "rel.error", "seconds");
+  for (size_t i = 0; i < boxes.size(); ++i) {
+    nlohmann::ordered_json jb;
+    jb["index"] = i;
+    jb["box_volume"] = vobb::volume(boxes[i]);
+    double exact_value = 0;
+    if (exact) {
+      const auto t0 = std::chrono::steady_clock::now();
+      exact_value = vobb::to_double_nearest(exact->obv(boxes[i]));
+      jb["exact"] = exact_value;
+      jb["exact_seconds"] = seconds_since(t0);
+    }
+    nlohmann::ordered_json est = nlohmann::ordered_json::array();
+    if (want_cpu)
+      for (int m : ms) {
+        const auto t0 = std::chrono::steady_clock::now();
+        const double v = cpu.estimate(boxes[i], m);
+        const double sec = seconds_since(t0);
+        est.push_back({{"backend", "cpu"}, {"m", m}, {"obv", v}, {"seconds", sec}});
+        if (!json) {
+          char rel[32] = "-";
+          if (exact && exact_value != 0) std::snprintf(rel, sizeof rel, "%.3e", std::abs(v - exact_value) / exact_value);
+          char ex[40] = "-";
+          if (exact) std::snprintf(ex, sizeof ex, "%.17g", exact_value);
+          std::printf("%5zu %8s %5d %24.17g %24s %12s %10.6f\n", i, "cpu", m, v, ex, rel, sec);
+        }
+      }
+    if (!json && !want_cpu) std::printf("%5zu %8s %5s %24.17g %24s %12s %10s\n", i, "exact", "-", exact_value, "-", "-", "-");
+    jb["estimates"] = est;
+    out.push_back(jb);
+  }
+  if (json) std::printf("%s\n", nlohmann::ordered_json({{"boxes", out}}).dump(2).c_str());
+  return kExitOk;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -188,6 +243,16 @@ int main(int argc, char** argv) {
       ->capture_default_str()->check(CLI::IsMember({"auto", "clip", "nef", "both"}));
   cert->add_flag("--quiet", quiet, "No per-layer progress on stderr");
 
+  std::string boxes_path, backend = "cpu";
+  std::vector<int> ms = {8, 16, 32};
+  CLI::App* obv = app.add_subcommand("obv", "OBV of boxes: cubemap estimates at several m, and the exact value");
+  obv->add_option("MESH", mesh, "Solid mesh")->required();
+  obv->add_option("--boxes", boxes_path, "Box file {\"boxes\":[{center, axes, half_extents}]}")->required();
+  obv->add_option("--m", ms, "Cubemap resolutions, e.g. 8,16,32")->delimiter(',')->check(CLI::Range(1, 4096));
+  obv->add_option("--backend", backend, "cpu, exact, all (gl: not in this build yet)")
+      ->capture_default_str()->check(CLI::IsMember({"gl", "cpu", "exact", "all"}));
+  obv->add_flag("--json", json, "Print JSON");
+
   CLI::App* exp = app.add_subcommand("export", "Write the boxes of one layer as OBJ or PLY");
   exp->add_option("TREE", tree_path, "Tree file")->required();
   exp->add_option("--level", level, "Layer to export")->required();
@@ -211,6 +276,7 @@ int main(int argc, char** argv) {
   if (info->parsed()) return run_info(mesh, json, rational);
   if (build->parsed()) return run_build(mesh, out, method, depth, arity);
   if (exp->parsed()) return run_export(tree_path, level, out);
+  if (obv->parsed()) return run_obv(mesh, boxes_path, ms, backend, json);
   if (cert->parsed()) return run_certify(mesh, tree_path, json, rational, omv_path, quiet);
   return kExitBadInput;
 }

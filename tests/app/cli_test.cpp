@@ -137,6 +137,21 @@ TEST(Cli, BuildExportAndInfoOnAnAnalyticMesh) {
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("but the mesh has 4"), std::string::npos) << r.err;
   std::remove(tet.c_str());
+  // obv: the cube's root box estimated and computed exactly; JSON per DESIGN §7.
+  {
+    Tree t;
+    ASSERT_TRUE(read_tree(tree, &t));
+    const std::string boxes = test::temp_path("boxes.json");
+    ASSERT_TRUE(write_boxes({t.nodes[0].box}, boxes));
+    r = vobb_cli("obv " + mesh + " --boxes " + boxes + " --m 4,8 --backend all --json");
+    ASSERT_EQ(r.code, 0) << r.err;
+    for (const char* key : {"\"index\"", "\"box_volume\"", "\"exact\"", "\"estimates\"", "\"backend\": \"cpu\"",
+                            "\"m\": 8", "\"obv\"", "\"seconds\""})
+      EXPECT_NE(r.out.find(key), std::string::npos) << key << r.out;
+    r = vobb_cli("obv " + mesh + " --boxes " + boxes + " --backend gl");
+    EXPECT_EQ(r.code, 2);
+    std::remove(boxes.c_str());
+  }
   r = vobb_cli("build " + mesh + " -o " + tree + " --method variational");
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("not available"), std::string::npos);
