@@ -30,6 +30,8 @@ class AabbTree {
                          const std::function<void(int32_t)>& visit) const;
   const Aabb& primitive_bounds(int32_t i) const { return boxes_[i]; }
   size_t size() const { return boxes_.size(); }
+  // Bounds of all primitives (empty for an empty tree).
+  Aabb bounds() const { return nodes_.empty() ? Aabb() : nodes_[0].bounds; }
 
  private:
   struct Node {

@@ -43,7 +43,7 @@ Hit segment_vs_triangle(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3&
 }  // namespace
 
 Location locate_point(const Mesh& mesh, const AabbTree& faces, const Vec3& p) {
-  const Aabb bb = mesh.bounds();
+  const Aabb bb = faces.bounds();  // the tree's root: no pass over the vertices per query
   const double reach = 2.0 * (bb.hi - bb.lo).norm() + (p - 0.5 * (bb.lo + bb.hi)).norm() + 1.0;
   // Directions with irrational-looking ratios make edge and vertex hits rare; each retry
   // turns the direction deterministically.
