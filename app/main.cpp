@@ -170,7 +170,8 @@ int run_obv(const std::string& mesh_path, const std::string& boxes_path, const s
   const bool want_cpu = backend == "cpu" || backend == "all";
   std::unique_ptr<vobb::exact::ClipSolver> exact;
   if (want_exact) exact = std::make_unique<vobb::exact::ClipSolver>(mesh.mesh);
-  vobb::CpuObvEstimator cpu(mesh.mesh);
+  std::unique_ptr<vobb::CpuObvEstimator> cpu;
+  if (want_cpu) cpu = std::make_unique<vobb::CpuObvEstimator>(mesh.mesh);
   nlohmann::ordered_json out = nlohmann::ordered_json::array();
   if (!json) std::printf("%5s %8s %5s %24s %24s %12s %10s\n", "box", "backend", "m", "OBV", "exact", "rel.error", "seconds");
   for (size_t i = 0; i < boxes.size(); ++i) {
@@ -188,7 +189,7 @@ int run_obv(const std::string& mesh_path, const std::string& boxes_path, const s
     if (want_cpu)
       for (int m : ms) {
         const auto t0 = std::chrono::steady_clock::now();
-        const double v = cpu.estimate(boxes[i], m);
+        const double v = cpu->estimate(boxes[i], m);
         const double sec = seconds_since(t0);
         est.push_back({{"backend", "cpu"}, {"m", m}, {"obv", v}, {"seconds", sec}});
         if (!json) {

@@ -108,8 +108,7 @@ std::vector<char> ClipSolver::may_overlap(const std::vector<Obb>& boxes) const {
   return out;
 }
 
-std::vector<ConvexCell> ClipSolver::overlap_cells(const std::vector<Obb>& boxes,
-                                                  std::vector<char>* overlapped) const {
+std::vector<ConvexCell> ClipSolver::overlap_cells(const std::vector<Obb>& boxes) const {
   const size_t n = boxes.size();
   std::vector<ConvexCell> whole(n);
   std::vector<Aabb> bounds(n);
@@ -118,15 +117,12 @@ std::vector<ConvexCell> ClipSolver::overlap_cells(const std::vector<Obb>& boxes,
     bounds[j] = whole[j].bounds();
   }
   AabbTree tree(bounds);
-  overlapped->assign(n, 0);
   std::vector<ConvexCell> shared;
   for (size_t j = 0; j < n; ++j) {
     if (whole[j].empty()) continue;
     std::vector<int32_t> earlier;
     tree.for_each_overlap(bounds[j], [&](int32_t i) {
-      if (i == static_cast<int32_t>(j) || whole[i].empty()) return;
-      (*overlapped)[j] = 1;
-      if (i < static_cast<int32_t>(j)) earlier.push_back(i);
+      if (i < static_cast<int32_t>(j) && !whole[i].empty()) earlier.push_back(i);
     });
     std::sort(earlier.begin(), earlier.end());
     // Split box j against the earlier boxes it may meet: `pieces` is what no earlier box
@@ -170,8 +166,7 @@ Rational ClipSolver::omv(const std::vector<Obb>& boxes, const Rational& sum_obv)
   // With S_j = B_j ∩ (B_1 ∪ ... ∪ B_{j-1}) split into the disjoint cells of overlap_cells:
   // vol(U B) = sum vol(B_j) - sum vol(S_j) and vol(X ∩ U B) = sum vol(X ∩ B_j) - sum
   // vol(X ∩ S_j), so OMV = sum OBV_j - sum vol(S_j \ X): the overlap term, over the cells.
-  std::vector<char> overlapped;
-  const std::vector<ConvexCell> shared = overlap_cells(boxes, &overlapped);
+  const std::vector<ConvexCell> shared = overlap_cells(boxes);
   std::vector<Rational> terms;
   terms.reserve(shared.size());
   for (const ConvexCell& c : shared) terms.push_back(c.volume() - inside_volume(c));

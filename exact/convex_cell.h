@@ -55,7 +55,6 @@ class ConvexCell {
   Rational volume() const;
   // Axis-aligned bounds in double, rounded outward so that they contain the cell.
   Aabb bounds() const;
-  size_t vertex_count() const { return v_.size(); }
 
  private:
   void refresh_shadow();

@@ -42,9 +42,8 @@ class ClipSolver {
   // vol(cell ∩ X).
   Rational inside_volume(const ConvexCell& cell) const;
   // Disjoint convex cells whose union is the set of points covered by two or more boxes
-  // (each box's part inside earlier boxes); `overlapped[j]` says whether box j may meet
-  // another box (by conservative bounds; false means it surely meets none).
-  std::vector<ConvexCell> overlap_cells(const std::vector<Obb>& boxes, std::vector<char>* overlapped) const;
+  // (each box's part inside earlier boxes). Empty when no two boxes overlap.
+  std::vector<ConvexCell> overlap_cells(const std::vector<Obb>& boxes) const;
 
  private:
   struct Prism;

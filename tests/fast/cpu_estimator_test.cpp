@@ -41,14 +41,19 @@ TEST(CpuEstimator, CubeCentredInAnAlignedBoxIsExact) {
 }
 
 // Off centre, the cube's faces cross cubemap faces at an angle: the error must shrink as m grows.
+// The error falls about as m^-2 but often changes sign between m and 2m (DESIGN §4), so one
+// box's error at 8 or 16 is compared with 4x its error at 64 (m^-2 predicts 16x from 16 to
+// 64). The bound is the CPU prototype's p95 for root-sized boxes at m=32 (2.2e-4, DESIGN §4),
+// which m=64 must beat.
 TEST(CpuEstimator, OffCentreErrorShrinksWithResolution) {
   const Mesh m = analytic::cube().mesh;
   const CpuObvEstimator est(m);
   for (const Vec3& c : {Vec3(0.25, 0.75, 0.6), Vec3(-0.5, 0.5, 0.5)}) {
     const Obb b = aabox(c, Vec3(1.5, 1.5, 1.5));  // holds the whole cube: OBV = 27 - 1
-    const double e8 = std::abs(est.estimate(b, 8) - 26), e64 = std::abs(est.estimate(b, 64) - 26);
-    EXPECT_LT(e64, e8) << c.transpose();
-    EXPECT_LT(e64, 1e-3 * 26) << c.transpose();
+    const double e8 = std::abs(est.estimate(b, 8) - 26), e16 = std::abs(est.estimate(b, 16) - 26);
+    const double e64 = std::abs(est.estimate(b, 64) - 26);
+    EXPECT_LT(4 * e64, std::max(e8, e16)) << c.transpose();
+    EXPECT_LT(e64, 2.2e-4 * 26) << c.transpose();
   }
 }
 
@@ -64,9 +69,12 @@ TEST(CpuEstimator, FiniteAndConsistentForCentresOnFacesEdgesAndVertices) {
     // The same box nudged off the surface both ways: the value moves continuously, so it must
     // stay within the change of the exact OBV over the nudge (at most the box's face area times
     // the nudge) plus the estimator's error, which for this aligned geometry is round-off.
+    const double area = 8 * (h[0] * h[1] + h[1] * h[2] + h[2] * h[0]);  // the box's surface
     for (double eps : {1e-9, -1e-9}) {
       const double w = est.estimate(aabox(c + Vec3::Constant(eps), h), 32);
-      EXPECT_NEAR(v, w, 1e-6) << c.transpose();
+      // Moving the box by |eps| sqrt(3) changes its exact OBV by at most area |eps| sqrt(3).
+      EXPECT_NEAR(v, w, area * std::sqrt(3.0) * std::abs(eps) + kRoundOff * volume(aabox(c, h)))
+          << c.transpose();
     }
     EXPECT_GE(v, -kRoundOff);
     EXPECT_LE(v, volume(aabox(c, h)) * (1 + kRoundOff));
