@@ -1,18 +1,17 @@
 // The CPU twin of the cubemap OBV estimator (cubemap.h): the same texel directions, ray-cast in
 // double. It is the reference for the GL estimator and a backend of its own (--backend cpu).
 //
-// Per box only the faces that can meet the box are cast against (culling by the face AABB
-// tree, then by the face's box-normalized bounds); each face is tested only on the texels its
-// projection covers. 1_X(centre) comes from an exact point classification; a centre exactly on
-// the surface instead counts, per ray, the crossings beyond the box (all faces, no culling),
-// which is the inside-ness at the box boundary without reference to the centre.
+// The per-box plan (texel_plan.h) is shared with the GL estimator: only faces that can meet the
+// box are cast against (AABB tree, then the face's box-normalized bounds), each only on the
+// texels of its projection within the box. 1_X(centre) comes from an exact point
+// classification; a centre exactly on the surface switches to the far-count mode.
 #pragma once
 
 #include <vector>
 
-#include "common/bvh.h"
 #include "common/mesh.h"
 #include "common/obb.h"
+#include "fast/texel_plan.h"
 
 namespace vobb {
 
@@ -23,15 +22,16 @@ class CpuObvEstimator {
   std::vector<double> estimate(const std::vector<Obb>& boxes, int m) const;
   double estimate(const Obb& box, int m) const;
   // For the culling ablation benchmark: cast against every face.
-  void set_culling(bool on) { culling_ = on; }
+  void set_culling(bool on) { planner_.set_culling(on); }
   // Faces cast against in the last estimate() call (the culling statistic).
   size_t faces_used() const { return faces_used_; }
 
  private:
-  const Mesh& mesh_;
-  AabbTree faces_;
-  bool culling_ = true;
+  BoxPlanner planner_;
   mutable size_t faces_used_ = 0;
 };
+
+// The sum over a plan's (texel, face) hits of their values (texel_plan.h), in double.
+double sum_texel_hits(const BoxPlan& plan, int m);
 
 }  // namespace vobb

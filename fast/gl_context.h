@@ -1,0 +1,37 @@
+// vobb::GlContext — a headless OpenGL 4.3 core context through EGL, made only when a GL backend
+// is asked for (no context where none is used).
+//
+// Order of attempts: an EGL device that is a real GPU (EGL_EXT_device_enumeration; Mesa's
+// software device is skipped), then Mesa's surfaceless platform (llvmpipe on a machine without
+// a GPU). The renderer string is logged once per process on stderr.
+// The environment variable VOBB_GL=off refuses to make any context (to run without GL, or to
+// exercise the fallback); VOBB_EGL_PLATFORM=device|surfaceless tries only that platform.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "common/status.h"
+
+namespace vobb {
+
+class GlContext {
+ public:
+  // On failure `out` stays empty and the Status says why, in one line.
+  static Status create(std::unique_ptr<GlContext>* out);
+  ~GlContext();
+  GlContext(const GlContext&) = delete;
+  GlContext& operator=(const GlContext&) = delete;
+
+  void make_current() const;
+  const std::string& renderer() const { return renderer_; }
+  const std::string& platform() const { return platform_; }  // "device" or "surfaceless"
+
+ private:
+  GlContext() = default;
+  void* display_ = nullptr;
+  void* context_ = nullptr;
+  std::string renderer_, platform_;
+};
+
+}  // namespace vobb

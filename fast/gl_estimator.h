@@ -1,0 +1,64 @@
+// The GL cubemap OBV estimator (DESIGN §4, paper §4.1): the CPU twin's texel rays, evaluated in
+// float by OpenGL through a headless EGL context (gl_context.h), many boxes per round trip.
+//
+// Per box the CPU makes the shared plan (texel_plan.h: box frame in double, exact centre class,
+// culled faces in box-normalized coordinates, texel spans). Each span becomes one instanced
+// quad in an R32F atlas, one 3m x 2m tile per box; the fragment shader runs the ray test of
+// texel_hit() in float and blends the hit's value additively; a compute pass sums each tile,
+// and one float per box is read back. Boxes whose plan draws nothing take no GPU work.
+// Shaders: shaders/texel_spans.{vert,frag}, shaders/reduce_tiles.comp, embedded at build time.
+//
+// Agreement with the CPU twin: gl_deviation_bound() bounds |GL - CPU| for one box from the
+// float arithmetic of the shaders (derivation in gl_estimator.cpp); the test suite checks it.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "common/mesh.h"
+#include "common/obb.h"
+#include "common/status.h"
+#include "fast/gl_context.h"
+#include "fast/texel_plan.h"
+
+namespace vobb {
+
+class GlObvEstimator {
+ public:
+  // Makes the GL context and compiles the shaders; on failure `out` stays empty and the Status
+  // says why in one line. Keeps a reference to `mesh`.
+  static Status create(const Mesh& mesh, std::unique_ptr<GlObvEstimator>* out);
+  ~GlObvEstimator();
+
+  // OBV estimate of each box at resolution m, 1 <= m <= max_m(), in world volume units.
+  std::vector<double> estimate(const std::vector<Obb>& boxes, int m);
+  double estimate(const Obb& box, int m);
+  int max_m() const;
+
+  // Ablations for the benchmark: culling off draws every mesh face for every box over its
+  // whole projection; batching off makes one GPU round trip per box.
+  void set_culling(bool on) { planner_.set_culling(on); }
+  void set_batching(bool on) { batching_ = on; }
+  const BoxPlanner& planner() const { return planner_; }
+
+  const std::string& renderer() const { return context_->renderer(); }
+  size_t round_trips() const { return round_trips_; }  // since construction
+
+ private:
+  struct Gl;
+  explicit GlObvEstimator(const Mesh& mesh);
+  void flush(int m);
+
+  BoxPlanner planner_;
+  std::unique_ptr<GlContext> context_;
+  std::unique_ptr<Gl> gl_;
+  bool batching_ = true;
+  size_t round_trips_ = 0;
+};
+
+// An upper bound on |GL estimate - CPU twin estimate| for a box with this plan at resolution
+// m, in world volume units, from float32 rounding in the shaders (gl_estimator.cpp derives it).
+double gl_deviation_bound(const BoxPlan& plan, int m);
+
+}  // namespace vobb

@@ -1,0 +1,102 @@
+// The per-box work that both cubemap backends share (cubemap.h): the box frame, the exact class
+// of the centre, the faces that can meet the box in box-normalized coordinates, and for each
+// (face, cubemap face) pair the rectangle of texels whose rays may hit the face. The CPU twin
+// ray-casts those texels in double; the GL estimator draws one quad per rectangle and runs the
+// same per-texel test (texel_hit) in float. Sharing the plan makes the two differ only in
+// arithmetic precision.
+//
+// A box's local OBV at resolution m is
+//   constant + (4 / (3 m^2)) * sum over (texel, face) hits of the hit's value,
+// with, in the normal mode (centre inside or outside the solid, 1_X(centre) known exactly),
+//   constant = 8 (1 - 1_X(centre)),  value = s (1 - zeta^3) for 0 < zeta < 1, else nothing;
+// and in the far-count mode (centre exactly on the surface, where 1_X(centre) is undefined),
+//   constant = 8,  value = -s zeta^3 for 0 < zeta < 1, -s for zeta >= 1,
+// which uses sum over all crossings of s = 1_X(centre) (the ray ends outside the solid), so
+// that 1 - c per texel becomes 1 - (sum of s beyond the box): only faces, no centre class.
+// The far-count mode draws every face of the mesh (no culling): a ray's far crossings can be
+// anywhere. Its hits at zeta -> 0 contribute -> 0, so faces through the centre do no harm.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "common/bvh.h"
+#include "common/mesh.h"
+#include "common/obb.h"
+#include "common/point_in_solid.h"
+#include "fast/cubemap.h"
+
+namespace vobb {
+
+// A mesh face in box-normalized coordinates, ready for texel rays from the origin.
+struct LocalTriangle {
+  Vec3 p[3];
+  int32_t id[3];       // mesh vertex ids
+  Vec3 edge_cross[3];  // p[k] x p[k+1]: a ray d passes edge k on the side sign(d . edge_cross[k])
+  // When d . edge_cross[k] is exactly 0 the side is +1 iff id[k] < id[k+1]. The two faces that
+  // share an edge run it in opposite directions (and their crosses are exact negatives), so
+  // exactly one of them claims a ray through the edge, unless the edge is a silhouette, where
+  // both or neither do, with opposite signs and equal depth: no net contribution either way.
+  bool tie_positive[3];
+  Vec3 normal;   // (p1 - p0) x (p2 - p0), outward for a solid (corrected for mirrored frames)
+  double plane;  // normal . p0: along d the face's plane is at zeta = plane / (normal . d)
+};
+
+// Texels [i0, i1] x [j0, j1] of cubemap face `face` whose rays may hit triangle `tri`.
+struct TexelSpan {
+  int32_t tri;
+  int32_t face;
+  int32_t i0, i1, j0, j1;
+};
+
+struct BoxPlan {
+  BoxFrame frame;
+  Location where = Location::kOutside;
+  bool far_count = false;  // the centre is on the surface (see above)
+  double constant = 0;     // local-volume constant of the formula above
+  std::vector<LocalTriangle> tris;
+  std::vector<TexelSpan> spans;
+  bool flat = false;  // zero-volume box: OBV 0, nothing to draw
+};
+
+// One texel ray against one face, in double: whether it hits, and the hit's value (above).
+inline bool texel_hit(const LocalTriangle& t, const Vec3& d, bool far_count, double* value) {
+  int side = 0;
+  for (int k = 0; k < 3; ++k) {
+    const double e = d.dot(t.edge_cross[k]);
+    const int sk = e > 0 ? 1 : e < 0 ? -1 : (t.tie_positive[k] ? 1 : -1);
+    if (k == 0) side = sk;
+    else if (sk != side) return false;
+  }
+  const double nd = t.normal.dot(d);
+  if (nd == 0) return false;  // the ray runs in the face's plane
+  const double zeta = t.plane / nd;
+  if (!(zeta > 0)) return false;  // behind the centre, or at it
+  const double s = nd > 0 ? 1.0 : -1.0;
+  if (!far_count) {
+    if (!(zeta < 1)) return false;
+    *value = s * (1 - zeta * zeta * zeta);
+  } else {
+    *value = zeta < 1 ? -s * zeta * zeta * zeta : -s;
+  }
+  return true;
+}
+
+class BoxPlanner {
+ public:
+  explicit BoxPlanner(const Mesh& mesh);  // keeps a reference
+  // Precondition: m >= 1.
+  BoxPlan plan(const Obb& box, int m) const;
+  // For the culling ablation: consider every face for every box.
+  void set_culling(bool on) { culling_ = on; }
+  bool culling() const { return culling_; }
+  const Mesh& mesh() const { return mesh_; }
+  const AabbTree& face_tree() const { return faces_; }
+
+ private:
+  const Mesh& mesh_;
+  AabbTree faces_;
+  bool culling_ = true;
+};
+
+}  // namespace vobb
