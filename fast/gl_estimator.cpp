@@ -168,15 +168,11 @@ std::vector<double> GlObvEstimator::estimate(const std::vector<Obb>& boxes, int 
   }
   std::vector<double> out(boxes.size(), 0.0);
   g.out = &out;
-  const double texel_weight = 4.0 / (3.0 * m * m);
   for (size_t b = 0; b < boxes.size(); ++b) {
     const BoxPlan plan = planner_.plan(boxes[b], m);
     if (plan.flat) continue;  // OBV 0
-    if (plan.spans.empty()) {  // nothing to draw: the constant alone
-      out[b] = plan.frame.volume_scale * plan.constant;
-      continue;
-    }
-    (void)texel_weight;
+    out[b] = plan.frame.volume_scale * plan.constant;  // the whole answer when nothing is drawn
+    const size_t records_before = g.batch_records.size();
     const int tile = static_cast<int>(g.batch_boxes.size());
     const int tile_x = tile % g.tiles_per_row * 3 * m, tile_y = tile / g.tiles_per_row * 2 * m;
     std::vector<std::array<float, 13>> tri_data(plan.tris.size());
@@ -192,6 +188,7 @@ std::vector<double> GlObvEstimator::estimate(const std::vector<Obb>& boxes, int 
       tri_data[t][12] = static_cast<float>(tri.plane * f);
     }
     for (const TexelSpan& span : plan.spans) {
+      if (span.i0 > span.i1 || span.j0 > span.j1) continue;  // covers no texel centre
       const LocalTriangle& tri = plan.tris[span.tri];
       SpanRecord r;
       r.span[0] = span.i0;
@@ -207,6 +204,7 @@ std::vector<double> GlObvEstimator::estimate(const std::vector<Obb>& boxes, int 
       std::memcpy(r.plane, tri_data[span.tri].data() + 9, 4 * sizeof(float));
       g.batch_records.push_back(r);
     }
+    if (g.batch_records.size() == records_before) continue;  // no span covers a texel centre
     g.batch_boxes.push_back(b);
     g.batch_scale.push_back(plan.frame.volume_scale);
     g.batch_constant.push_back(plan.constant);

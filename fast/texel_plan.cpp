@@ -74,25 +74,46 @@ bool texel_span(const LocalTriangle& t, int face, int m, bool no_far_clip, Texel
   }
   span->face = face;
   if (whole) {
-    span->i0 = span->j0 = 0;
-    span->i1 = span->j1 = m - 1;
+    span->i0 = span->j0 = span->ci0 = span->cj0 = 0;
+    span->i1 = span->j1 = span->ci1 = span->cj1 = m - 1;
     return true;
   }
+  constexpr double kDelta = 1e-8;  // see below
+  // Cells: texel i covers u in [-1 + 2i/m, -1 + 2(i+1)/m]; widened by delta like the centres.
+  auto cell = [&](double x) { return std::clamp(static_cast<int>(std::floor((x + 1) * m / 2)), 0, m - 1); };
+  span->ci0 = cell(ulo - kDelta);
+  span->ci1 = cell(uhi + kDelta);
+  span->cj0 = cell(vlo - kDelta);
+  span->cj1 = cell(vhi + kDelta);
   // Texel i's centre is -1 + (2i + 1) / m; keep the centres within [lo - delta, hi + delta].
   // A texel ray that hits the face inside the cone passes through the clipped polygon, so its
   // (u, v) lies in the projected bounds up to the projection's relative error, below 1e-9
   // (above): delta = 1e-8 keeps every such texel. A face that covers no texel centre gets none.
-  constexpr double kDelta = 1e-8;
   auto lo = [&](double x) { return std::max(0, static_cast<int>(std::ceil(((x - kDelta + 1) * m - 1) / 2))); };
   auto hi = [&](double x) { return std::min(m - 1, static_cast<int>(std::floor(((x + kDelta + 1) * m - 1) / 2))); };
   span->i0 = lo(ulo);
   span->i1 = hi(uhi);
   span->j0 = lo(vlo);
   span->j1 = hi(vhi);
-  return span->i0 <= span->i1 && span->j0 <= span->j1;
+  if (span->i0 > span->i1 || span->j0 > span->j1) span->i0 = 1, span->i1 = 0;  // no centre: draw nothing
+  return true;
 }
 
 }  // namespace
+
+double resolution_bound(const BoxPlan& plan, int m) {
+  if (plan.flat || plan.spans.empty()) return 0.0;
+  std::vector<char> touched(6 * static_cast<size_t>(m) * m, 0);
+  size_t count = 0;
+  for (const TexelSpan& s : plan.spans)
+    for (int i = s.ci0; i <= s.ci1; ++i)
+      for (int j = s.cj0; j <= s.cj1; ++j) {
+        char& t = touched[(static_cast<size_t>(s.face) * m + i) * m + j];
+        count += t == 0;
+        t = 1;
+      }
+  return plan.frame.volume_scale * 4.0 / (3.0 * m * m) * static_cast<double>(count);
+}
 
 BoxPlanner::BoxPlanner(const Mesh& mesh) : mesh_(mesh), faces_(AabbTree::over_faces(mesh)) {}
 

@@ -1,0 +1,218 @@
+#include "fast/gl_estimator.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <random>
+
+#include "common/io/mesh_report.h"
+#include "data/analytic_meshes.h"
+#include "fast/cpu_estimator.h"
+#include "test_common.h"
+
+namespace vobb {
+namespace {
+
+// Every machine here has Mesa's llvmpipe, so a missing context is a failure, unless GL was
+// switched off on purpose (VOBB_GL=off), which skips.
+#define VOBB_MAKE_GL(est, mesh)                                                   \
+  std::unique_ptr<GlObvEstimator> est;                                            \
+  do {                                                                            \
+    const Status made = GlObvEstimator::create((mesh), &est);                     \
+    const char* env = std::getenv("VOBB_GL");                                     \
+    if (!made && env != nullptr && std::string(env) == "off") GTEST_SKIP() << made.message(); \
+    ASSERT_TRUE(made) << made.message();                                          \
+  } while (0)
+
+Obb aabox(const Vec3& c, const Vec3& h) {
+  Obb b;
+  b.center = c;
+  b.half = h;
+  return b;
+}
+
+// Relative tolerance for results exact up to double rounding (as in cpu_estimator_test.cpp).
+constexpr double kRoundOff = 1e-12;
+
+// Seeded boxes over a mesh: centres uniform in its bounds grown by 10 %, random orientation,
+// half extents log-uniform from 1 % to 40 % of the bounds' diagonal per axis (leaf to root).
+std::vector<Obb> random_boxes(const Mesh& mesh, int n, uint64_t seed) {
+  Aabb bounds;
+  for (const Vec3& v : mesh.vertices) bounds.extend(v);
+  const Vec3 size = bounds.hi - bounds.lo;
+  const double diag = size.norm();
+  std::mt19937_64 rng(seed);
+  auto uniform = [&] { return static_cast<double>(rng() >> 11) * 0x1.0p-53; };
+  std::vector<Obb> out;
+  for (int i = 0; i < n; ++i) {
+    Obb b;
+    for (int k = 0; k < 3; ++k) b.center[k] = bounds.lo[k] - 0.1 * size[k] + 1.2 * size[k] * uniform();
+    b.axes = orthonormalize({Vec3(uniform() - 0.5, uniform() - 0.5, uniform() - 0.5),
+                             Vec3(uniform() - 0.5, uniform() - 0.5, uniform() - 0.5), Vec3::Zero()});
+    for (int k = 0; k < 3; ++k) b.half[k] = diag * 0.01 * std::pow(40.0, uniform());
+    out.push_back(b);
+  }
+  return out;
+}
+
+// GL against the CPU twin: every box within gl_deviation_bound (gl_estimator.cpp derives it
+// from the shaders' float32 arithmetic). Returns the median of bound / |value| so callers can
+// check that the bound is informative, not vacuous.
+double expect_gl_matches_cpu(const Mesh& mesh, GlObvEstimator& gl, const std::vector<Obb>& boxes, int m) {
+  const CpuObvEstimator cpu(mesh);
+  const std::vector<double> g = gl.estimate(boxes, m), c = cpu.estimate(boxes, m);
+  std::vector<double> relative_bounds;
+  for (size_t i = 0; i < boxes.size(); ++i) {
+    const BoxPlan plan = gl.planner().plan(boxes[i], m);
+    const double bound = gl_deviation_bound(plan, m);
+    EXPECT_TRUE(std::isfinite(g[i])) << i;
+    EXPECT_LE(std::abs(g[i] - c[i]), bound + kRoundOff * volume(boxes[i])) << "box " << i << " m " << m;
+    EXPECT_GE(g[i], -bound - kRoundOff * volume(boxes[i])) << i;  // no negative beyond round-off
+    relative_bounds.push_back(bound / std::max(std::abs(c[i]), 1e-300));
+  }
+  std::nth_element(relative_bounds.begin(), relative_bounds.begin() + relative_bounds.size() / 2,
+                   relative_bounds.end());
+  return relative_bounds[relative_bounds.size() / 2];
+}
+
+// 200 seeded boxes over two real meshes, at a power-of-two m (texel directions exact in float)
+// and at m = 23 (rounded directions). The median bound must stay near float round-off
+// (1e-5 relative is some 100 float ulps): a vacuous bound would make the comparison toothless.
+TEST(GlEstimator, MatchesCpuTwinOnRealMeshesWithinDerivedFloatBound) {
+  int seed = 1;
+  for (const char* name : {"dino", "knot1"}) {
+    VOBB_REQUIRE_REAL_MESH(name);
+    LoadedMesh lm;
+    ASSERT_TRUE(load_solid(test::real_mesh(name), &lm));
+    VOBB_MAKE_GL(gl, lm.mesh);
+    const std::vector<Obb> boxes = random_boxes(lm.mesh, 100, seed++);
+    for (int m : {16, 23}) EXPECT_LT(expect_gl_matches_cpu(lm.mesh, *gl, boxes, m), 1e-5) << name << " m " << m;
+  }
+}
+
+TEST(GlEstimator, MatchesCpuTwinOnAnalyticMeshes) {
+  for (const auto& a : {analytic::polygonal_torus(), analytic::cube_with_cavity(), analytic::octahedron()}) {
+    VOBB_MAKE_GL(gl, a.mesh);
+    const std::vector<Obb> boxes = random_boxes(a.mesh, 40, 7);
+    for (int m : {1, 8, 32}) EXPECT_LT(expect_gl_matches_cpu(a.mesh, *gl, boxes, m), 1e-5) << a.name << " m " << m;
+  }
+}
+
+TEST(GlEstimator, DisjointBoxIsItsVolumeWithoutGpuWork) {
+  const Mesh m = analytic::cube().mesh;
+  VOBB_MAKE_GL(gl, m);
+  const Obb b = aabox(Vec3(5, 5, 5), Vec3(1, 2, 0.5));
+  const size_t trips = gl->round_trips();
+  for (int res : {1, 7, 32}) EXPECT_NEAR(gl->estimate(b, res), volume(b), kRoundOff * volume(b));
+  EXPECT_EQ(gl->round_trips(), trips);  // nothing drawn, nothing read back
+}
+
+// A box holding the whole mesh: vol(box) - vol(mesh), to the estimator's resolution
+// (resolution_bound: the texels the surface crosses, each off by at most its pyramid). Centred
+// on the aligned cube the estimate is exact, up to float round-off (gl_deviation_bound).
+TEST(GlEstimator, WholeMeshBoxIsBoxVolumeMinusMeshVolume) {
+  const auto cube = analytic::cube();
+  VOBB_MAKE_GL(gl, cube.mesh);
+  const Obb centred = aabox(Vec3(0.5, 0.5, 0.5), Vec3(1.5, 1.5, 1.5));
+  for (int res : {1, 3, 16, 64}) {
+    const double bound = gl_deviation_bound(gl->planner().plan(centred, res), res);
+    EXPECT_NEAR(gl->estimate(centred, res), 26.0, bound + kRoundOff * 27) << res;
+  }
+  for (const auto& a : {analytic::polygonal_torus(), analytic::cube_with_cavity()}) {
+    VOBB_MAKE_GL(est, a.mesh);
+    Aabb bounds;
+    for (const Vec3& v : a.mesh.vertices) bounds.extend(v);
+    Obb b;
+    b.axes = orthonormalize({Vec3(1, 0.2, 0.1), Vec3(-0.1, 1, 0.3), Vec3::Zero()});
+    b.center = 0.5 * (bounds.lo + bounds.hi) + 0.05 * (bounds.hi - bounds.lo);
+    b.half = Vec3::Constant((bounds.hi - bounds.lo).norm());  // holds every vertex in any orientation
+    const double exact = volume(b) - to_double_nearest(a.volume);
+    for (int res : {8, 32}) {
+      const BoxPlan plan = est->planner().plan(b, res);
+      const double v = est->estimate(b, res);
+      EXPECT_NEAR(v, exact, resolution_bound(plan, res) + gl_deviation_bound(plan, res)) << a.name << " m " << res;
+    }
+  }
+}
+
+// A centre on a face, an edge or a vertex: finite (far-count mode) and consistent with the same
+// box nudged off the surface both ways (which classifies the centre normally).
+TEST(GlEstimator, FiniteAndConsistentForCentresOnFacesEdgesAndVertices) {
+  const Mesh m = analytic::cube().mesh;
+  VOBB_MAKE_GL(gl, m);
+  const Vec3 h(0.3, 0.2, 0.25);
+  for (const Vec3& c : {Vec3(0, 0, 0), Vec3(0.5, 0, 0), Vec3(0.5, 0.5, 0), Vec3(1, 1, 0.5)}) {
+    const Obb b = aabox(c, h);
+    const double v = gl->estimate(b, 32);
+    ASSERT_TRUE(std::isfinite(v));
+    EXPECT_TRUE(gl->planner().plan(b, 32).far_count) << c.transpose();
+    const double area = 8 * (h[0] * h[1] + h[1] * h[2] + h[2] * h[0]);
+    for (double eps : {1e-9, -1e-9}) {
+      const Obb nudged = aabox(c + Vec3::Constant(eps), h);
+      const double w = gl->estimate(nudged, 32);
+      // The exact OBV moves by at most area * |eps| sqrt(3) (cpu_estimator_test.cpp); both
+      // GL values carry float deviations from the (aligned, here exact) CPU value.
+      const double slack = gl_deviation_bound(gl->planner().plan(b, 32), 32) +
+                           gl_deviation_bound(gl->planner().plan(nudged, 32), 32);
+      EXPECT_NEAR(v, w, area * std::sqrt(3.0) * std::abs(eps) + slack + kRoundOff * volume(b)) << c.transpose();
+    }
+  }
+}
+
+// Batches of any size give the same floats as one box per round trip: the blend order within a
+// texel and the reduction order do not depend on the batch. At m = 256 an atlas holds 40 tiles,
+// so 200 boxes take several trips and the multi-trip path runs too.
+TEST(GlEstimator, BatchingChangesNothingButTheRoundTrips) {
+  const Mesh m = analytic::polygonal_torus().mesh;
+  VOBB_MAKE_GL(gl, m);
+  const std::vector<Obb> boxes = random_boxes(m, 200, 11);
+  for (int res : {8, 256}) {
+    size_t trips = gl->round_trips();
+    const std::vector<double> batched = gl->estimate(boxes, res);
+    const size_t batched_trips = gl->round_trips() - trips;
+    gl->set_batching(false);
+    trips = gl->round_trips();
+    const std::vector<double> single = gl->estimate(boxes, res);
+    const size_t single_trips = gl->round_trips() - trips;
+    gl->set_batching(true);
+    EXPECT_EQ(batched, single) << res;
+    EXPECT_LT(batched_trips, single_trips);
+    if (res == 256) {
+      EXPECT_GT(batched_trips, 1u);
+    }
+  }
+}
+
+TEST(GlEstimator, CullingChangesNothingButTheWork) {
+  const Mesh m = analytic::polygonal_torus().mesh;
+  VOBB_MAKE_GL(gl, m);
+  const std::vector<Obb> boxes = random_boxes(m, 30, 5);
+  const std::vector<double> culled = gl->estimate(boxes, 16);
+  gl->set_culling(false);
+  const std::vector<double> all = gl->estimate(boxes, 16);
+  gl->set_culling(true);
+  for (size_t i = 0; i < boxes.size(); ++i) {
+    // Without culling the faces beyond the box are drawn too, and discarded per texel; the kept
+    // hits are the same, blended in the same order: the same floats.
+    EXPECT_EQ(culled[i], all[i]) << i;
+  }
+}
+
+TEST(GlContext, SwitchedOffGivesAClearOneLineError) {
+  const char* old = std::getenv("VOBB_GL");
+  const std::string saved = old ? old : "";
+  ::setenv("VOBB_GL", "off", 1);
+  std::unique_ptr<GlContext> ctx;
+  const Status s = GlContext::create(&ctx);
+  if (old) ::setenv("VOBB_GL", saved.c_str(), 1);
+  else ::unsetenv("VOBB_GL");
+  EXPECT_FALSE(s);
+  EXPECT_EQ(ctx, nullptr);
+  EXPECT_NE(s.message().find("VOBB_GL=off"), std::string::npos) << s.message();
+  EXPECT_EQ(s.message().find('\n'), std::string::npos);
+}
+
+}  // namespace
+}  // namespace vobb
