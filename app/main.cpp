@@ -16,6 +16,7 @@
 #include "exact/certify.h"
 #include "exact/outer_volume.h"
 #include "fast/cpu_estimator.h"
+#include "fast/gl_estimator.h"
 #include "fast/obbtree_builder.h"
 #include "vobb/config.h"
 
@@ -158,8 +159,6 @@ int run_certify(const std::string& mesh_path, const std::string& tree_path, bool
 
 int run_obv(const std::string& mesh_path, const std::string& boxes_path, const std::vector<int>& ms,
             const std::string& backend, bool json) {
-  if (backend == "gl")
-    return refuse(vobb::Status::error("backend 'gl' is not available in this build yet (use cpu, exact or all)"));
   vobb::LoadedMesh mesh;
   vobb::Status s = vobb::load_solid(mesh_path, &mesh);
   if (!s) return refuse(s);
@@ -167,44 +166,90 @@ int run_obv(const std::string& mesh_path, const std::string& boxes_path, const s
   s = vobb::read_boxes(boxes_path, &boxes);
   if (!s) return refuse(s);
   const bool want_exact = backend == "exact" || backend == "all";
-  const bool want_cpu = backend == "cpu" || backend == "all";
-  std::unique_ptr<vobb::exact::ClipSolver> exact;
-  if (want_exact) exact = std::make_unique<vobb::exact::ClipSolver>(mesh.mesh);
-  std::unique_ptr<vobb::CpuObvEstimator> cpu;
-  if (want_cpu) cpu = std::make_unique<vobb::CpuObvEstimator>(mesh.mesh);
+  bool want_cpu = backend == "cpu" || backend == "all";
+  // A GL context only where GL is asked for; auto and all fall back to the CPU twin.
+  std::unique_ptr<vobb::GlObvEstimator> gl;
+  if (backend == "gl" || backend == "auto" || backend == "all") {
+    s = vobb::GlObvEstimator::create(mesh.mesh, &gl);
+    if (!s) {
+      if (backend == "gl") return refuse(s);
+      std::fprintf(stderr, "vobb: warning: %s; using the CPU twin instead\n", s.message().c_str());
+      want_cpu = true;
+    } else {
+      for (int m : ms)
+        if (m > gl->max_m())
+          return refuse(vobb::Status::error("--m " + std::to_string(m) + " exceeds the GL estimator's limit " +
+                                            std::to_string(gl->max_m()) + " on this renderer"));
+    }
+  }
+  const size_t n = boxes.size();
+  // Estimates per backend and m: values and seconds per box (GL: the batch's time amortised).
+  struct Run {
+    std::string backend;
+    int m;
+    std::vector<double> obv, seconds;
+  };
+  std::vector<Run> runs;
+  if (want_cpu) {
+    const vobb::CpuObvEstimator cpu(mesh.mesh);
+    for (int m : ms) {
+      Run r{"cpu", m, {}, {}};
+      for (const vobb::Obb& b : boxes) {
+        const auto t0 = std::chrono::steady_clock::now();
+        r.obv.push_back(cpu.estimate(b, m));
+        r.seconds.push_back(seconds_since(t0));
+      }
+      runs.push_back(std::move(r));
+    }
+  }
+  if (gl)
+    for (int m : ms) {
+      const auto t0 = std::chrono::steady_clock::now();
+      Run r{"gl", m, gl->estimate(boxes, m), {}};
+      r.seconds.assign(n, n ? seconds_since(t0) / n : 0.0);
+      runs.push_back(std::move(r));
+    }
+  std::vector<double> exact_value(n, 0.0), exact_seconds(n, 0.0);
+  if (want_exact) {
+    const vobb::exact::ClipSolver exact(mesh.mesh);
+    for (size_t i = 0; i < n; ++i) {
+      const auto t0 = std::chrono::steady_clock::now();
+      exact_value[i] = vobb::to_double_nearest(exact.obv(boxes[i]));
+      exact_seconds[i] = seconds_since(t0);
+    }
+  }
+
   nlohmann::ordered_json out = nlohmann::ordered_json::array();
   if (!json) std::printf("%5s %8s %5s %24s %24s %12s %10s\n", "box", "backend", "m", "OBV", "exact", "rel.error", "seconds");
-  for (size_t i = 0; i < boxes.size(); ++i) {
+  for (size_t i = 0; i < n; ++i) {
     nlohmann::ordered_json jb;
     jb["index"] = i;
     jb["box_volume"] = vobb::volume(boxes[i]);
-    double exact_value = 0;
-    if (exact) {
-      const auto t0 = std::chrono::steady_clock::now();
-      exact_value = vobb::to_double_nearest(exact->obv(boxes[i]));
-      jb["exact"] = exact_value;
-      jb["exact_seconds"] = seconds_since(t0);
+    if (want_exact) {
+      jb["exact"] = exact_value[i];
+      jb["exact_seconds"] = exact_seconds[i];
     }
     nlohmann::ordered_json est = nlohmann::ordered_json::array();
-    if (want_cpu)
-      for (int m : ms) {
-        const auto t0 = std::chrono::steady_clock::now();
-        const double v = cpu->estimate(boxes[i], m);
-        const double sec = seconds_since(t0);
-        est.push_back({{"backend", "cpu"}, {"m", m}, {"obv", v}, {"seconds", sec}});
-        if (!json) {
-          char rel[32] = "-";
-          if (exact && exact_value != 0) std::snprintf(rel, sizeof rel, "%.3e", std::abs(v - exact_value) / exact_value);
-          char ex[40] = "-";
-          if (exact) std::snprintf(ex, sizeof ex, "%.17g", exact_value);
-          std::printf("%5zu %8s %5d %24.17g %24s %12s %10.6f\n", i, "cpu", m, v, ex, rel, sec);
-        }
-      }
-    if (!json && !want_cpu) std::printf("%5zu %8s %5s %24.17g %24s %12s %10s\n", i, "exact", "-", exact_value, "-", "-", "-");
+    for (const Run& r : runs) {
+      est.push_back({{"backend", r.backend}, {"m", r.m}, {"obv", r.obv[i]}, {"seconds", r.seconds[i]}});
+      if (json) continue;
+      char rel[32] = "-", ex[40] = "-";
+      if (want_exact && exact_value[i] != 0)
+        std::snprintf(rel, sizeof rel, "%.3e", std::abs(r.obv[i] - exact_value[i]) / exact_value[i]);
+      if (want_exact) std::snprintf(ex, sizeof ex, "%.17g", exact_value[i]);
+      std::printf("%5zu %8s %5d %24.17g %24s %12s %10.6f\n", i, r.backend.c_str(), r.m, r.obv[i], ex, rel, r.seconds[i]);
+    }
+    if (!json && runs.empty())
+      std::printf("%5zu %8s %5s %24.17g %24s %12s %10.6f\n", i, "exact", "-", exact_value[i], "-", "-", exact_seconds[i]);
     jb["estimates"] = est;
     out.push_back(jb);
   }
-  if (json) std::printf("%s\n", nlohmann::ordered_json({{"boxes", out}}).dump(2).c_str());
+  if (json) {
+    nlohmann::ordered_json doc;
+    if (gl) doc["renderer"] = gl->renderer();
+    doc["boxes"] = out;
+    std::printf("%s\n", doc.dump(2).c_str());
+  }
   return kExitOk;
 }
 
@@ -244,14 +289,16 @@ int main(int argc, char** argv) {
       ->capture_default_str()->check(CLI::IsMember({"auto", "clip", "nef", "both"}));
   cert->add_flag("--quiet", quiet, "No per-layer progress on stderr");
 
-  std::string boxes_path, backend = "cpu";
+  std::string boxes_path, backend = "auto";
   std::vector<int> ms = {8, 16, 32};
   CLI::App* obv = app.add_subcommand("obv", "OBV of boxes: cubemap estimates at several m, and the exact value");
   obv->add_option("MESH", mesh, "Solid mesh")->required();
   obv->add_option("--boxes", boxes_path, "Box file {\"boxes\":[{center, axes, half_extents}]}")->required();
   obv->add_option("--m", ms, "Cubemap resolutions, e.g. 8,16,32")->delimiter(',')->check(CLI::Range(1, 4096));
-  obv->add_option("--backend", backend, "cpu, exact, all (gl: not in this build yet)")
-      ->capture_default_str()->check(CLI::IsMember({"gl", "cpu", "exact", "all"}));
+  obv->add_option("--backend", backend,
+                  "gl (EGL: a GPU, else llvmpipe), cpu (the double-precision twin), exact, all, or auto "
+                  "(gl, else cpu with a warning)")
+      ->capture_default_str()->check(CLI::IsMember({"auto", "gl", "cpu", "exact", "all"}));
   obv->add_flag("--json", json, "Print JSON");
 
   CLI::App* exp = app.add_subcommand("export", "Write the boxes of one layer as OBJ or PLY");

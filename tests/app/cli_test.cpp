@@ -146,10 +146,20 @@ TEST(Cli, BuildExportAndInfoOnAnAnalyticMesh) {
     r = vobb_cli("obv " + mesh + " --boxes " + boxes + " --m 4,8 --backend all --json");
     ASSERT_EQ(r.code, 0) << r.err;
     for (const char* key : {"\"index\"", "\"box_volume\"", "\"exact\"", "\"estimates\"", "\"backend\": \"cpu\"",
-                            "\"m\": 8", "\"obv\"", "\"seconds\""})
+                            "\"backend\": \"gl\"", "\"m\": 8", "\"obv\"", "\"seconds\"", "\"renderer\""})
       EXPECT_NE(r.out.find(key), std::string::npos) << key << r.out;
+    // Without a GL context: gl is refused in one line, auto falls back to the CPU twin and warns.
+    ::setenv("VOBB_GL", "off", 1);
     r = vobb_cli("obv " + mesh + " --boxes " + boxes + " --backend gl");
     EXPECT_EQ(r.code, 2);
+    EXPECT_EQ(line_count(r.err), 1u) << r.err;
+    EXPECT_NE(r.err.find("VOBB_GL=off"), std::string::npos) << r.err;
+    r = vobb_cli("obv " + mesh + " --boxes " + boxes + " --m 8 --backend auto --json");
+    ::unsetenv("VOBB_GL");
+    EXPECT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.err.find("warning"), std::string::npos) << r.err;
+    EXPECT_NE(r.out.find("\"backend\": \"cpu\""), std::string::npos) << r.out;
+    EXPECT_EQ(r.out.find("\"backend\": \"gl\""), std::string::npos) << r.out;
     std::remove(boxes.c_str());
   }
   r = vobb_cli("build " + mesh + " -o " + tree + " --method variational");
