@@ -18,6 +18,7 @@
 #include "fast/cpu_estimator.h"
 #include "fast/gl_estimator.h"
 #include "fast/obbtree_builder.h"
+#include "fast/variational_builder.h"
 #include "vobb/config.h"
 
 namespace {
@@ -46,19 +47,77 @@ int run_info(const std::string& mesh, bool json, bool rational) {
   return s ? kExitOk : refuse(s);
 }
 
-int run_build(const std::string& mesh_path, const std::string& out, const std::string& method,
-              int depth, int arity) {
-  if (method != "obbtree")
-    return refuse(vobb::Status::error("method '" + method +
-                                      "' is not available in this build (available: obbtree)"));
+struct BuildFlags {
+  std::string method = "variational";
+  int depth = 8, arity = 2, m = 32, lloyd = 4;
+  std::string backend = "auto";
+  bool no_axis_search = false, quiet = false;
+};
+
+// The OBV estimator that the variational builder runs in its loop. auto: the GL estimator on an
+// EGL device (a GPU); on llvmpipe, or without a context, the CPU twin, which is faster there
+// (docs/BENCHMARKS.md) and gives the same texels in double.
+vobb::Status make_estimator(const vobb::Mesh& mesh, const BuildFlags& f, std::unique_ptr<vobb::GlObvEstimator>* gl,
+                            std::unique_ptr<vobb::CpuObvEstimator>* cpu, vobb::ObvEstimate* estimate) {
+  if (f.backend == "gl" || f.backend == "auto") {
+    vobb::Status s = vobb::GlObvEstimator::create(mesh, gl, /*device_only=*/f.backend == "auto");
+    if (!s && f.backend == "gl") return s;
+    if (s && f.m > (*gl)->max_m())
+      return vobb::Status::error("--m " + std::to_string(f.m) + " exceeds the GL estimator's limit");
+  }
+  const int m = f.m;
+  if (*gl) {
+    vobb::GlObvEstimator* g = gl->get();
+    *estimate = [g, m](const std::vector<vobb::Obb>& boxes) { return g->estimate(boxes, m); };
+  } else {
+    *cpu = std::make_unique<vobb::CpuObvEstimator>(mesh);
+    const vobb::CpuObvEstimator* c = cpu->get();
+    *estimate = [c, m](const std::vector<vobb::Obb>& boxes) { return c->estimate(boxes, m); };
+  }
+  return vobb::Status::ok();
+}
+
+vobb::Tree build_tree(const vobb::Mesh& mesh, const BuildFlags& f, const vobb::ObvEstimate& estimate) {
+  if (f.method == "obbtree") {
+    vobb::ObbTreeOptions opt;
+    opt.depth = f.depth;
+    opt.arity = f.arity;
+    return vobb::build_obbtree(mesh, opt);
+  }
+  vobb::VariationalOptions opt;
+  opt.depth = f.depth;
+  opt.arity = f.arity;
+  opt.lloyd_iterations = f.lloyd;
+  opt.optimise_axes = !f.no_axis_search;
+  const auto t0 = std::chrono::steady_clock::now();
+  double last = -1;
+  if (!f.quiet)
+    opt.progress = [&](const vobb::VariationalProgress& p) {
+      const double now = seconds_since(t0);
+      if (now - last < 0.5) return;
+      last = now;
+      std::fprintf(stderr, "\rvobb: level %d/%d  node %zu/%zu  iteration %d  sum OBV %.6g  estimates %zu  %.1f s   ",
+                   p.level, f.depth, p.node, p.nodes, p.iteration, p.sum_obv, p.estimates, now);
+      std::fflush(stderr);
+    };
+  vobb::Tree tree = vobb::build_variational(mesh, opt, estimate);
+  if (!f.quiet && last >= 0) std::fprintf(stderr, "\n");
+  return tree;
+}
+
+int run_build(const std::string& mesh_path, const std::string& out, const BuildFlags& f) {
   const auto t0 = std::chrono::steady_clock::now();
   vobb::LoadedMesh loaded;
   vobb::Status s = vobb::load_solid(mesh_path, &loaded);
   if (!s) return refuse(s);
-  vobb::ObbTreeOptions opt;
-  opt.depth = depth;
-  opt.arity = arity;
-  vobb::Tree tree = vobb::build_obbtree(loaded.mesh, opt);
+  std::unique_ptr<vobb::GlObvEstimator> gl;
+  std::unique_ptr<vobb::CpuObvEstimator> cpu;
+  vobb::ObvEstimate estimate;
+  if (f.method == "variational") {
+    s = make_estimator(loaded.mesh, f, &gl, &cpu, &estimate);
+    if (!s) return refuse(s);
+  }
+  vobb::Tree tree = build_tree(loaded.mesh, f, estimate);
   tree.mesh_sha256 = vobb::mesh_sha256(loaded.mesh);
   s = vobb::write_tree(tree, out);
   if (!s) return refuse(s);
@@ -260,23 +319,33 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   app.set_version_flag("--version", VOBB_VERSION);
 
-  std::string mesh, tree_path, out, method = "obbtree";
+  std::string mesh, tree_path, out;
   bool json = false, rational = false;
-  int depth = 8, arity = 2, level = 0;
+  int level = 0;
 
   CLI::App* info = app.add_subcommand("info", "Counts, exact enclosed volume, bounding box and solidity verdict");
   info->add_option("MESH", mesh, "Mesh file (OFF, OBJ, PLY, STL; others through assimp)")->required();
   info->add_flag("--json", json, "Print JSON");
   info->add_flag("--rational", rational, "Also print the exact volume as a rational");
 
+  BuildFlags bf;
   CLI::App* build = app.add_subcommand("build", "Build an OBB tree and write it as JSON");
   build->add_option("MESH", mesh, "Solid mesh file")->required();
   build->add_option("-o,--output", out, "Tree file to write")->required();
-  build->add_option("--method", method, "obbtree (the OBB-Tree baseline)")->capture_default_str();
-  build->add_option("--depth", depth, "Deepest level; the root is level 0")
+  build->add_option("--method", bf.method, "variational (the paper's) or obbtree (the OBB-Tree baseline)")
+      ->capture_default_str()->check(CLI::IsMember({"variational", "obbtree"}));
+  build->add_option("--depth", bf.depth, "Deepest level; the root is level 0")
       ->capture_default_str()->check(CLI::Range(0, 30));
-  build->add_option("--arity", arity, "Most children per node")
+  build->add_option("--arity", bf.arity, "Most children per node")
       ->capture_default_str()->check(CLI::Range(2, 64));
+  build->add_option("--m", bf.m, "Cubemap resolution of the OBV estimator (variational)")
+      ->capture_default_str()->check(CLI::Range(1, 4096));
+  build->add_option("--backend", bf.backend, "OBV estimator: auto (GL on a GPU, else the CPU twin), gl, cpu")
+      ->capture_default_str()->check(CLI::IsMember({"auto", "gl", "cpu"}));
+  build->add_option("--lloyd", bf.lloyd, "Most Lloyd iterations per node (variational)")
+      ->capture_default_str()->check(CLI::Range(0, 1000));
+  build->add_flag("--no-axis-search", bf.no_axis_search, "Ablation: keep covariance axes (no orientation search)");
+  build->add_flag("--quiet", bf.quiet, "No progress line");
 
   std::string omv_path = "auto";
   bool quiet = false;
@@ -322,7 +391,7 @@ int main(int argc, char** argv) {
     return kExitBadInput;
   }
   if (info->parsed()) return run_info(mesh, json, rational);
-  if (build->parsed()) return run_build(mesh, out, method, depth, arity);
+  if (build->parsed()) return run_build(mesh, out, bf);
   if (exp->parsed()) return run_export(tree_path, level, out);
   if (obv->parsed()) return run_obv(mesh, boxes_path, ms, backend, json);
   if (cert->parsed()) return run_certify(mesh, tree_path, json, rational, omv_path, quiet);

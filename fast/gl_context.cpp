@@ -72,14 +72,14 @@ EGLContext make_context(EGLDisplay display, std::string* why) {
 
 }  // namespace
 
-Status GlContext::create(std::unique_ptr<GlContext>* out) {
+Status GlContext::create(std::unique_ptr<GlContext>* out, bool device_only) {
   out->reset();
   const char* gl_env = std::getenv("VOBB_GL");
   if (gl_env != nullptr && std::strcmp(gl_env, "off") == 0)
     return Status::error("no OpenGL context: disabled by VOBB_GL=off");
   const char* only = std::getenv("VOBB_EGL_PLATFORM");
   const bool try_device = only == nullptr || std::strcmp(only, "device") == 0;
-  const bool try_surfaceless = only == nullptr || std::strcmp(only, "surfaceless") == 0;
+  const bool try_surfaceless = !device_only && (only == nullptr || std::strcmp(only, "surfaceless") == 0);
 
   const char* client = eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
   auto get_platform_display =

@@ -17,8 +17,9 @@ namespace vobb {
 
 class GlContext {
  public:
-  // On failure `out` stays empty and the Status says why, in one line.
-  static Status create(std::unique_ptr<GlContext>* out);
+  // On failure `out` stays empty and the Status says why, in one line. `device_only` skips
+  // the surfaceless (software) platform: for callers that only want GL on a GPU.
+  static Status create(std::unique_ptr<GlContext>* out, bool device_only = false);
   ~GlContext();
   GlContext(const GlContext&) = delete;
   GlContext& operator=(const GlContext&) = delete;

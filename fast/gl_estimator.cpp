@@ -101,10 +101,10 @@ GlObvEstimator::~GlObvEstimator() {
   glDeleteTextures(1, &gl_->atlas);
 }
 
-Status GlObvEstimator::create(const Mesh& mesh, std::unique_ptr<GlObvEstimator>* out) {
+Status GlObvEstimator::create(const Mesh& mesh, std::unique_ptr<GlObvEstimator>* out, bool device_only) {
   out->reset();
   std::unique_ptr<GlObvEstimator> e(new GlObvEstimator(mesh));
-  Status s = GlContext::create(&e->context_);
+  Status s = GlContext::create(&e->context_, device_only);
   if (!s) return s;
   Gl& g = *e->gl_;
   std::string log;

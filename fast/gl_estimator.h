@@ -27,8 +27,9 @@ namespace vobb {
 class GlObvEstimator {
  public:
   // Makes the GL context and compiles the shaders; on failure `out` stays empty and the Status
-  // says why in one line. Keeps a reference to `mesh`.
-  static Status create(const Mesh& mesh, std::unique_ptr<GlObvEstimator>* out);
+  // says why in one line. Keeps a reference to `mesh`. `device_only`: only on a GPU (see
+  // GlContext::create).
+  static Status create(const Mesh& mesh, std::unique_ptr<GlObvEstimator>* out, bool device_only = false);
   ~GlObvEstimator();
 
   // OBV estimate of each box at resolution m, 1 <= m <= max_m(), in world volume units.

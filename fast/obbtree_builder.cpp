@@ -95,6 +95,22 @@ std::array<Vec3, 3> covariance_axes(const Mesh& mesh, const std::vector<int32_t>
   return orthonormalize({a0, a1, a0.cross(a1)});
 }
 
+std::vector<std::vector<int32_t>> split_into_groups(const Mesh& mesh, const std::vector<int32_t>& faces, int arity) {
+  std::vector<std::vector<int32_t>> groups{faces};
+  while (static_cast<int>(groups.size()) < arity) {
+    // The largest group with more than one face; the first on ties.
+    size_t best = groups.size();
+    for (size_t g = 0; g < groups.size(); ++g)
+      if (groups[g].size() > 1 && (best == groups.size() || groups[g].size() > groups[best].size())) best = g;
+    if (best == groups.size()) break;
+    std::vector<int32_t> left, right;
+    split_by_rapid_rule(mesh, groups[best], &left, &right);
+    groups[best] = std::move(left);
+    groups.insert(groups.begin() + best + 1, std::move(right));
+  }
+  return groups;
+}
+
 Tree build_obbtree(const Mesh& mesh, const ObbTreeOptions& options) {
   VOBB_ASSERT(options.depth >= 0 && options.arity >= 2, "depth >= 0 and arity >= 2");
   VOBB_ASSERT(!mesh.faces.empty(), "build_obbtree needs faces");
@@ -112,18 +128,7 @@ Tree build_obbtree(const Mesh& mesh, const ObbTreeOptions& options) {
     node.box = fit_obb(mesh, node.faces, covariance_axes(mesh, node.faces));
     tree.depth = std::max(tree.depth, static_cast<int>(node.level));
     if (node.level >= options.depth || node.faces.size() < 2) continue;
-    std::vector<std::vector<int32_t>> groups{node.faces};
-    while (static_cast<int>(groups.size()) < options.arity) {
-      // The largest group with more than one face; the first on ties.
-      size_t best = groups.size();
-      for (size_t g = 0; g < groups.size(); ++g)
-        if (groups[g].size() > 1 && (best == groups.size() || groups[g].size() > groups[best].size())) best = g;
-      if (best == groups.size()) break;
-      std::vector<int32_t> left, right;
-      split_by_rapid_rule(mesh, groups[best], &left, &right);
-      groups[best] = std::move(left);
-      groups.insert(groups.begin() + best + 1, std::move(right));
-    }
+    std::vector<std::vector<int32_t>> groups = split_into_groups(mesh, node.faces, options.arity);
     const int32_t parent = static_cast<int32_t>(i);
     const int32_t level = node.level + 1;
     for (auto& g : groups) {
