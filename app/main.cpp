@@ -312,6 +312,63 @@ int run_obv(const std::string& mesh_path, const std::string& boxes_path, const s
   return kExitOk;
 }
 
+// Both builders on one mesh, both trees certified exactly; per layer the exact OMV of each and
+// the change, and each tree's weighted error e (DESIGN §1, §7).
+int run_compare(const std::string& mesh_path, const BuildFlags& flags, bool json) {
+  vobb::LoadedMesh loaded;
+  vobb::Status s = vobb::load_solid(mesh_path, &loaded);
+  if (!s) return refuse(s);
+  std::unique_ptr<vobb::GlObvEstimator> gl;
+  std::unique_ptr<vobb::CpuObvEstimator> cpu;
+  vobb::ObvEstimate estimate;
+  s = make_estimator(loaded.mesh, flags, &gl, &cpu, &estimate);
+  if (!s) return refuse(s);
+  vobb::exact::CertifyOptions copt;
+  if (!flags.quiet) copt.progress = [](const std::string& line) { std::fprintf(stderr, "vobb: %s\n", line.c_str()); };
+  struct Result {
+    vobb::Tree tree;
+    vobb::exact::Certificate cert;
+    double build_seconds = 0;
+  } r[2];
+  for (int i = 0; i < 2; ++i) {
+    BuildFlags f = flags;
+    f.method = i == 0 ? "obbtree" : "variational";
+    const auto t0 = std::chrono::steady_clock::now();
+    r[i].tree = build_tree(loaded.mesh, f, estimate);
+    r[i].build_seconds = seconds_since(t0);
+    r[i].cert = vobb::exact::certify(loaded.mesh, r[i].tree, copt);
+  }
+  const bool ok = r[0].cert.ok() && r[1].cert.ok();
+  const size_t levels = std::max(r[0].cert.layers.size(), r[1].cert.layers.size());
+  auto omv = [&](int i, size_t l) {
+    const auto& layers = r[i].cert.layers;
+    return vobb::to_double_nearest(layers[std::min(l, layers.size() - 1)].omv);
+  };
+  auto change = [](double a, double b) { return a == 0 ? 0.0 : 100.0 * (b - a) / a; };
+  const double e0 = vobb::to_double_nearest(r[0].cert.weighted_error), e1 = vobb::to_double_nearest(r[1].cert.weighted_error);
+  if (json) {
+    nlohmann::ordered_json doc, rows = nlohmann::ordered_json::array();
+    for (size_t l = 0; l < levels; ++l)
+      rows.push_back({{"level", l}, {"omv_baseline", omv(0, l)}, {"omv_variational", omv(1, l)},
+                      {"change_pct", change(omv(0, l), omv(1, l))}});
+    doc["levels"] = rows;
+    doc["e_baseline"] = e0;
+    doc["e_variational"] = e1;
+    doc["seconds_baseline"] = r[0].build_seconds;
+    doc["seconds_variational"] = r[1].build_seconds;
+    doc["certified"] = ok;
+    std::printf("%s\n", doc.dump(2).c_str());
+  } else {
+    std::printf("%5s %24s %24s %10s\n", "layer", "OMV obbtree", "OMV variational", "change %");
+    for (size_t l = 0; l < levels; ++l)
+      std::printf("%5zu %24.17g %24.17g %+10.2f\n", l, omv(0, l), omv(1, l), change(omv(0, l), omv(1, l)));
+    std::printf("\ne obbtree %.17g, e variational %.17g, change %+.2f %%\n", e0, e1, change(e0, e1));
+    std::printf("build seconds: obbtree %.3f, variational %.3f; both certified: %s\n", r[0].build_seconds,
+                r[1].build_seconds, ok ? "yes" : "NO");
+  }
+  return ok ? kExitOk : kExitCheckFailed;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -370,6 +427,20 @@ int main(int argc, char** argv) {
       ->capture_default_str()->check(CLI::IsMember({"auto", "gl", "cpu", "exact", "all"}));
   obv->add_flag("--json", json, "Print JSON");
 
+  bool compare_json = false;
+  BuildFlags cf;
+  CLI::App* cmp = app.add_subcommand("compare", "Both builders, both trees certified exactly: OMV per layer and e");
+  cmp->add_option("MESH", mesh, "Solid mesh")->required();
+  cmp->add_option("--depth", cf.depth, "Deepest level")->capture_default_str()->check(CLI::Range(0, 30));
+  cmp->add_option("--arity", cf.arity, "Most children per node")->capture_default_str()->check(CLI::Range(2, 64));
+  cmp->add_option("--m", cf.m, "Cubemap resolution of the variational builder's estimator")
+      ->capture_default_str()->check(CLI::Range(1, 4096));
+  cmp->add_option("--backend", cf.backend, "auto, gl or cpu")->capture_default_str()->check(CLI::IsMember({"auto", "gl", "cpu"}));
+  cmp->add_option("--lloyd", cf.lloyd, "Most Lloyd iterations per node")->capture_default_str()->check(CLI::Range(0, 1000));
+  cmp->add_flag("--no-axis-search", cf.no_axis_search, "Ablation: keep covariance axes");
+  cmp->add_flag("--json", compare_json, "Print JSON (DESIGN §7)");
+  cmp->add_flag("--quiet", cf.quiet, "No progress on stderr");
+
   CLI::App* exp = app.add_subcommand("export", "Write the boxes of one layer as OBJ or PLY");
   exp->add_option("TREE", tree_path, "Tree file")->required();
   exp->add_option("--level", level, "Layer to export")->required();
@@ -394,6 +465,7 @@ int main(int argc, char** argv) {
   if (build->parsed()) return run_build(mesh, out, bf);
   if (exp->parsed()) return run_export(tree_path, level, out);
   if (obv->parsed()) return run_obv(mesh, boxes_path, ms, backend, json);
+  if (cmp->parsed()) return run_compare(mesh, cf, compare_json);
   if (cert->parsed()) return run_certify(mesh, tree_path, json, rational, omv_path, quiet);
   return kExitBadInput;
 }
