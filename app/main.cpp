@@ -50,6 +50,7 @@ int run_info(const std::string& mesh, bool json, bool rational) {
 struct BuildFlags {
   std::string method = "variational";
   int depth = 8, arity = 2, m = 32, lloyd = 4;
+  uint64_t seed = 1;
   std::string backend = "auto";
   bool no_axis_search = false, quiet = false;
 };
@@ -89,6 +90,7 @@ vobb::Tree build_tree(const vobb::Mesh& mesh, const BuildFlags& f, const vobb::O
   opt.arity = f.arity;
   opt.lloyd_iterations = f.lloyd;
   opt.optimise_axes = !f.no_axis_search;
+  opt.seed = f.seed;
   const auto t0 = std::chrono::steady_clock::now();
   double last = -1;
   if (!f.quiet)
@@ -236,9 +238,15 @@ int run_obv(const std::string& mesh_path, const std::string& boxes_path, const s
       want_cpu = true;
     } else {
       for (int m : ms)
-        if (m > gl->max_m())
-          return refuse(vobb::Status::error("--m " + std::to_string(m) + " exceeds the GL estimator's limit " +
-                                            std::to_string(gl->max_m()) + " on this renderer"));
+        if (m > gl->max_m()) {
+          const vobb::Status too_big = vobb::Status::error("--m " + std::to_string(m) + " exceeds the GL estimator's limit " +
+                                                           std::to_string(gl->max_m()) + " on this renderer");
+          if (backend == "gl") return refuse(too_big);
+          std::fprintf(stderr, "vobb: warning: %s; using the CPU twin instead\n", too_big.message().c_str());
+          gl.reset();
+          want_cpu = true;
+          break;
+        }
     }
   }
   const size_t n = boxes.size();
@@ -401,6 +409,7 @@ int main(int argc, char** argv) {
       ->capture_default_str()->check(CLI::IsMember({"auto", "gl", "cpu"}));
   build->add_option("--lloyd", bf.lloyd, "Most Lloyd iterations per node (variational)")
       ->capture_default_str()->check(CLI::Range(0, 1000));
+  build->add_option("--seed", bf.seed, "Seed of the orientation search's random starts")->capture_default_str();
   build->add_flag("--no-axis-search", bf.no_axis_search, "Ablation: keep covariance axes (no orientation search)");
   build->add_flag("--quiet", bf.quiet, "No progress line");
 
@@ -437,6 +446,7 @@ int main(int argc, char** argv) {
       ->capture_default_str()->check(CLI::Range(1, 4096));
   cmp->add_option("--backend", cf.backend, "auto, gl or cpu")->capture_default_str()->check(CLI::IsMember({"auto", "gl", "cpu"}));
   cmp->add_option("--lloyd", cf.lloyd, "Most Lloyd iterations per node")->capture_default_str()->check(CLI::Range(0, 1000));
+  cmp->add_option("--seed", cf.seed, "Seed of the orientation search's random starts")->capture_default_str();
   cmp->add_flag("--no-axis-search", cf.no_axis_search, "Ablation: keep covariance axes");
   cmp->add_flag("--json", compare_json, "Print JSON (DESIGN §7)");
   cmp->add_flag("--quiet", cf.quiet, "No progress on stderr");

@@ -189,7 +189,6 @@ std::vector<double> GlObvEstimator::estimate(const std::vector<Obb>& boxes, int 
     }
     for (const TexelSpan& span : plan.spans) {
       if (span.i0 > span.i1 || span.j0 > span.j1) continue;  // covers no texel centre
-      const LocalTriangle& tri = plan.tris[span.tri];
       SpanRecord r;
       r.span[0] = span.i0;
       r.span[1] = span.j0;
@@ -197,8 +196,7 @@ std::vector<double> GlObvEstimator::estimate(const std::vector<Obb>& boxes, int 
       r.span[3] = span.j1;
       r.meta[0] = tile_x + span.face % 3 * m;
       r.meta[1] = tile_y + span.face / 3 * m;
-      r.meta[2] = span.face | (tri.tie_positive[0] << 3) | (tri.tie_positive[1] << 4) |
-                  (tri.tie_positive[2] << 5) | (plan.far_count << 6);
+      r.meta[2] = span.face | (plan.far_count << 6);
       r.meta[3] = 0;
       std::memcpy(r.edge, tri_data[span.tri].data(), 9 * sizeof(float));
       std::memcpy(r.plane, tri_data[span.tri].data() + 9, 4 * sizeof(float));
@@ -208,7 +206,11 @@ std::vector<double> GlObvEstimator::estimate(const std::vector<Obb>& boxes, int 
     g.batch_boxes.push_back(b);
     g.batch_scale.push_back(plan.frame.volume_scale);
     g.batch_constant.push_back(plan.constant);
-    if (!batching_ || static_cast<int>(g.batch_boxes.size()) == g.capacity) flush(m);
+    // Flush when the atlas is full, or the span records pass 64 MiB (boxes in far-count mode or
+    // without culling draw every face of the mesh).
+    constexpr size_t kMaxRecords = (size_t{64} << 20) / sizeof(SpanRecord);
+    if (!batching_ || static_cast<int>(g.batch_boxes.size()) == g.capacity || g.batch_records.size() >= kMaxRecords)
+      flush(m);
   }
   if (!g.batch_boxes.empty()) flush(m);
   g.out = nullptr;

@@ -33,6 +33,7 @@ int clip(const Vec3* in, int n, Vec3* out, const Plane& plane) {
     const double fp = plane(p), fq = plane(q);
     if (fp >= 0) out[k++] = p;
     if ((fp >= 0) != (fq >= 0)) out[k++] = p + (fp / (fp - fq)) * (q - p);
+    VOBB_ASSERT(k <= 16, "clipped polygon fits its buffer");
   }
   return k;
 }
@@ -44,7 +45,7 @@ int clip(const Vec3* in, int n, Vec3* out, const Plane& plane) {
 bool texel_span(const LocalTriangle& t, int face, int m, bool no_far_clip, TexelSpan* span) {
   const int k = face / 2, a = (k + 1) % 3, b = (k + 2) % 3;
   const double s = face % 2 == 0 ? 1.0 : -1.0;
-  Vec3 buf0[8], buf1[8];
+  Vec3 buf0[16], buf1[16];  // a convex polygon gains at most one vertex per plane: 3 + 5 <= 16
   for (int c = 0; c < 3; ++c) buf0[c] = Vec3(s * t.p[c][k], t.p[c][a], t.p[c][b]);  // (zeta, u, v)
   int n = 3;
   n = clip(buf0, n, buf1, [](const Vec3& p) { return p[0] - p[1]; });
@@ -148,8 +149,7 @@ BoxPlan BoxPlanner::plan(const Obb& box, int m) const {
     }
     for (int k = 0; k < 3; ++k) {
       const int a = k, b = (k + 1) % 3;
-      t.edge_cross[k] = t.p[a].cross(t.p[b]);
-      t.tie_positive[k] = t.id[a] < t.id[b];
+      t.edge_cross[k] = t.id[a] < t.id[b] ? Vec3(t.p[a].cross(t.p[b])) : Vec3(-t.p[b].cross(t.p[a]));
     }
     t.normal = (t.p[1] - t.p[0]).cross(t.p[2] - t.p[0]);
     if (plan.frame.mirrored) t.normal = -t.normal;
@@ -173,7 +173,11 @@ BoxPlan BoxPlanner::plan(const Obb& box, int m) const {
     const Vec3 pad = Vec3::Constant(1e-9 * (world.hi - world.lo).norm());
     world.lo -= pad;
     world.hi += pad;
-    faces_.for_each_overlap(world, consider);
+    // Faces in mesh order, as without culling: the same plan, the same float blend order.
+    std::vector<int32_t> ids;
+    faces_.for_each_overlap(world, [&](int32_t f) { ids.push_back(f); });
+    std::sort(ids.begin(), ids.end());
+    for (int32_t f : ids) consider(f);
   }
   return plan;
 }

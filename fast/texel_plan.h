@@ -32,12 +32,13 @@ namespace vobb {
 struct LocalTriangle {
   Vec3 p[3];
   int32_t id[3];       // mesh vertex ids
-  Vec3 edge_cross[3];  // p[k] x p[k+1]: a ray d passes edge k on the side sign(d . edge_cross[k])
-  // When d . edge_cross[k] is exactly 0 the side is +1 iff id[k] < id[k+1]. The two faces that
-  // share an edge run it in opposite directions (and their crosses are exact negatives), so
-  // exactly one of them claims a ray through the edge, unless the edge is a silhouette, where
-  // both or neither do, with opposite signs and equal depth: no net contribution either way.
-  bool tie_positive[3];
+  Vec3 edge_cross[3];  // +-(p[k] x p[k+1]): a ray d passes edge k on the side sign(d . edge_cross[k])
+  // Computed in canonical order (lower vertex id first) and negated when needed, so the two
+  // faces that share an edge hold exact negatives whatever the compiler fuses. When
+  // d . edge_cross[k] is exactly 0 the side is decided by simulation of simplicity: the ray is
+  // taken as d + eps e_a + eps^2 e_b + eps^3 e_k (face axis k, a = k+1, b = k+2), whose sign is
+  // that of the first nonzero of E_a, E_b, E_k. That is one consistent perturbed ray for every
+  // face, so a ray through a shared edge or a vertex is claimed exactly as a ray beside it.
   Vec3 normal;   // (p1 - p0) x (p2 - p0), outward for a solid (corrected for mirrored frames)
   double plane;  // normal . p0: along d the face's plane is at zeta = plane / (normal . d)
 };
@@ -61,12 +62,23 @@ struct BoxPlan {
   bool flat = false;  // zero-volume box: OBV 0, nothing to draw
 };
 
-// One texel ray against one face, in double: whether it hits, and the hit's value (above).
-inline bool texel_hit(const LocalTriangle& t, const Vec3& d, bool far_count, double* value) {
+// One texel ray (direction d on cubemap face `face`) against one face, in double: whether it
+// hits, and the hit's value (above).
+// The side of edge cross E for texel direction d on cubemap face `face` (see LocalTriangle).
+inline int edge_side(const Vec3& E, const Vec3& d, int face) {
+  const double e = d.dot(E);
+  if (e != 0) return e > 0 ? 1 : -1;
+  const int k = face / 2;
+  for (int c : {(k + 1) % 3, (k + 2) % 3, k})
+    if (E[c] != 0) return E[c] > 0 ? 1 : -1;
+  return 0;  // a degenerate edge: no face of a solid has one
+}
+
+inline bool texel_hit(const LocalTriangle& t, const Vec3& d, int face, bool far_count, double* value) {
   int side = 0;
   for (int k = 0; k < 3; ++k) {
-    const double e = d.dot(t.edge_cross[k]);
-    const int sk = e > 0 ? 1 : e < 0 ? -1 : (t.tie_positive[k] ? 1 : -1);
+    const int sk = edge_side(t.edge_cross[k], d, face);
+    if (sk == 0) return false;
     if (k == 0) side = sk;
     else if (sk != side) return false;
   }

@@ -7,6 +7,7 @@
 #include <map>
 #include <numeric>
 #include <queue>
+#include <random>
 #include <tuple>
 
 #include "common/status.h"
@@ -85,6 +86,8 @@ class NodeSplitter {
   };
 
   // The root: one group, its axes optimised like any child's.
+  void set_level(int level) { level_ = level; }
+
   std::array<Vec3, 3> optimise_single(const std::vector<int32_t>& faces) {
     State s;
     s.groups = {faces};
@@ -127,10 +130,27 @@ class NodeSplitter {
       std::array<Vec3, 3> axes = s->axes[g];
       double best = measure({tight_box(mesh_, faces, axes)})[0];
       if (options_.optimise_axes) {
-        // Also try the covariance axes of the (new) group.
-        const auto cov = covariance_axes(mesh_, faces);
-        const double c = measure({tight_box(mesh_, faces, cov)})[0];
-        if (c < best) best = c, axes = cov;
+        // Other starts: the covariance axes of the (new) group, and seeded random orientations
+        // (uniform unit quaternions), so that the search is not stuck in the start's basin.
+        // More for the big boxes of the top levels, which weigh most in e.
+        std::vector<std::array<Vec3, 3>> starts{covariance_axes(mesh_, faces)};
+        const int random_starts = level_ <= 3 ? 32 : 4;
+        std::mt19937_64 rng(options_.seed ^ (0x9e3779b97f4a7c15ull * (faces.front() + 1)) ^ faces.size());
+        for (int r = 0; r < random_starts; ++r) {
+          Eigen::Quaterniond q;
+          auto gauss = [&] {  // Box-Muller on the generator's raw bits: the same on every machine
+            const double u1 = (static_cast<double>(rng() >> 11) + 1) * 0x1.0p-53, u2 = static_cast<double>(rng() >> 11) * 0x1.0p-53;
+            return std::sqrt(-2 * std::log(u1)) * std::cos(2 * M_PI * u2);
+          };
+          q.coeffs() << gauss(), gauss(), gauss(), gauss();
+          const Eigen::Matrix3d rot = q.normalized().toRotationMatrix();
+          starts.push_back(orthonormalize({Vec3(rot.col(0)), Vec3(rot.col(1)), Vec3(rot.col(2))}));
+        }
+        std::vector<Obb> start_boxes;
+        for (const auto& a : starts) start_boxes.push_back(tight_box(mesh_, faces, a));
+        const std::vector<double> sv = measure(start_boxes);
+        for (size_t i = 0; i < starts.size(); ++i)
+          if (sv[i] < best) best = sv[i], axes = starts[i];
         for (double step = 0.2; step >= 0.0125;) {
           std::vector<std::array<Vec3, 3>> trial;
           std::vector<Obb> boxes;
@@ -306,6 +326,7 @@ class NodeSplitter {
   const VariationalOptions& options_;
   const ObvEstimate& estimate_;
   size_t* estimates_;
+  int level_ = 0;  // level of the boxes being fitted
 };
 
 }  // namespace
@@ -343,6 +364,7 @@ Tree build_variational(const Mesh& mesh, const VariationalOptions& options, cons
     }
     const std::vector<int32_t> faces = node.faces;
     const int32_t level = node.level + 1;
+    splitter.set_level(level);
     const NodeSplitter::State s = splitter.split(faces, [&](int it, double sum) {
       progress.iteration = it;
       progress.estimates = estimates;

@@ -8,8 +8,9 @@
 //    neighbours several regions goes to the one whose box grows least in OBV (dOBV; a face that
 //    does not enlarge a box costs nothing and needs no estimate);
 //  - box update: per group, the orientation minimising the estimated OBV of the group's tight
-//    box, by a pattern search over rotations about the box axes (step 0.2 rad halving to
-//    0.0125 rad). The issue speaks of 6 parameters, centre and orientation; but for fixed axes
+//    box: the best of the current axes, the covariance axes and seeded random orientations (32
+//    for levels 0-3, 4 below), then a pattern search over rotations about the box axes (step
+//    0.2 rad halving to 0.0125 rad). The issue speaks of 6 parameters, centre and orientation; but for fixed axes
 //    the tight fit of the faces is contained in every other box that holds them, and OBV grows
 //    with the box, so the optimal centre and extents follow from the axes: only the 3 rotation
 //    parameters are searched, and the centre is the tight fit's;
@@ -22,6 +23,7 @@
 // checkpoints and the time budget.
 #pragma once
 
+#include <cstdint>
 #include <functional>
 #include <vector>
 
@@ -48,6 +50,7 @@ struct VariationalOptions {
   int arity = 2;             // >= 2
   int lloyd_iterations = 4;  // most partition + update rounds per node
   bool optimise_axes = true; // ablation: false keeps the groups' covariance axes
+  uint64_t seed = 1;         // the random starts of the orientation search
   std::function<void(const VariationalProgress&)> progress;  // called often; may be empty
 };
 

@@ -4,7 +4,7 @@
 // blending into an R32F atlas). The same test, in double, is texel_hit() in fast/texel_plan.h:
 // keep the two in step.
 flat in ivec3 v_meta;  // atlas pixel of texel (0, 0); flags: bits 0-2 cubemap face,
-                       // bits 3-5 tie sides of edges 0-2, bit 6 far-count mode
+                       // bit 6 far-count mode
 flat in vec3 v_edge0;
 flat in vec3 v_edge1;
 flat in vec3 v_edge2;
@@ -14,10 +14,13 @@ uniform int u_m;
 
 layout(location = 0) out float o_value;
 
-int edge_side(float e, int flags, int bit) {
+// Exact zeros by simulation of simplicity, as edge_side() in fast/texel_plan.h: the first
+// nonzero of E[a], E[b], E[k].
+int edge_side(float e, vec3 E, int k) {
   if (e > 0.0) return 1;
   if (e < 0.0) return -1;
-  return (flags & (1 << bit)) != 0 ? 1 : -1;
+  const float first = E[(k + 1) % 3] != 0.0 ? E[(k + 1) % 3] : E[(k + 2) % 3] != 0.0 ? E[(k + 2) % 3] : E[k];
+  return first > 0.0 ? 1 : first < 0.0 ? -1 : 0;
 }
 
 void main() {
@@ -36,8 +39,8 @@ void main() {
   precise float e0 = dot(d, v_edge0);
   precise float e1 = dot(d, v_edge1);
   precise float e2 = dot(d, v_edge2);
-  const int s0 = edge_side(e0, flags, 3);
-  if (edge_side(e1, flags, 4) != s0 || edge_side(e2, flags, 5) != s0) discard;
+  const int s0 = edge_side(e0, v_edge0, k);
+  if (s0 == 0 || edge_side(e1, v_edge1, k) != s0 || edge_side(e2, v_edge2, k) != s0) discard;
   precise float nd = dot(v_plane.xyz, d);
   if (nd == 0.0) discard;  // the ray runs in the face's plane
   precise float zeta = v_plane.w / nd;

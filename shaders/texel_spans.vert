@@ -6,9 +6,9 @@
 // play no part in the result.
 layout(location = 0) in ivec4 a_span;   // i0, j0, i1, j1: texels of the span
 layout(location = 1) in ivec4 a_meta;   // atlas pixel of texel (0, 0) of this cubemap face; flags; unused
-layout(location = 2) in vec3 a_edge0;   // p0 x p1
-layout(location = 3) in vec3 a_edge1;   // p1 x p2
-layout(location = 4) in vec3 a_edge2;   // p2 x p0
+layout(location = 2) in vec3 a_edge0;   // +-(p0 x p1), see fast/texel_plan.h
+layout(location = 3) in vec3 a_edge1;   // +-(p1 x p2)
+layout(location = 4) in vec3 a_edge2;   // +-(p2 x p0)
 layout(location = 5) in vec4 a_plane;   // normal, normal . p0
 
 uniform vec2 u_atlas_size;

@@ -185,6 +185,23 @@ TEST(GlEstimator, BatchingChangesNothingButTheRoundTrips) {
   }
 }
 
+// As RaysThroughVerticesAreClaimedOnce (cpu_estimator_test.cpp), on the GL side: the shader's
+// simulation-of-simplicity tie rule claims a vertex ray once. Both GL values also carry float
+// deviations (gl_deviation_bound) on top of the 1e-6 continuity allowance derived there.
+TEST(GlEstimator, RaysThroughVerticesAreClaimedOnce) {
+  const Mesh m = analytic::octahedron().mesh;
+  VOBB_MAKE_GL(gl, m);
+  const Obb b = aabox(Vec3::Zero(), Vec3(2, 2, 2));
+  Obb turned = b;
+  const double a = 1e-9;
+  turned.axes = orthonormalize({Vec3(std::cos(a), std::sin(a), 0), Vec3(-std::sin(a), std::cos(a), 0), Vec3::Zero()});
+  for (int res : {1, 3, 9}) {
+    const double slack = gl_deviation_bound(gl->planner().plan(b, res), res) +
+                         gl_deviation_bound(gl->planner().plan(turned, res), res);
+    EXPECT_NEAR(gl->estimate(b, res), gl->estimate(turned, res), 1e-6 * volume(b) + slack) << res;
+  }
+}
+
 TEST(GlEstimator, CullingChangesNothingButTheWork) {
   const Mesh m = analytic::polygonal_torus().mesh;
   VOBB_MAKE_GL(gl, m);
@@ -195,7 +212,8 @@ TEST(GlEstimator, CullingChangesNothingButTheWork) {
   gl->set_culling(true);
   for (size_t i = 0; i < boxes.size(); ++i) {
     // Without culling the faces beyond the box are drawn too, and discarded per texel; the kept
-    // hits are the same, blended in the same order: the same floats.
+    // hits are the same, blended in the same order (plans list faces in mesh order either way):
+    // the same floats.
     EXPECT_EQ(culled[i], all[i]) << i;
   }
 }
