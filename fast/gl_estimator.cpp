@@ -290,7 +290,8 @@ void GlObvEstimator::flush(int m) {
 //    the exact sign as long as r < 1/2 and the plane does not underflow; otherwise (a grazing
 //    ray, or a centre within float underflow of the face's plane) the pair is uncertain.
 //  - An uncertain (texel, face) pair adds 2: each side's value lies in [-1, 1].
-//  - Sums: each texel blends its hits in float, and the reduction adds per lane
+//  - Sums (assuming round-to-nearest float blending, which GL does not promise but every
+//    implementation we know does): each texel blends its hits in float, and the reduction adds per lane
 //    ceil(6m^2 / 256) texels and then 8 tree levels: all in all at most K = H + ceil(6m^2/256)
 //    + 8 additions per term, H the most hits in one texel, so the summation error is at most
 //    gamma_K sum |values| (the recursive-summation bound, Higham, Accuracy and Stability of
@@ -309,7 +310,9 @@ double gl_deviation_bound(const BoxPlan& plan, int m) {
     const LocalTriangle& t = plan.tris[span.tri];
     const int k = span.face / 2, a = (k + 1) % 3, b = (k + 2) % 3;
     const double fn = pow2_normalizer(t.normal[0], t.normal[1], t.normal[2]);
-    const bool plane_underflows = t.plane != 0 && std::abs(t.plane * fn) < kFloatMin;
+    // zeta = plane / nd with |nd| up to 3 (|d_i| <= 1, |n_i| < 1 after scaling): a plane below
+    // 3 FLT_MIN may give a subnormal zeta, which GLSL may flush to 0.
+    const bool plane_underflows = t.plane != 0 && std::abs(t.plane * fn) < 3 * kFloatMin;
     for (int i = span.i0; i <= span.i1; ++i) {
       for (int j = span.j0; j <= span.j1; ++j) {
         const Vec3 d = cubemap_direction(span.face, texel_center(i, m), texel_center(j, m));
