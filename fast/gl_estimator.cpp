@@ -313,6 +313,8 @@ double gl_deviation_bound(const BoxPlan& plan, int m) {
     // zeta = plane / nd with |nd| up to 3 (|d_i| <= 1, |n_i| < 1 after scaling): a plane below
     // 3 FLT_MIN may give a subnormal zeta, which GLSL may flush to 0.
     const bool plane_underflows = t.plane != 0 && std::abs(t.plane * fn) < 3 * kFloatMin;
+    double fe[3];  // the shader's power-of-two scale of each edge cross
+    for (int e = 0; e < 3; ++e) fe[e] = pow2_normalizer(t.edge_cross[e][0], t.edge_cross[e][1], t.edge_cross[e][2]);
     for (int i = span.i0; i <= span.i1; ++i) {
       for (int j = span.j0; j <= span.j1; ++j) {
         const Vec3 d = cubemap_direction(span.face, texel_center(i, m), texel_center(j, m));
@@ -321,10 +323,9 @@ double gl_deviation_bound(const BoxPlan& plan, int m) {
         bool unsure = false, miss = false;
         for (int e = 0; e < 3 && !miss; ++e) {
           const Vec3& E = t.edge_cross[e];
-          const double fe = pow2_normalizer(E[0], E[1], E[2]);
-          const double dot = d.dot(E) * fe;
-          const double err = 8 * u * (std::abs(E[a]) + std::abs(E[b])) * fe +
-                             5 * u * d.cwiseAbs().dot(E.cwiseAbs()) * fe + 3 * kFloatMin;
+          const double dot = d.dot(E) * fe[e];
+          const double err = 8 * u * (std::abs(E[a]) + std::abs(E[b])) * fe[e] +
+                             5 * u * d.cwiseAbs().dot(E.cwiseAbs()) * fe[e] + 3 * kFloatMin;
           int side;
           if (std::abs(dot) <= err) {
             unsure = true;

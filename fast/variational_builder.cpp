@@ -15,6 +15,22 @@
 
 namespace vobb {
 
+namespace {
+
+// The box spanning projections [lo_k, hi_k] along orthonormal axes a_k.
+Obb box_from_projections(const std::array<Vec3, 3>& axes, const Vec3& lo, const Vec3& hi) {
+  Obb b;
+  b.axes = axes;
+  b.center = Vec3::Zero();
+  for (int k = 0; k < 3; ++k) {
+    b.center += 0.5 * (lo[k] + hi[k]) * axes[k];
+    b.half[k] = 0.5 * (hi[k] - lo[k]);
+  }
+  return b;
+}
+
+}  // namespace
+
 Obb tight_box(const Mesh& mesh, const std::vector<int32_t>& faces, const std::array<Vec3, 3>& axes) {
   Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
   for (int32_t f : faces)
@@ -26,14 +42,7 @@ Obb tight_box(const Mesh& mesh, const std::vector<int32_t>& faces, const std::ar
         hi[k] = std::max(hi[k], t);
       }
     }
-  Obb b;
-  b.axes = axes;
-  b.center = Vec3::Zero();
-  for (int k = 0; k < 3; ++k) {
-    b.center += 0.5 * (lo[k] + hi[k]) * axes[k];
-    b.half[k] = 0.5 * (hi[k] - lo[k]);
-  }
-  return b;
+  return box_from_projections(axes, lo, hi);
 }
 
 namespace {
@@ -179,9 +188,16 @@ class NodeSplitter {
     const size_t k = s->groups.size();
     std::vector<Obb> boxes;
     for (size_t g = 0; g < k; ++g) boxes.push_back(tight_box(mesh_, s->groups[g], s->axes[g]));
-    // Local ids: faces of this node only.
-    std::map<int32_t, int32_t> local;
-    for (size_t i = 0; i < faces.size(); ++i) local[faces[i]] = static_cast<int32_t>(i);
+    // Local ids of this node's faces (-1 for other faces), cleared again on the way out.
+    if (local_.size() != mesh_.faces.size()) local_.assign(mesh_.faces.size(), -1);
+    for (size_t i = 0; i < faces.size(); ++i) local_[faces[i]] = static_cast<int32_t>(i);
+    struct Clear {
+      std::vector<int32_t>& local;
+      const std::vector<int32_t>& faces;
+      ~Clear() {
+        for (int32_t f : faces) local[f] = -1;
+      }
+    } clear{local_, faces};
     std::vector<int32_t> owner(faces.size(), -1);
     std::vector<Vec3> cent(faces.size());
     for (size_t i = 0; i < faces.size(); ++i) cent[i] = centroid(mesh_, faces[i]);
@@ -202,16 +218,7 @@ class NodeSplitter {
       }
       return *nlo != lo[g] || *nhi != hi[g];
     };
-    auto make_box = [&](size_t g, const Vec3& l, const Vec3& h) {
-      Obb b;
-      b.axes = s->axes[g];
-      b.center = Vec3::Zero();
-      for (int a = 0; a < 3; ++a) {
-        b.center += 0.5 * (l[a] + h[a]) * b.axes[a];
-        b.half[a] = 0.5 * (h[a] - l[a]);
-      }
-      return b;
-    };
+    auto make_box = [&](size_t g, const Vec3& l, const Vec3& h) { return box_from_projections(s->axes[g], l, h); };
     using Entry = std::tuple<double, int32_t, int32_t>;  // distance, local face, group
     std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> queue;
     auto assign = [&](int32_t i, size_t g, const Vec3& l, const Vec3& h, bool grew, double new_obv) {
@@ -223,9 +230,9 @@ class NodeSplitter {
         if (fresh[g]) obv[g] = new_obv;
       }
       for (int32_t n : adj_[faces[i]]) {
-        auto it = local.find(n);
-        if (it == local.end() || owner[it->second] >= 0) continue;
-        queue.emplace((cent[it->second] - boxes[g].center).norm(), it->second, static_cast<int32_t>(g));
+        const int32_t j = local_[n];
+        if (j < 0 || owner[j] >= 0) continue;
+        queue.emplace((cent[j] - boxes[g].center).norm(), j, static_cast<int32_t>(g));
       }
     };
     // Seeds: per box the nearest face to its centre not taken by an earlier box.
@@ -265,8 +272,8 @@ class NodeSplitter {
         for (size_t g = 0; g < k; ++g) cand.push_back(g);
       } else {
         for (int32_t n : adj_[faces[i]]) {
-          auto it = local.find(n);
-          if (it != local.end() && owner[it->second] >= 0) cand.push_back(owner[it->second]);
+          const int32_t j = local_[n];
+          if (j >= 0 && owner[j] >= 0) cand.push_back(owner[j]);
         }
         std::sort(cand.begin(), cand.end());
         cand.erase(std::unique(cand.begin(), cand.end()), cand.end());
@@ -326,7 +333,8 @@ class NodeSplitter {
   const VariationalOptions& options_;
   const ObvEstimate& estimate_;
   size_t* estimates_;
-  int level_ = 0;  // level of the boxes being fitted
+  int level_ = 0;                // level of the boxes being fitted
+  std::vector<int32_t> local_;   // mesh face -> index in the node being partitioned, else -1
 };
 
 }  // namespace
