@@ -11,6 +11,7 @@
 
 #include "common/box_export.h"
 #include "common/io/mesh_report.h"
+#include "common/png_io.h"
 #include "common/sha256.h"
 #include "common/tree_io.h"
 #include "exact/certify.h"
@@ -18,6 +19,7 @@
 #include "fast/cpu_estimator.h"
 #include "fast/gl_estimator.h"
 #include "fast/obbtree_builder.h"
+#include "fast/tree_figure.h"
 #include "fast/variational_builder.h"
 #include "vobb/config.h"
 
@@ -322,7 +324,8 @@ int run_obv(const std::string& mesh_path, const std::string& boxes_path, const s
 
 // Both builders on one mesh, both trees certified exactly; per layer the exact OMV of each and
 // the change, and each tree's weighted error e (DESIGN §1, §7).
-int run_compare(const std::string& mesh_path, const BuildFlags& flags, bool json) {
+// With `figure_path`, also draws both trees' layers over the mesh (fast/tree_figure.h) to a PNG.
+int run_compare(const std::string& mesh_path, const BuildFlags& flags, bool json, const std::string& figure_path) {
   vobb::LoadedMesh loaded;
   vobb::Status s = vobb::load_solid(mesh_path, &loaded);
   if (!s) return refuse(s);
@@ -373,6 +376,23 @@ int run_compare(const std::string& mesh_path, const BuildFlags& flags, bool json
     std::printf("\ne obbtree %.17g, e variational %.17g, change %+.2f %%\n", e0, e1, change(e0, e1));
     std::printf("build seconds: obbtree %.3f, variational %.3f; both certified: %s\n", r[0].build_seconds,
                 r[1].build_seconds, ok ? "yes" : "NO");
+  }
+  if (!figure_path.empty()) {
+    // The estimator's context when it made one, else a context of our own (llvmpipe will do).
+    std::unique_ptr<vobb::GlContext> own;
+    if (!gl) {
+      s = vobb::GlContext::create(&own);
+      if (!s) return refuse(vobb::Status::error(figure_path + ": cannot draw the figure: " + s.message()));
+    }
+    const std::vector<vobb::FigureRow> rows = {{"obbtree", &r[0].tree}, {"variational", &r[1].tree}};
+    vobb::FigureOptions fo;
+    fo.levels = vobb::default_figure_levels(rows);
+    vobb::RgbaImage image;
+    s = vobb::render_tree_figure(gl ? gl->context() : *own, loaded.mesh, rows, fo, &image);
+    if (s) s = vobb::write_png(figure_path, image);
+    if (!s) return refuse(s);
+    std::fprintf(stderr, "vobb: figure %s: %dx%d px; row 1 obbtree (baseline), row 2 variational; columns levels %d..%d\n",
+                 figure_path.c_str(), image.width, image.height, fo.levels.front(), fo.levels.back());
   }
   return ok ? kExitOk : kExitCheckFailed;
 }
@@ -450,6 +470,8 @@ int main(int argc, char** argv) {
   cmp->add_flag("--no-axis-search", cf.no_axis_search, "Ablation: keep covariance axes");
   cmp->add_flag("--json", compare_json, "Print JSON (DESIGN §7)");
   cmp->add_flag("--quiet", cf.quiet, "No progress on stderr");
+  std::string compare_figure;
+  cmp->add_option("--figure", compare_figure, "Also draw both trees' boxes at levels 1..8 over the mesh to this PNG");
 
   CLI::App* exp = app.add_subcommand("export", "Write the boxes of one layer as OBJ or PLY");
   exp->add_option("TREE", tree_path, "Tree file")->required();
@@ -475,7 +497,7 @@ int main(int argc, char** argv) {
   if (build->parsed()) return run_build(mesh, out, bf);
   if (exp->parsed()) return run_export(tree_path, level, out);
   if (obv->parsed()) return run_obv(mesh, boxes_path, ms, backend, json);
-  if (cmp->parsed()) return run_compare(mesh, cf, compare_json);
+  if (cmp->parsed()) return run_compare(mesh, cf, compare_json, compare_figure);
   if (cert->parsed()) return run_certify(mesh, tree_path, json, rational, omv_path, quiet);
   return kExitBadInput;
 }

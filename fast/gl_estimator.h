@@ -44,6 +44,8 @@ class GlObvEstimator {
   const BoxPlanner& planner() const { return planner_; }
 
   const std::string& renderer() const { return context_->renderer(); }
+  // The estimator's GL context, for other drawing in the same process (tree_figure.h).
+  const GlContext& context() const { return *context_; }
   size_t round_trips() const { return round_trips_; }  // since construction
 
  private:

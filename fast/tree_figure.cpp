@@ -1,0 +1,457 @@
+#include "fast/tree_figure.h"
+
+#define GL_GLEXT_PROTOTYPES 1
+#include <GL/glcorearb.h>
+
+#include <algorithm>
+#include <cmath>
+#include <initializer_list>
+
+#include "common/obb.h"
+#include "vobb/shaders.h"
+
+namespace vobb {
+
+namespace {
+
+constexpr int kMaxLevel = 30;  // as the command line's --depth
+
+std::string one_line(std::string s) {
+  for (char& c : s)
+    if (c == '\n' || c == '\r') c = ' ';
+  while (!s.empty() && s.back() == ' ') s.pop_back();
+  return s;
+}
+
+GLuint compile(GLenum type, const char* source, std::string* log) {
+  const GLuint s = glCreateShader(type);
+  glShaderSource(s, 1, &source, nullptr);
+  glCompileShader(s);
+  GLint ok = 0;
+  glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
+  if (ok) return s;
+  char buf[2048] = {0};
+  glGetShaderInfoLog(s, sizeof buf - 1, nullptr, buf);
+  *log = buf;
+  glDeleteShader(s);
+  return 0;
+}
+
+// Links a vertex and a fragment shader; 0 with `log` set on failure.
+GLuint program(const char* vert, const char* frag, std::string* log) {
+  const GLuint vs = compile(GL_VERTEX_SHADER, vert, log);
+  if (!vs) return 0;
+  const GLuint fs = compile(GL_FRAGMENT_SHADER, frag, log);
+  if (!fs) {
+    glDeleteShader(vs);
+    return 0;
+  }
+  const GLuint p = glCreateProgram();
+  glAttachShader(p, vs);
+  glAttachShader(p, fs);
+  glLinkProgram(p);
+  glDeleteShader(vs);
+  glDeleteShader(fs);
+  GLint ok = 0;
+  glGetProgramiv(p, GL_LINK_STATUS, &ok);
+  if (ok) return p;
+  char buf[2048] = {0};
+  glGetProgramInfoLog(p, sizeof buf - 1, nullptr, buf);
+  *log = buf;
+  glDeleteProgram(p);
+  return 0;
+}
+
+// Every GL object of one render, deleted on the way out whatever the outcome (the context is
+// current for the whole call).
+struct GlObjects {
+  GLuint mesh_program = 0, fill_program = 0, lines_program = 0;
+  GLuint vaos[3] = {0, 0, 0};     // mesh, fill, lines
+  GLuint buffers[3] = {0, 0, 0};  // likewise
+  GLuint fbos[2] = {0, 0};        // multisampled, resolved
+  GLuint renderbuffers[3] = {0, 0, 0};  // multisampled colour and depth, resolved colour
+  ~GlObjects() {
+    glDeleteProgram(mesh_program);
+    glDeleteProgram(fill_program);
+    glDeleteProgram(lines_program);
+    glDeleteVertexArrays(3, vaos);
+    glDeleteBuffers(3, buffers);
+    glDeleteFramebuffers(2, fbos);
+    glDeleteRenderbuffers(3, renderbuffers);
+  }
+};
+
+// GL errors are sticky until read; drain what an earlier user left so that a later check
+// reports ours. Returns the first error, GL_NO_ERROR when none.
+GLenum drain_errors() {
+  GLenum first = GL_NO_ERROR;
+  for (int i = 0; i < 64; ++i) {
+    const GLenum e = glGetError();
+    if (e == GL_NO_ERROR) break;
+    if (first == GL_NO_ERROR) first = e;
+  }
+  return first;
+}
+
+std::string gl_error_name(GLenum e) {
+  switch (e) {
+    case GL_INVALID_ENUM: return "GL_INVALID_ENUM";
+    case GL_INVALID_VALUE: return "GL_INVALID_VALUE";
+    case GL_INVALID_OPERATION: return "GL_INVALID_OPERATION";
+    case GL_INVALID_FRAMEBUFFER_OPERATION: return "GL_INVALID_FRAMEBUFFER_OPERATION";
+    case GL_OUT_OF_MEMORY: return "GL_OUT_OF_MEMORY";
+    default: return "GL error " + std::to_string(e);
+  }
+}
+
+// The camera: world point p maps to q = (p - centre) / radius in the unit ball, and q to clip
+// coordinates by an orthographic projection along the view frame, with a margin of kMargin.
+struct Camera {
+  Vec3 centre;
+  double radius = 1;
+  std::array<float, 16> view_proj{};  // column-major, applied to q
+  Vec3 light;                          // unit, towards the light
+};
+
+constexpr double kMargin = 1.04;  // the ball's silhouette stays 2 % inside each panel edge
+
+Camera make_camera(const Vec3& centre, double radius, const FigureOptions& o) {
+  Camera cam;
+  cam.centre = centre;
+  cam.radius = radius;
+  const Vec3 z = o.view.normalized();       // towards the viewer
+  const Vec3 x = o.up.cross(z).normalized();  // screen right
+  const Vec3 y = z.cross(x);                  // screen up
+  const double s = 1.0 / kMargin;
+  // Rows of the 3x3 part: s x, s y, -s z (NDC depth grows away from the viewer); w = 1.
+  const Vec3 rows[3] = {s * x, s * y, -s * z};
+  cam.view_proj.fill(0.0f);
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) cam.view_proj[c * 4 + r] = static_cast<float>(rows[r][c]);
+  cam.view_proj[15] = 1.0f;
+  // Light from the viewer's upper left, a little in front.
+  cam.light = (-0.45 * x + 0.65 * y + 0.9 * z).normalized();
+  return cam;
+}
+
+void hsv_to_rgb(double h, double s, double v, double rgb[3]) {
+  const double k[3] = {5, 3, 1};
+  for (int i = 0; i < 3; ++i) {
+    const double t = std::fmod(k[i] + h * 6.0, 6.0);
+    rgb[i] = v - v * s * std::max(0.0, std::min({t, 4.0 - t, 1.0}));
+  }
+}
+
+// One panel's share of the fill and edge buffers.
+struct PanelDraw {
+  GLint fill_first = 0;
+  GLsizei fill_count = 0;
+  GLuint edge_first = 0;
+  GLsizei edge_count = 0;
+};
+
+struct FillVertex {
+  float pos[3];
+  float color[4];
+};
+struct EdgeInstance {
+  float p0[3], p1[3];
+  float color[4];
+};
+
+}  // namespace
+
+std::vector<int> default_figure_levels(const std::vector<FigureRow>& rows) {
+  int depth = 0;
+  for (const FigureRow& r : rows)
+    if (r.tree != nullptr) depth = std::max(depth, r.tree->depth);
+  std::vector<int> levels;
+  for (int l = 1; l <= std::min(8, depth); ++l) levels.push_back(l);
+  if (levels.empty()) levels.push_back(0);
+  return levels;
+}
+
+std::array<uint8_t, 4> figure_box_color(size_t index) {
+  // Golden-ratio hue steps: consecutive boxes sit about 222 degrees apart on the hue circle.
+  const double hue = std::fmod(0.58 + 0.6180339887498949 * static_cast<double>(index % 4096), 1.0);
+  const double value = index % 2 == 0 ? 0.88 : 0.70;  // alternate brightness too
+  double rgb[3];
+  hsv_to_rgb(hue, 0.85, value, rgb);
+  std::array<uint8_t, 4> out;
+  for (int i = 0; i < 3; ++i) out[i] = static_cast<uint8_t>(std::lround(255.0 * rgb[i]));
+  out[3] = 255;
+  return out;
+}
+
+PanelRect figure_panel(const FigureOptions& o, int row, int column) {
+  PanelRect r;
+  r.side = o.panel_px;
+  r.x0 = o.gap_px + column * (o.panel_px + o.gap_px);
+  r.y0 = o.gap_px + row * (o.panel_px + o.gap_px);
+  return r;
+}
+
+Status render_tree_figure(const GlContext& context, const Mesh& mesh, const std::vector<FigureRow>& rows,
+                          const FigureOptions& options, RgbaImage* out) {
+  *out = RgbaImage();
+  auto fail = [](const std::string& why) { return Status::error("tree figure: " + why); };
+  if (rows.empty()) return fail("no trees to draw");
+  if (mesh.faces.empty()) return fail("the mesh has no faces");
+  if (options.panel_px < 16) return fail("panel size " + std::to_string(options.panel_px) + " px is below 16");
+  if (options.gap_px < 0) return fail("negative gap");
+  for (size_t r = 0; r < rows.size(); ++r) {
+    if (rows[r].tree == nullptr || rows[r].tree->nodes.empty()) return fail("row " + std::to_string(r + 1) + " has no tree");
+    if (rows[r].tree->mesh_triangles != mesh.faces.size())
+      return fail("row " + std::to_string(r + 1) + " (" + rows[r].label + ") was built for " +
+                  std::to_string(rows[r].tree->mesh_triangles) + " triangles, the mesh has " +
+                  std::to_string(mesh.faces.size()));
+  }
+  const std::vector<int> levels = options.levels.empty() ? default_figure_levels(rows) : options.levels;
+  for (int l : levels)
+    if (l < 0 || l > kMaxLevel) return fail("level " + std::to_string(l) + " is outside 0.." + std::to_string(kMaxLevel));
+  const Vec3 view = options.view, up = options.up;
+  if (!view.allFinite() || !up.allFinite() || view.norm() == 0 || up.cross(view).norm() <= 1e-6 * up.norm() * view.norm())
+    return fail("the view direction is zero or parallel to up");
+
+  // The ball: centred on the mesh's bounds, holding the mesh and every box that is drawn.
+  const Aabb bounds = mesh.bounds();
+  if (!bounds.lo.allFinite() || !bounds.hi.allFinite()) return fail("the mesh has non-finite vertices");
+  const Vec3 centre = 0.5 * (bounds.lo + bounds.hi);
+  double radius = 0;
+  for (const Vec3& v : mesh.vertices) radius = std::max(radius, (v - centre).norm());
+  const int n_rows = static_cast<int>(rows.size()), n_cols = static_cast<int>(levels.size());
+  std::vector<std::vector<std::vector<int32_t>>> layers(n_rows);  // [row][column] node ids
+  for (int r = 0; r < n_rows; ++r)
+    for (int l : levels) {
+      layers[r].push_back(layer(*rows[r].tree, l));
+      for (int32_t id : layers[r].back())
+        for (const Vec3& c : corners(rows[r].tree->nodes[id].box)) radius = std::max(radius, (c - centre).norm());
+    }
+  if (!(radius > 0) || !std::isfinite(radius)) return fail("the mesh and boxes have no extent");
+  const Camera cam = make_camera(centre, radius, options);
+  auto to_unit = [&](const Vec3& p, float q[3]) {
+    for (int k = 0; k < 3; ++k) q[k] = static_cast<float>((p[k] - centre[k]) / radius);
+  };
+
+  // Mesh: three vertices per face, each with the face's unit normal (flat shading).
+  std::vector<float> mesh_data;
+  mesh_data.reserve(mesh.faces.size() * 18);
+  for (size_t f = 0; f < mesh.faces.size(); ++f) {
+    const Vec3 &a = mesh.corner(f, 0), &b = mesh.corner(f, 1), &c = mesh.corner(f, 2);
+    Vec3 n = (b - a).cross(c - a);
+    n = n.norm() > 0 ? Vec3(n.normalized()) : Vec3(0, 0, 0);
+    for (int k = 0; k < 3; ++k) {
+      float q[3];
+      to_unit(mesh.corner(f, k), q);
+      mesh_data.insert(mesh_data.end(), {q[0], q[1], q[2], static_cast<float>(n[0]), static_cast<float>(n[1]),
+                                         static_cast<float>(n[2])});
+    }
+  }
+  // Boxes: per panel, two triangles per box face and one instance per box edge.
+  std::vector<FillVertex> fill;
+  std::vector<EdgeInstance> edges;
+  std::vector<PanelDraw> draws;
+  for (int r = 0; r < n_rows; ++r)
+    for (int c = 0; c < n_cols; ++c) {
+      PanelDraw d;
+      d.fill_first = static_cast<GLint>(fill.size());
+      d.edge_first = static_cast<GLuint>(edges.size());
+      const std::vector<int32_t>& ids = layers[r][c];
+      for (size_t i = 0; i < ids.size(); ++i) {
+        const Obb& box = rows[r].tree->nodes[ids[i]].box;
+        const std::array<Vec3, 8> corner = corners(box);
+        float q[8][3];
+        for (int k = 0; k < 8; ++k) to_unit(corner[k], q[k]);
+        const std::array<uint8_t, 4> rgb = figure_box_color(i);
+        float color[4];
+        for (int k = 0; k < 4; ++k) color[k] = rgb[k] / 255.0f;
+        for (int a = 0; a < 8; ++a)
+          for (int bit = 1; bit < 8; bit <<= 1)
+            if ((a & bit) == 0) {
+              EdgeInstance e;
+              std::copy(q[a], q[a] + 3, e.p0);
+              std::copy(q[a | bit], q[a | bit] + 3, e.p1);
+              std::copy(color, color + 4, e.color);
+              edges.push_back(e);
+            }
+        if (options.fill_alpha > 0) {
+          color[3] = options.fill_alpha;
+          for (const auto& quad : kBoxQuads)
+            for (int t : {0, 1, 2, 0, 2, 3}) {
+              FillVertex v;
+              std::copy(q[quad[t]], q[quad[t]] + 3, v.pos);
+              std::copy(color, color + 4, v.color);
+              fill.push_back(v);
+            }
+        }
+      }
+      d.fill_count = static_cast<GLsizei>(fill.size()) - d.fill_first;
+      d.edge_count = static_cast<GLsizei>(edges.size() - d.edge_first);
+      draws.push_back(d);
+    }
+
+  const long long width = static_cast<long long>(n_cols) * options.panel_px + (n_cols + 1LL) * options.gap_px;
+  const long long height = static_cast<long long>(n_rows) * options.panel_px + (n_rows + 1LL) * options.gap_px;
+
+  context.make_current();
+  drain_errors();
+  GlObjects g;
+  GLint max_rb = 0, max_samples = 0;
+  glGetIntegerv(GL_MAX_RENDERBUFFER_SIZE, &max_rb);
+  glGetIntegerv(GL_MAX_SAMPLES, &max_samples);
+  if (width > max_rb || height > max_rb)
+    return fail("a " + std::to_string(width) + "x" + std::to_string(height) + " image exceeds the renderer's " +
+                std::to_string(max_rb) + " px framebuffer limit");
+  const GLsizei samples = std::max(0, std::min(options.samples > 1 ? options.samples : 0, max_samples));
+
+  std::string log;
+  g.mesh_program = program(shaders::kShader_figure_mesh_vert, shaders::kShader_figure_mesh_frag, &log);
+  if (!g.mesh_program) return fail("figure_mesh shaders: " + one_line(log));
+  g.fill_program = program(shaders::kShader_figure_fill_vert, shaders::kShader_figure_fill_frag, &log);
+  if (!g.fill_program) return fail("figure_fill shaders: " + one_line(log));
+  g.lines_program = program(shaders::kShader_figure_lines_vert, shaders::kShader_figure_fill_frag, &log);
+  if (!g.lines_program) return fail("figure_lines shaders: " + one_line(log));
+
+  // Framebuffers: draw into the multisampled one, resolve into the plain one, read that.
+  glGenRenderbuffers(3, g.renderbuffers);
+  glBindRenderbuffer(GL_RENDERBUFFER, g.renderbuffers[0]);
+  glRenderbufferStorageMultisample(GL_RENDERBUFFER, samples, GL_RGBA8, width, height);
+  glBindRenderbuffer(GL_RENDERBUFFER, g.renderbuffers[1]);
+  glRenderbufferStorageMultisample(GL_RENDERBUFFER, samples, GL_DEPTH_COMPONENT24, width, height);
+  glBindRenderbuffer(GL_RENDERBUFFER, g.renderbuffers[2]);
+  glRenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, width, height);
+  glGenFramebuffers(2, g.fbos);
+  glBindFramebuffer(GL_FRAMEBUFFER, g.fbos[1]);
+  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, g.renderbuffers[2]);
+  if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) return fail("resolve framebuffer incomplete");
+  glBindFramebuffer(GL_FRAMEBUFFER, g.fbos[0]);
+  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, g.renderbuffers[0]);
+  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, g.renderbuffers[1]);
+  if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+    return fail("multisampled framebuffer incomplete (" + std::to_string(samples) + " samples)");
+
+  // Vertex data.
+  glGenVertexArrays(3, g.vaos);
+  glGenBuffers(3, g.buffers);
+  glBindVertexArray(g.vaos[0]);
+  glBindBuffer(GL_ARRAY_BUFFER, g.buffers[0]);
+  glBufferData(GL_ARRAY_BUFFER, mesh_data.size() * sizeof(float), mesh_data.data(), GL_STATIC_DRAW);
+  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), nullptr);
+  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), reinterpret_cast<void*>(3 * sizeof(float)));
+  glEnableVertexAttribArray(0);
+  glEnableVertexAttribArray(1);
+  glBindVertexArray(g.vaos[1]);
+  glBindBuffer(GL_ARRAY_BUFFER, g.buffers[1]);
+  glBufferData(GL_ARRAY_BUFFER, fill.size() * sizeof(FillVertex), fill.data(), GL_STATIC_DRAW);
+  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(FillVertex), reinterpret_cast<void*>(offsetof(FillVertex, pos)));
+  glVertexAttribPointer(1, 4, GL_FLOAT, GL_FALSE, sizeof(FillVertex), reinterpret_cast<void*>(offsetof(FillVertex, color)));
+  glEnableVertexAttribArray(0);
+  glEnableVertexAttribArray(1);
+  glBindVertexArray(g.vaos[2]);
+  glBindBuffer(GL_ARRAY_BUFFER, g.buffers[2]);
+  glBufferData(GL_ARRAY_BUFFER, edges.size() * sizeof(EdgeInstance), edges.data(), GL_STATIC_DRAW);
+  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(EdgeInstance), reinterpret_cast<void*>(offsetof(EdgeInstance, p0)));
+  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, sizeof(EdgeInstance), reinterpret_cast<void*>(offsetof(EdgeInstance, p1)));
+  glVertexAttribPointer(2, 4, GL_FLOAT, GL_FALSE, sizeof(EdgeInstance), reinterpret_cast<void*>(offsetof(EdgeInstance, color)));
+  for (GLuint a = 0; a < 3; ++a) {
+    glEnableVertexAttribArray(a);
+    glVertexAttribDivisor(a, 1);
+  }
+  if (const GLenum e = drain_errors(); e != GL_NO_ERROR) return fail(gl_error_name(e) + " while setting up");
+
+  // Uniforms.
+  glUseProgram(g.mesh_program);
+  glUniformMatrix4fv(glGetUniformLocation(g.mesh_program, "u_view_proj"), 1, GL_FALSE, cam.view_proj.data());
+  glUniform3f(glGetUniformLocation(g.mesh_program, "u_light"), static_cast<float>(cam.light[0]),
+              static_cast<float>(cam.light[1]), static_cast<float>(cam.light[2]));
+  glUniform3f(glGetUniformLocation(g.mesh_program, "u_albedo"), 0.80f, 0.80f, 0.78f);
+  glUseProgram(g.fill_program);
+  glUniformMatrix4fv(glGetUniformLocation(g.fill_program, "u_view_proj"), 1, GL_FALSE, cam.view_proj.data());
+  glUseProgram(g.lines_program);
+  glUniformMatrix4fv(glGetUniformLocation(g.lines_program, "u_view_proj"), 1, GL_FALSE, cam.view_proj.data());
+  glUniform2f(glGetUniformLocation(g.lines_program, "u_viewport"), static_cast<float>(options.panel_px),
+              static_cast<float>(options.panel_px));
+  glUniform1f(glGetUniformLocation(g.lines_program, "u_half_width"), 0.5f * options.edge_width_px);
+  // Depth bias: 2^-9 of the NDC depth range [-1, 1] is 1/256 of the ball's diameter, enough
+  // for an edge lying on the mesh (box faces touch it) to win over the 24-bit depth's
+  // rounding, small enough that edges behind a fold of the mesh stay hidden.
+  glUniform1f(glGetUniformLocation(g.lines_program, "u_depth_bias"), 1.0f / 512.0f);
+
+  // Draw.
+  glBindFramebuffer(GL_FRAMEBUFFER, g.fbos[0]);
+  glViewport(0, 0, static_cast<GLsizei>(width), static_cast<GLsizei>(height));
+  glDisable(GL_SCISSOR_TEST);
+  glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+  glDepthMask(GL_TRUE);
+  auto clear_color = [](const std::array<uint8_t, 4>& c) {
+    const GLfloat f[4] = {c[0] / 255.0f, c[1] / 255.0f, c[2] / 255.0f, c[3] / 255.0f};
+    glClearBufferfv(GL_COLOR, 0, f);
+  };
+  clear_color(options.gap_color);
+  const GLfloat far_depth = 1.0f;
+  glClearBufferfv(GL_DEPTH, 0, &far_depth);
+  glDisable(GL_CULL_FACE);
+  glEnable(GL_MULTISAMPLE);
+  for (int r = 0; r < n_rows; ++r)
+    for (int c = 0; c < n_cols; ++c) {
+      const PanelRect p = figure_panel(options, r, c);
+      const GLint gl_y = static_cast<GLint>(height) - p.y0 - p.side;  // GL rows run bottom-up
+      glViewport(p.x0, gl_y, p.side, p.side);
+      glEnable(GL_SCISSOR_TEST);
+      glScissor(p.x0, gl_y, p.side, p.side);
+      clear_color(options.background);
+      glDisable(GL_BLEND);
+      glEnable(GL_DEPTH_TEST);
+      glDepthFunc(GL_LESS);
+      glDepthMask(GL_TRUE);
+      glUseProgram(g.mesh_program);
+      glBindVertexArray(g.vaos[0]);
+      glDrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(mesh.faces.size() * 3));
+      const PanelDraw& d = draws[r * n_cols + c];
+      if (d.fill_count > 0) {
+        glEnable(GL_BLEND);
+        glBlendEquation(GL_FUNC_ADD);
+        glBlendFuncSeparate(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA, GL_ONE, GL_ONE_MINUS_SRC_ALPHA);
+        glDepthMask(GL_FALSE);
+        glUseProgram(g.fill_program);
+        glBindVertexArray(g.vaos[1]);
+        glDrawArrays(GL_TRIANGLES, d.fill_first, d.fill_count);
+        glDisable(GL_BLEND);
+        glDepthMask(GL_TRUE);
+      }
+      if (d.edge_count > 0) {
+        glDepthFunc(GL_LEQUAL);
+        glUseProgram(g.lines_program);
+        glBindVertexArray(g.vaos[2]);
+        glDrawArraysInstancedBaseInstance(GL_TRIANGLE_STRIP, 0, 4, d.edge_count, d.edge_first);
+      }
+    }
+  glDisable(GL_SCISSOR_TEST);
+  glDisable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LESS);
+
+  // Resolve and read back.
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, g.fbos[0]);
+  glBindFramebuffer(GL_DRAW_FRAMEBUFFER, g.fbos[1]);
+  glBlitFramebuffer(0, 0, width, height, 0, 0, width, height, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, g.fbos[1]);
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glPixelStorei(GL_PACK_ROW_LENGTH, 0);
+  glBindBuffer(GL_PIXEL_PACK_BUFFER, 0);
+  std::vector<uint8_t> bottom_up(static_cast<size_t>(width) * height * 4);
+  glReadPixels(0, 0, width, height, GL_RGBA, GL_UNSIGNED_BYTE, bottom_up.data());
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  glBindVertexArray(0);
+  glUseProgram(0);
+  if (const GLenum e = drain_errors(); e != GL_NO_ERROR) return fail(gl_error_name(e) + " while drawing");
+
+  out->width = static_cast<int>(width);
+  out->height = static_cast<int>(height);
+  out->rgba.resize(bottom_up.size());
+  const size_t row_bytes = static_cast<size_t>(width) * 4;
+  for (long long y = 0; y < height; ++y)
+    std::copy_n(bottom_up.data() + (height - 1 - y) * row_bytes, row_bytes, out->rgba.data() + y * row_bytes);
+  return Status::ok();
+}
+
+}  // namespace vobb

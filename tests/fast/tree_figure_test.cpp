@@ -1,0 +1,192 @@
+#include "fast/tree_figure.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <cstring>
+#include <memory>
+#include <set>
+
+#include "common/png_io.h"
+#include "data/analytic_meshes.h"
+#include "fast/obbtree_builder.h"
+#include "test_common.h"
+
+namespace vobb {
+namespace {
+
+// Every machine here has Mesa's llvmpipe, so a missing context is a failure, unless GL was
+// switched off on purpose (VOBB_GL=off), which skips.
+#define VOBB_MAKE_CONTEXT(ctx)                                                            \
+  std::unique_ptr<GlContext> ctx;                                                         \
+  do {                                                                                    \
+    const Status made = GlContext::create(&ctx);                                          \
+    const char* env = std::getenv("VOBB_GL");                                             \
+    if (!made && env != nullptr && std::string(env) == "off") GTEST_SKIP() << made.message(); \
+    ASSERT_TRUE(made) << made.message();                                                  \
+  } while (0)
+
+bool same_rgba(const uint8_t* p, const std::array<uint8_t, 4>& c) { return std::memcmp(p, c.data(), 4) == 0; }
+
+// Two rows over a cube (12 faces): the baseline at arity 2 and at arity 3, depth 2, so that
+// each panel holds a few boxes.
+struct Fixture {
+  analytic::AnalyticMesh cube = analytic::cube(2.0, Vec3(-1, -1, -1));
+  Tree binary = build_obbtree(cube.mesh, {2, 2});
+  Tree ternary = build_obbtree(cube.mesh, {2, 3});
+  std::vector<FigureRow> rows() const { return {{"arity 2", &binary}, {"arity 3", &ternary}}; }
+};
+
+FigureOptions small_options() {
+  FigureOptions o;
+  o.panel_px = 96;
+  o.gap_px = 2;
+  o.edge_width_px = 3;  // wide enough for interior pixels that every sample covers
+  return o;
+}
+
+TEST(TreeFigure, DefaultLevelsAreOneToDepthCappedAtEight) {
+  Tree deep, shallow, root_only;
+  deep.depth = 11;
+  shallow.depth = 3;
+  EXPECT_EQ(default_figure_levels({{"a", &shallow}}), (std::vector<int>{1, 2, 3}));
+  EXPECT_EQ(default_figure_levels({{"a", &shallow}, {"b", &deep}}), (std::vector<int>{1, 2, 3, 4, 5, 6, 7, 8}));
+  EXPECT_EQ(default_figure_levels({{"a", &root_only}}), (std::vector<int>{0}));
+}
+
+TEST(TreeFigure, BoxColoursOfALayerDiffer) {
+  std::set<std::array<uint8_t, 4>> seen;
+  for (size_t i = 0; i < 64; ++i) seen.insert(figure_box_color(i));
+  EXPECT_EQ(seen.size(), 64u);
+}
+
+TEST(TreeFigure, GridOfPanelsShowsMeshAndBoxes) {
+  VOBB_MAKE_CONTEXT(ctx);
+  const Fixture f;
+  const FigureOptions o = small_options();
+  RgbaImage img;
+  const Status s = render_tree_figure(*ctx, f.cube.mesh, f.rows(), o, &img);
+  ASSERT_TRUE(s) << s.message();
+  // Default levels 1..2: 2 columns, 2 rows.
+  ASSERT_EQ(img.width, 2 * 96 + 3 * 2);
+  ASSERT_EQ(img.height, 2 * 96 + 3 * 2);
+  ASSERT_EQ(img.rgba.size(), static_cast<size_t>(img.width) * img.height * 4);
+  // Image corners are the border colour.
+  for (int x : {0, img.width - 1})
+    for (int y : {0, img.height - 1}) EXPECT_TRUE(same_rgba(img.pixel(x, y), o.gap_color)) << x << "," << y;
+  const Tree* trees[2] = {&f.binary, &f.ternary};
+  for (int r = 0; r < 2; ++r)
+    for (int c = 0; c < 2; ++c) {
+      const PanelRect p = figure_panel(o, r, c);
+      SCOPED_TRACE("panel row " + std::to_string(r) + " column " + std::to_string(c));
+      // The camera fits the ball holding mesh and boxes (radius >= the cube's sqrt 3) with a
+      // 4 % margin, so the panel's corner pixels lie outside it: the background, exactly.
+      for (int x : {p.x0, p.x0 + p.side - 1})
+        for (int y : {p.y0, p.y0 + p.side - 1}) EXPECT_TRUE(same_rgba(img.pixel(x, y), o.background));
+      // The centre looks at the cube: shaded grey, not the background.
+      const uint8_t* centre = img.pixel(p.x0 + p.side / 2, p.y0 + p.side / 2);
+      EXPECT_FALSE(same_rgba(centre, o.background));
+      // Some pixel of the panel has exactly the colour of one of this layer's boxes: an edge
+      // drawn unlit and opaque, 3 px wide, covers whole pixels (all samples: resolve is exact).
+      const std::vector<int32_t> ids = layer(*trees[r], c + 1);
+      std::set<std::array<uint8_t, 4>> colours;
+      for (size_t i = 0; i < ids.size(); ++i) colours.insert(figure_box_color(i));
+      size_t hits = 0;
+      std::set<std::array<uint8_t, 4>> found;
+      for (int y = p.y0; y < p.y0 + p.side; ++y)
+        for (int x = p.x0; x < p.x0 + p.side; ++x) {
+          std::array<uint8_t, 4> px;
+          std::memcpy(px.data(), img.pixel(x, y), 4);
+          if (colours.count(px)) {
+            ++hits;
+            found.insert(px);
+          }
+        }
+      EXPECT_GT(hits, 20u);
+      EXPECT_GE(found.size(), 2u) << "at least two boxes' edges visible";
+      // Border pixels between panels keep the border colour.
+      EXPECT_TRUE(same_rgba(img.pixel(p.x0 - 1, p.y0 + p.side / 2), o.gap_color));
+    }
+}
+
+TEST(TreeFigure, LevelsAndPanelSizeFollowOptions) {
+  VOBB_MAKE_CONTEXT(ctx);
+  const Fixture f;
+  FigureOptions o = small_options();
+  o.levels = {0, 1, 2, 5};  // 5 is past the depth: the leaves
+  o.panel_px = 40;
+  o.gap_px = 0;
+  RgbaImage img;
+  const Status s = render_tree_figure(*ctx, f.cube.mesh, {{"one", &f.binary}}, o, &img);
+  ASSERT_TRUE(s) << s.message();
+  EXPECT_EQ(img.width, 4 * 40);
+  EXPECT_EQ(img.height, 40);
+  // Level 5 shows the leaves, as level 2 does: the same pixels.
+  for (int y = 0; y < 40; ++y)
+    EXPECT_EQ(std::memcmp(img.pixel(2 * 40, y), img.pixel(3 * 40, y), 40 * 4), 0) << "row " << y;
+}
+
+TEST(TreeFigure, BadInputIsAStatusNotACrash) {
+  VOBB_MAKE_CONTEXT(ctx);
+  const Fixture f;
+  RgbaImage img;
+  EXPECT_FALSE(render_tree_figure(*ctx, f.cube.mesh, {}, small_options(), &img));
+  const analytic::AnalyticMesh other = analytic::octahedron();
+  EXPECT_FALSE(render_tree_figure(*ctx, other.mesh, f.rows(), small_options(), &img));  // wrong mesh
+  FigureOptions o = small_options();
+  o.levels = {-1};
+  EXPECT_FALSE(render_tree_figure(*ctx, f.cube.mesh, f.rows(), o, &img));
+  o = small_options();
+  o.panel_px = 1 << 20;  // beyond any renderer's framebuffer
+  const Status s = render_tree_figure(*ctx, f.cube.mesh, f.rows(), o, &img);
+  EXPECT_FALSE(s);
+  EXPECT_EQ(s.message().find('\n'), std::string::npos);
+  EXPECT_TRUE(img.rgba.empty());
+}
+
+TEST(TreeFigure, PngRoundTripKeepsEveryPixel) {
+  VOBB_MAKE_CONTEXT(ctx);
+  const Fixture f;
+  RgbaImage img;
+  ASSERT_TRUE(render_tree_figure(*ctx, f.cube.mesh, f.rows(), small_options(), &img));
+  const std::string path = test::temp_path("figure.png");
+  const Status w = write_png(path, img);
+  ASSERT_TRUE(w) << w.message();
+  RgbaImage back;
+  const Status r = read_png(path, &back);
+  std::remove(path.c_str());
+  ASSERT_TRUE(r) << r.message();
+  EXPECT_EQ(back.width, img.width);
+  EXPECT_EQ(back.height, img.height);
+  EXPECT_TRUE(back.rgba == img.rgba);
+}
+
+TEST(PngIo, RejectsMalformedImagesAndFiles) {
+  RgbaImage bad;
+  bad.width = 3;
+  bad.height = 2;
+  bad.rgba.assign(5, 0);
+  const std::string path = test::temp_path("bad.png");
+  EXPECT_FALSE(write_png(path, bad));
+  EXPECT_FALSE(test::exists(path));  // nothing half-written
+  RgbaImage back;
+  EXPECT_FALSE(read_png(path, &back));  // absent
+  // A truncated PNG: the first half of a valid one.
+  RgbaImage ok;
+  ok.width = 17;
+  ok.height = 9;
+  for (int i = 0; i < 17 * 9 * 4; ++i) ok.rgba.push_back(static_cast<uint8_t>(i * 37));
+  std::string bytes;
+  ASSERT_TRUE(encode_png(ok, &bytes, "mem"));
+  FILE* out = std::fopen(path.c_str(), "wb");
+  ASSERT_NE(out, nullptr);
+  std::fwrite(bytes.data(), 1, bytes.size() / 2, out);
+  std::fclose(out);
+  const Status s = read_png(path, &back);
+  std::remove(path.c_str());
+  EXPECT_FALSE(s);
+  EXPECT_TRUE(back.rgba.empty());
+}
+
+}  // namespace
+}  // namespace vobb
