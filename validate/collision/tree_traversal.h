@@ -1,0 +1,48 @@
+// One vobb tree prepared for collision queries: the traversal whose tests the collision
+// experiment counts (paper §5, issue 7).
+//
+// A query walks the tree from the root. Each visited node costs one collider–box test
+// (`may_touch_box`, conservative); a node that may touch is opened, and at a leaf each face
+// costs one leaf triangle test (`touches_triangle`). There is no early exit: a query finds
+// every touching face. Precondition: the tree's boxes contain their faces (check_conservative);
+// then the faces found equal brute force's (`brute_force_touching`).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "common/mesh.h"
+#include "common/tree.h"
+#include "validate/collision/contact_predicates.h"
+
+namespace vobb::collision {
+
+struct QueryCounts {
+  uint64_t box_tests = 0;   // collider–box tests (every visited node, the root included)
+  uint64_t leaf_tests = 0;  // collider–triangle tests at the leaves
+  uint64_t contacts = 0;    // touching faces found
+};
+
+class TreeTraversal {
+ public:
+  // Keeps references to `mesh`; copies what it needs of `tree`.
+  TreeTraversal(const Mesh& mesh, const Tree& tree);
+  // Sets `faces` to the touching faces, ascending, and adds to `counts`.
+  void query(const PreparedCollider& c, std::vector<int32_t>* faces, QueryCounts* counts) const;
+
+ private:
+  struct Node {
+    PreparedBox box;
+    int32_t first_child = 0, num_children = 0;  // into children_
+    int32_t first_face = 0, num_faces = 0;      // into faces_ (leaves only)
+  };
+  const Mesh& mesh_;
+  std::vector<Node> nodes_;
+  std::vector<int32_t> children_, faces_;
+  mutable std::vector<int32_t> stack_;
+};
+
+// Every face against the collider, in mesh order.
+void brute_force_touching(const Mesh& mesh, const PreparedCollider& c, std::vector<int32_t>* faces);
+
+}  // namespace vobb::collision
