@@ -22,6 +22,7 @@
 #include "fast/tree_figure.h"
 #include "fast/variational_builder.h"
 #include "vobb/config.h"
+#include "app/validate_command.h"
 
 namespace {
 
@@ -473,6 +474,9 @@ int main(int argc, char** argv) {
   std::string compare_figure;
   cmp->add_option("--figure", compare_figure, "Also draw both trees' boxes at levels 1..8 over the mesh to this PNG");
 
+  vobb::app::ValidateFlags validate_flags;
+  CLI::App* validate_cmd = vobb::app::add_validate_command(app, &validate_flags);
+
   CLI::App* exp = app.add_subcommand("export", "Write the boxes of one layer as OBJ or PLY");
   exp->add_option("TREE", tree_path, "Tree file")->required();
   exp->add_option("--level", level, "Layer to export")->required();
@@ -496,6 +500,7 @@ int main(int argc, char** argv) {
   if (info->parsed()) return run_info(mesh, json, rational);
   if (build->parsed()) return run_build(mesh, out, bf);
   if (exp->parsed()) return run_export(tree_path, level, out);
+  if (validate_cmd->parsed()) return vobb::app::run_validate_command(validate_flags);
   if (obv->parsed()) return run_obv(mesh, boxes_path, ms, backend, json);
   if (cmp->parsed()) return run_compare(mesh, cf, compare_json, compare_figure);
   if (cert->parsed()) return run_certify(mesh, tree_path, json, rational, omv_path, quiet);

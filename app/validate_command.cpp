@@ -1,0 +1,47 @@
+#include "app/validate_command.h"
+
+#include <cstdio>
+#include <filesystem>
+
+#include "validate/validation_suite.h"
+
+namespace vobb::app {
+
+CLI::App* add_validate_command(CLI::App& app, ValidateFlags* f) {
+  CLI::App* v = app.add_subcommand(
+      "validate", "Validation suite: error against m, error against time, sum OBV >= OMV, stiff cases; CSV, PNG, summary.md");
+  v->add_option("--suite", f->suite, "quick (CI, minutes) or full (under an hour)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"quick", "full"}));
+  v->add_option("--out", f->out, "Output folder (default: validation-<suite>)");
+  v->add_option("--meshes", f->meshes, "Folder of the real meshes (default: data/real)");
+  v->add_flag("--cpu-only", f->cpu_only, "Skip the GL estimator (the CPU twin only)");
+  v->add_flag("--quiet", f->quiet, "No progress on stderr");
+  return v;
+}
+
+int run_validate_command(const ValidateFlags& f) {
+  validate::SuiteOptions o;
+  o.suite = f.suite == "full" ? validate::SuiteKind::kFull : validate::SuiteKind::kQuick;
+  o.out_dir = f.out.empty() ? "validation-" + f.suite : f.out;
+  o.mesh_dir = f.meshes;
+  if (o.mesh_dir.empty()) o.mesh_dir = std::filesystem::is_directory("data/real") ? "data/real" : VOBB_SOURCE_MESH_DIR;
+  o.want_gl = !f.cpu_only;
+  o.command = "vobb validate --suite " + f.suite + (f.out.empty() ? "" : " --out " + f.out) +
+              (f.meshes.empty() ? "" : " --meshes " + f.meshes) + (f.cpu_only ? " --cpu-only" : "");
+  if (!f.quiet) o.progress = [](const std::string& line) { std::fprintf(stderr, "validate: %s\n", line.c_str()); };
+  validate::SuiteReport report;
+  const Status s = validate::run_validation_suite(o, &report);
+  if (!s) {
+    std::fprintf(stderr, "vobb: %s\n", s.message().c_str());
+    return 2;
+  }
+  for (const validate::SuiteCheck& c : report.checks)
+    std::printf("%-4s %-50s %s\n", c.passed ? "ok" : "FAIL", c.name.c_str(), c.detail.c_str());
+  for (const std::string& n : report.notes) std::printf("note: %s\n", n.c_str());
+  std::printf("%s suite: %s in %.1f s; summary: %s\n", f.suite.c_str(), report.ok() ? "all checks passed" : "CHECKS FAILED",
+              report.seconds, report.summary_path.c_str());
+  return report.ok() ? 0 : 1;
+}
+
+}  // namespace vobb::app

@@ -1,0 +1,297 @@
+#include "validate/discretization_study.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+#include "exact/outer_volume.h"
+
+namespace vobb::validate {
+namespace {
+
+double since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
+double StudyEval::abs_error(const StudySample& s) const { return std::abs(estimate - s.exact); }
+
+double StatedBound::per_volume(int m) const { return c * std::pow(double(m), -p); }
+
+double quantile(std::vector<double> v, double q) {
+  VOBB_ASSERT(!v.empty(), "quantile of an empty set");
+  std::sort(v.begin(), v.end());
+  const double pos = q * (v.size() - 1);
+  const size_t lo = static_cast<size_t>(std::floor(pos));
+  const size_t hi = std::min(v.size() - 1, lo + 1);
+  return v[lo] + (pos - lo) * (v[hi] - v[lo]);
+}
+
+double median(std::vector<double> v) { return quantile(std::move(v), 0.5); }
+
+double lsq_slope(const std::vector<double>& x, const std::vector<double>& y) {
+  const size_t n = x.size();
+  if (n < 2) return std::numeric_limits<double>::quiet_NaN();
+  double mx = 0, my = 0;
+  for (size_t i = 0; i < n; ++i) mx += x[i], my += y[i];
+  mx /= n, my /= n;
+  double sxy = 0, sxx = 0;
+  for (size_t i = 0; i < n; ++i) sxy += (x[i] - mx) * (y[i] - my), sxx += (x[i] - mx) * (x[i] - mx);
+  return sxy / sxx;
+}
+
+ErrorStats error_stats(const DiscretizationResult& r, const std::function<bool(const StudyEval&)>& keep) {
+  ErrorStats st;
+  std::vector<double> rel, ab, norm, rig;
+  double secs = 0;
+  for (const StudyEval& e : r.evals) {
+    if (!keep(e)) continue;
+    const StudySample& s = r.samples[e.sample];
+    ++st.n;
+    secs += e.seconds;
+    if (!std::isfinite(e.estimate)) {
+      ++st.non_finite;
+      ++st.rigorous_violations;
+      continue;
+    }
+    const double a = e.abs_error(s);
+    ab.push_back(a);
+    norm.push_back(a / s.box_volume);
+    rig.push_back(e.rigorous / s.box_volume);
+    if (s.exact > 0) rel.push_back(a / s.exact);
+    if (!(a <= e.rigorous)) ++st.rigorous_violations;
+  }
+  if (st.n) st.seconds_mean = secs / st.n;
+  st.n_rel = rel.size();
+  if (!rel.empty()) {
+    st.rel_median = median(rel);
+    st.rel_p95 = quantile(rel, 0.95);
+    st.rel_max = *std::max_element(rel.begin(), rel.end());
+  }
+  if (!ab.empty()) {
+    st.abs_median = median(ab);
+    st.abs_p95 = quantile(ab, 0.95);
+    st.abs_max = *std::max_element(ab.begin(), ab.end());
+    st.norm_median = median(norm);
+    st.norm_p95 = quantile(norm, 0.95);
+    st.norm_max = *std::max_element(norm.begin(), norm.end());
+    st.rigorous_norm_median = median(rig);
+  }
+  return st;
+}
+
+// B(m) = c m^-p vol(O). For each m, q_m is the (1 - alpha/2) quantile of the fit corpus's
+// normalised errors (both backends pooled: they share texels and differ by float round-off).
+// p is the least-squares slope of log q_m against log m (negated), and c the smallest constant
+// with c m^-p >= q_m at every m: the fitted curve lifted to envelope the quantiles. The margin
+// between the fitted quantile (1 - alpha/2) and the stated level (alpha) is for the sampling
+// error of a quantile from a few dozen boxes per m; it is fixed before the held-out check runs.
+StatedBound fit_stated_bound(const DiscretizationResult& r, double alpha) {
+  StatedBound b;
+  b.alpha = alpha;
+  b.quantile = 1 - alpha / 2;
+  std::vector<int> ms;
+  for (const StudyEval& e : r.evals)
+    if (std::find(ms.begin(), ms.end(), e.m) == ms.end()) ms.push_back(e.m);
+  std::sort(ms.begin(), ms.end());
+  std::vector<double> lx, ly;
+  for (int m : ms) {
+    std::vector<double> u;
+    for (const StudyEval& e : r.evals) {
+      const StudySample& s = r.samples[e.sample];
+      if (e.m != m || s.held_out) continue;
+      u.push_back(std::isfinite(e.estimate) ? e.abs_error(s) / s.box_volume : std::numeric_limits<double>::infinity());
+    }
+    if (u.empty()) continue;
+    const double q = quantile(u, b.quantile);
+    b.fitted_quantiles.push_back({m, q});
+    if (q > 0 && std::isfinite(q)) {
+      lx.push_back(std::log(double(m)));
+      ly.push_back(std::log(q));
+    }
+  }
+  b.p = lx.size() >= 2 ? -lsq_slope(lx, ly) : 0.0;
+  b.c = 0;
+  for (const auto& [m, q] : b.fitted_quantiles) b.c = std::max(b.c, q * std::pow(double(m), b.p));
+  std::vector<std::pair<size_t, size_t>> per_m(ms.size());  // (n, violations)
+  for (const StudyEval& e : r.evals) {
+    const StudySample& s = r.samples[e.sample];
+    const bool violates = !(e.abs_error(s) <= b.per_volume(e.m) * s.box_volume);  // NaN violates
+    if (s.held_out) {
+      ++b.held_out_n;
+      b.held_out_violations += violates;
+      const size_t k = std::find(ms.begin(), ms.end(), e.m) - ms.begin();
+      ++per_m[k].first;
+      per_m[k].second += violates;
+    } else {
+      ++b.fit_n;
+      b.fit_violations += violates;
+    }
+  }
+  for (size_t k = 0; k < ms.size(); ++k)
+    if (per_m[k].first) b.held_out_rate_per_m.push_back({ms[k], double(per_m[k].second) / per_m[k].first});
+  return b;
+}
+
+DiscretizationResult run_discretization_study(const DiscretizationConfig& config) {
+  const auto t0 = std::chrono::steady_clock::now();
+  DiscretizationResult r;
+  auto say = [&](const std::string& line) {
+    if (config.progress) config.progress(line);
+  };
+  const BoxSize sizes[] = {BoxSize::kLeaf, BoxSize::kMid, BoxSize::kRoot};
+  std::vector<std::pair<NamedMesh, bool>> meshes;
+  for (const NamedMesh& nm : config.fit_meshes) meshes.push_back({nm, false});
+  for (const NamedMesh& nm : config.held_out_meshes) meshes.push_back({nm, true});
+
+  double clip_seconds = 0, nef_seconds = 0, clip_on_nef_boxes = 0;
+  size_t clip_n = 0;
+  bool gl_ever = false, gl_tried = false;
+  for (size_t mi = 0; mi < meshes.size(); ++mi) {
+    const auto& [nm, held_out] = meshes[mi];
+    const Mesh& mesh = *nm.mesh;
+    EstimatorSet est(mesh, config.want_gl, config.perturb);
+    if (config.want_gl && !gl_tried) {
+      gl_tried = true;
+      r.gl_note = est.has_gl() ? "GL renderer: " + est.renderer() : "GL estimator unavailable: " + est.gl_status();
+    }
+    gl_ever |= est.has_gl();
+    const exact::ClipSolver clip(mesh);
+    const bool time_nef = mi == 0 && config.nef_boxes_per_size > 0;
+    std::unique_ptr<exact::NefSolver> nef;
+    if (time_nef) {
+      const auto tn = std::chrono::steady_clock::now();
+      nef = std::make_unique<exact::NefSolver>(mesh);
+      r.exact_timings.push_back({"nef (build Nef(X) once)", 1, since(tn), nm.name});
+    }
+    const size_t first = r.samples.size();
+    std::vector<Obb> boxes;
+    for (int si = 0; si < 3; ++si) {
+      const uint64_t seed = (held_out ? config.held_out_seed : config.fit_seed) + 10 * mi + si;
+      const std::vector<Obb> part = box_corpus(mesh, sizes[si], config.boxes_per_size, seed);
+      for (size_t i = 0; i < part.size(); ++i) {
+        StudySample s;
+        s.mesh = nm.name;
+        s.held_out = held_out;
+        s.size = sizes[si];
+        s.index = static_cast<int>(i);
+        s.box = part[i];
+        s.box_volume = volume(part[i]);
+        s.centre = est.centre_location(part[i]);
+        const auto te = std::chrono::steady_clock::now();
+        const Rational v = clip.obv(part[i]);
+        s.exact_seconds = since(te);
+        s.exact = to_double_nearest(v);
+        clip_seconds += s.exact_seconds;
+        ++clip_n;
+        if (nef && static_cast<int>(i) < config.nef_boxes_per_size) {
+          const auto tn = std::chrono::steady_clock::now();
+          const Rational w = nef->obv(part[i]);
+          nef_seconds += since(tn);
+          clip_on_nef_boxes += s.exact_seconds;
+          ++r.nef_compared;
+          if (!(w == v)) r.nef_agrees = false;  // exact: equal rationals or a finding
+        }
+        r.samples.push_back(s);
+        boxes.push_back(part[i]);
+      }
+    }
+    say(nm.name + (held_out ? " (held out)" : " (fit)") + ": " + std::to_string(boxes.size()) +
+        " boxes, exact OBV by clipping done");
+    for (Backend backend : {Backend::kCpu, Backend::kGl}) {
+      if (backend == Backend::kGl && !est.has_gl()) continue;
+      if (backend == Backend::kGl) {  // warm-up: shader JIT and the atlas's first pages are not timed
+        std::vector<double> ignored;
+        est.estimate(backend, {boxes[0]}, 8, &ignored);
+      }
+      for (int m : config.ms) {
+        if (backend == Backend::kGl && m > est.gl_max_m()) continue;
+        std::vector<double> secs;
+        const std::vector<double> v = est.estimate(backend, boxes, m, &secs);
+        for (size_t i = 0; i < boxes.size(); ++i) {
+          StudyEval e;
+          e.sample = first + i;
+          e.backend = backend;
+          e.m = m;
+          e.estimate = v[i];
+          e.seconds = secs[i];
+          const EstimatorSet::Bounds bd = est.bounds(boxes[i], m);
+          e.rigorous = bd.rigorous();
+          e.deviation = bd.deviation + bd.roundoff;
+          r.evals.push_back(e);
+        }
+      }
+      say(nm.name + ": " + to_string(backend) + " estimates at every m done");
+    }
+  }
+  r.backends.push_back(Backend::kCpu);
+  if (gl_ever) r.backends.push_back(Backend::kGl);
+  if (clip_n) r.exact_timings.push_back({"clip", clip_n, clip_seconds / clip_n, "every box of the corpus"});
+  if (r.nef_compared) {
+    r.exact_timings.push_back({"nef", r.nef_compared, nef_seconds / r.nef_compared, "first fit mesh, first boxes of each size"});
+    r.exact_timings.push_back({"clip (same boxes as nef)", r.nef_compared, clip_on_nef_boxes / r.nef_compared, ""});
+  }
+
+  for (Backend b : r.backends)
+    for (int m : config.ms) {
+      PerMStats pm{b, m, error_stats(r, [&](const StudyEval& e) { return e.backend == b && e.m == m; })};
+      if (pm.all.n) r.per_m.push_back(pm);
+    }
+  if (std::find(config.ms.begin(), config.ms.end(), 32) != config.ms.end())
+    for (Backend b : r.backends)
+      for (BoxSize sz : sizes)
+        for (Location loc : {Location::kInside, Location::kOutside, Location::kOnSurface}) {
+          const ErrorStats st = error_stats(r, [&](const StudyEval& e) {
+            const StudySample& s = r.samples[e.sample];
+            return e.backend == b && e.m == 32 && s.size == sz && s.centre == loc;
+          });
+          if (st.n) r.per_class_m32.push_back({b, sz, loc, st});
+        }
+  for (Backend b : r.backends) {
+    std::vector<double> lx, lmed, lp95, lmax;
+    for (const PerMStats& pm : r.per_m)
+      if (pm.backend == b && pm.all.rel_median > 0 && pm.all.rel_p95 > 0 && pm.all.rel_max > 0) {
+        lx.push_back(std::log(double(pm.m)));
+        lmed.push_back(std::log(pm.all.rel_median));
+        lp95.push_back(std::log(pm.all.rel_p95));
+        lmax.push_back(std::log(pm.all.rel_max));
+      }
+    r.rates.push_back({b, lsq_slope(lx, lmed), lsq_slope(lx, lp95), lsq_slope(lx, lmax)});
+  }
+  r.bound = fit_stated_bound(r, config.alpha);
+
+  // Richardson: per (sample, backend) the estimates at m and 2m, judged at 2m.
+  for (Backend b : r.backends)
+    for (int m : config.ms) {
+      if (std::find(config.ms.begin(), config.ms.end(), 2 * m) == config.ms.end()) continue;
+      std::vector<const StudyEval*> at_m(r.samples.size(), nullptr), at_2m(r.samples.size(), nullptr);
+      for (const StudyEval& e : r.evals) {
+        if (e.backend != b) continue;
+        if (e.m == m) at_m[e.sample] = &e;
+        if (e.m == 2 * m) at_2m[e.sample] = &e;
+      }
+      RichardsonRow row{b, m};
+      size_t c3 = 0, c1 = 0, c2 = 0;
+      for (size_t i = 0; i < r.samples.size(); ++i) {
+        if (!at_m[i] || !at_2m[i]) continue;
+        const double d = std::abs(at_m[i]->estimate - at_2m[i]->estimate);
+        const double err = at_2m[i]->abs_error(r.samples[i]);
+        ++row.n;
+        c3 += err <= d / 3;
+        c1 += err <= d;
+        c2 += err <= 2 * d;
+      }
+      if (!row.n) continue;
+      row.cover_third = double(c3) / row.n;
+      row.cover_one = double(c1) / row.n;
+      row.cover_two = double(c2) / row.n;
+      r.richardson.push_back(row);
+    }
+  r.seconds = since(t0);
+  return r;
+}
+
+}  // namespace vobb::validate

@@ -1,0 +1,81 @@
+// The cubemap estimators as the validation suite drives them: the CPU twin and the GL
+// estimator over one mesh, each evaluation timed, with the rigorous per-box error allowance
+// and an optional perturbation of every estimate (the tests' injection point).
+//
+// The perturbation exists only so that a test can break the estimator on purpose and show
+// that the suite fails (tests/validate/validation_suite_test.cpp); a run from the command line
+// never sets it. It receives the estimate, the box and m, and returns the value the suite sees.
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "common/mesh.h"
+#include "common/obb.h"
+#include "common/status.h"
+#include "fast/cpu_estimator.h"
+#include "fast/gl_estimator.h"
+#include "fast/texel_plan.h"
+
+namespace vobb::validate {
+
+using EstimatePerturbation = std::function<double(double estimate, const Obb& box, int m)>;
+
+enum class Backend { kCpu, kGl };
+const char* to_string(Backend b);
+
+class EstimatorSet {
+ public:
+  // Keeps a reference to `mesh`. `want_gl`: try to make a GL context; when that fails,
+  // has_gl() is false and gl_status() says why in one line.
+  EstimatorSet(const Mesh& mesh, bool want_gl, EstimatePerturbation perturb = {});
+  ~EstimatorSet();
+
+  bool has_gl() const { return gl_ != nullptr; }
+  const std::string& gl_status() const { return gl_status_; }
+  std::string renderer() const;
+  int gl_max_m() const;
+
+  // Estimates of each box at resolution m (1 <= m, and m <= gl_max_m() for GL), perturbed when
+  // a perturbation is set. `seconds` gets the time per evaluation: measured per box for the
+  // CPU twin, the batch's time divided by the count for GL (it evaluates the batch at once).
+  std::vector<double> estimate(Backend backend, const std::vector<Obb>& boxes, int m,
+                               std::vector<double>* seconds);
+
+  // A rigorous bound on |estimate - exact OBV| for one box at resolution m, for either backend:
+  // resolution_bound (texel_plan.h) plus gl_deviation_bound plus 32 eps vol(O). For the CPU
+  // twin the float bound is kept too: it bounds the same sums' round-off in float32, so it
+  // covers the twin's double round-off of the texel sum (2^29 times smaller). The last term is
+  // the round-off outside the texel sum, which both bounds leave out (it matters where they
+  // are 0, e.g. a box that meets no face): the volume scale |det[h0 a0, h1 a1, h2 a2]| (3
+  // roundings scaling the axes, then the determinant's 5 per term, its sum of |terms| at most
+  // sqrt(3) |det| for axes orthonormal to round-off: under 9 eps), the products with the
+  // constant and the texel weight (2 eps), and the exact value's rounding to the nearest
+  // double (eps/2): under 12 eps, taken as 32 eps for margin.
+  double rigorous_bound(const Obb& box, int m) const;
+  // The parts: resolution_bound, gl_deviation_bound (the bound on |GL - CPU twin|) and the
+  // round-off term.
+  struct Bounds {
+    double resolution = 0, deviation = 0, roundoff = 0;
+    double rigorous() const { return resolution + deviation + roundoff; }
+  };
+  Bounds bounds(const Obb& box, int m) const;
+  // The suite's front door for one estimate: refuses, in one line, what the estimators take
+  // as a programmer error (m < 1, m beyond the GL limit, a box with non-finite numbers or
+  // negative half extents) instead of aborting.
+  Status check_request(Backend backend, const Obb& box, int m) const;
+  // Where the centre of the box lies (the plan's exact classification).
+  Location centre_location(const Obb& box) const;
+
+ private:
+  const Mesh& mesh_;
+  BoxPlanner planner_;
+  CpuObvEstimator cpu_;
+  std::unique_ptr<GlObvEstimator> gl_;
+  std::string gl_status_;
+  EstimatePerturbation perturb_;
+};
+
+}  // namespace vobb::validate
