@@ -23,6 +23,7 @@
 #include "fast/variational_builder.h"
 #include "vobb/config.h"
 #include "app/validate_command.h"
+#include "app/collide_command.h"
 
 namespace {
 
@@ -476,6 +477,8 @@ int main(int argc, char** argv) {
 
   vobb::app::ValidateFlags validate_flags;
   CLI::App* validate_cmd = vobb::app::add_validate_command(app, &validate_flags);
+  vobb::app::CollideFlags collide_flags;
+  CLI::App* collide_cmd = vobb::app::add_collide_command(app, &collide_flags);
 
   CLI::App* exp = app.add_subcommand("export", "Write the boxes of one layer as OBJ or PLY");
   exp->add_option("TREE", tree_path, "Tree file")->required();
@@ -501,6 +504,7 @@ int main(int argc, char** argv) {
   if (build->parsed()) return run_build(mesh, out, bf);
   if (exp->parsed()) return run_export(tree_path, level, out);
   if (validate_cmd->parsed()) return vobb::app::run_validate_command(validate_flags);
+  if (collide_cmd->parsed()) return vobb::app::run_collide_command(collide_flags);
   if (obv->parsed()) return run_obv(mesh, boxes_path, ms, backend, json);
   if (cmp->parsed()) return run_compare(mesh, cf, compare_json, compare_figure);
   if (cert->parsed()) return run_certify(mesh, tree_path, json, rational, omv_path, quiet);

@@ -105,8 +105,57 @@ int sat_box_triangle(const T c[3], const T u[3][3], const T p[3][3]) {
   return undecided ? 0 : -1;
 }
 
+// Double filter of sat_box_triangle with a semi-static error bound. For an axis L = x × y the
+// separation min_i(D_i.L) - sum_k |u_k.L| (and its mirror) is a polynomial of degree 3 in the
+// inputs; its computed value differs from the exact one (with the exact u_k = half_k axes_k,
+// the exact L) by at most gamma_m times the same polynomial in absolute values, where m = 11
+// roundings lie on its longest path (u_k or D_i or e_j: 1, the cross: 2, the dot: 3, the
+// absolute sum: 2, the subtraction: 1, plus 2 for the inputs of the cross). That absolute
+// polynomial is at most |L|abs . (max_i |D_i| + sum_k |u_k|) with |L|abs = |x| × |y| taken
+// on absolute values (all componentwise). 16u times the computed bound covers gamma_11 and the
+// bound's own round-off (relative 10u). Returns +1 separated, -1 touching, 0 undecided.
+int sat_box_triangle_filter(const Collider& b, const Vec3* const p[3]) {
+  Vec3 u[3], ua[3], d[3], e[3], da[3], ea[3];
+  for (int k = 0; k < 3; ++k) {
+    u[k] = b.half[k] * b.axes[k];
+    ua[k] = u[k].cwiseAbs();
+    d[k] = *p[k] - b.center;
+    da[k] = d[k].cwiseAbs();
+  }
+  for (int j = 0; j < 3; ++j) {
+    e[j] = *p[(j + 1) % 3] - *p[j];
+    ea[j] = e[j].cwiseAbs();
+  }
+  const Vec3 dmax = da[0].cwiseMax(da[1]).cwiseMax(da[2]);
+  const Vec3 mag = dmax + ua[0] + ua[1] + ua[2];
+  auto abs_cross = [](const Vec3& x, const Vec3& y) {
+    return Vec3(x[1] * y[2] + x[2] * y[1], x[2] * y[0] + x[0] * y[2], x[0] * y[1] + x[1] * y[0]);
+  };
+  bool undecided = false;
+  auto axis = [&](const Vec3& L, const Vec3& La) {
+    const double r = std::abs(u[0].dot(L)) + std::abs(u[1].dot(L)) + std::abs(u[2].dot(L));
+    const double d0 = d[0].dot(L), d1 = d[1].dot(L), d2 = d[2].dot(L);
+    const double sep = std::max(std::min(std::min(d0, d1), d2) - r, -std::max(std::max(d0, d1), d2) - r);
+    const double bound = 16 * kU * La.dot(mag);
+    if (sep > bound) return true;
+    if (!(sep <= -bound)) undecided = true;
+    return false;
+  };
+  for (int k = 0; k < 3; ++k) {
+    const int a = (k + 1) % 3, c = (k + 2) % 3;
+    if (axis(u[a].cross(u[c]), abs_cross(ua[a], ua[c]))) return 1;
+  }
+  if (axis(e[0].cross(e[1]), abs_cross(ea[0], ea[1]))) return 1;
+  for (int k = 0; k < 3; ++k)
+    for (int j = 0; j < 3; ++j)
+      if (axis(u[k].cross(e[j]), abs_cross(ua[k], ea[j]))) return 1;
+  return undecided ? 0 : -1;
+}
+
 bool box_touches_triangle(const Collider& b, const Vec3& p0, const Vec3& p1, const Vec3& p2) {
   const Vec3* ps[3] = {&p0, &p1, &p2};
+  const int s = sat_box_triangle_filter(b, ps);
+  if (s != 0) return s < 0;
   {
     Interval c[3], u[3][3], p[3][3];
     for (int i = 0; i < 3; ++i) {
@@ -114,8 +163,8 @@ bool box_touches_triangle(const Collider& b, const Vec3& p0, const Vec3& p1, con
       for (int k = 0; k < 3; ++k) u[k][i] = point(b.half[k]) * point(b.axes[k][i]);
       for (int k = 0; k < 3; ++k) p[k][i] = point((*ps[k])[i]);
     }
-    const int s = sat_box_triangle(c, u, p);
-    if (s != 0) return s < 0;
+    const int si = sat_box_triangle(c, u, p);
+    if (si != 0) return si < 0;
   }
   g_exact_fallbacks.fetch_add(1, std::memory_order_relaxed);
   Rational c[3], u[3][3], p[3][3];

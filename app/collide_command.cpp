@@ -1,0 +1,170 @@
+#include "app/collide_command.h"
+
+#include <nlohmann/json.hpp>
+
+#include <cstdio>
+
+#include "common/atomic_file.h"
+#include "common/io/mesh_report.h"
+#include "common/sha256.h"
+#include "common/tree_io.h"
+#include "validate/collision/collision_experiment.h"
+
+namespace vobb::app {
+namespace {
+
+constexpr int kExitOk = 0, kExitCheckFailed = 1, kExitBadInput = 2;
+
+int refuse(const Status& s) {
+  std::fprintf(stderr, "vobb: %s\n", s.message().c_str());
+  return kExitBadInput;
+}
+
+std::string format_json(const CollideFlags& f, const collision::ExperimentReport& r) {
+  using collision::reduction_pct;
+  nlohmann::ordered_json j;
+  j["mode"] = r.dynamic ? "dynamic" : "static";
+  j["mesh"] = f.mesh;
+  j["colliders"] = f.colliders;
+  j["seed"] = f.seed;
+  j["simulated_seconds"] = r.simulated_seconds;
+  j["queries"] = r.queries;
+  j["touching_queries"] = r.touching_queries;
+  j["brute_force_agrees"] = r.brute_force_agrees;
+  if (!r.brute_force_agrees) j["first_disagreement"] = r.first_disagreement;
+  j["brute_force_seconds"] = r.brute_force_seconds;
+  j["exact_fallbacks"] = r.exact_fallbacks;
+  if (r.dynamic) j["ode_contacts"] = r.ode_contacts;
+  const double unit = r.dynamic ? r.simulated_seconds : static_cast<double>(r.queries);
+  const auto& t0 = r.trees.front();
+  nlohmann::ordered_json trees = nlohmann::ordered_json::array();
+  for (const auto& t : r.trees) {
+    nlohmann::ordered_json jt;
+    jt["file"] = t.name;
+    jt["method"] = t.method;
+    jt["depth"] = t.depth;
+    jt["arity"] = t.arity;
+    jt["nodes"] = t.nodes;
+    jt["box_tests"] = t.counts.box_tests;
+    jt["leaf_tests"] = t.counts.leaf_tests;
+    jt["contacts"] = t.counts.contacts;
+    jt["narrow_phase_seconds"] = t.narrow_phase_seconds;
+    jt[r.dynamic ? "box_tests_per_second" : "box_tests_per_query"] = t.counts.box_tests / unit;
+    jt["reduction_pct"] = reduction_pct(t0.counts.box_tests, t.counts.box_tests);
+    jt["disagreements"] = t.disagreements;
+    if (t.fcl.available) {
+      jt["fcl_bv_tests"] = t.fcl.bv_tests;
+      jt["fcl_tree_node_bv_tests"] = t.fcl.tree_node_bv_tests;
+      jt["fcl_leaf_tests"] = t.fcl.leaf_tests;
+      if (t0.fcl.available) {
+        jt["fcl_reduction_pct"] = reduction_pct(t0.fcl.bv_tests, t.fcl.bv_tests);
+        jt["fcl_tree_node_reduction_pct"] = reduction_pct(t0.fcl.tree_node_bv_tests, t.fcl.tree_node_bv_tests);
+      }
+      jt["fcl_answer_disagreements"] = t.fcl.answer_disagreements;
+      jt["fcl_face_disagreements"] = t.fcl.face_disagreements;
+    } else {
+      jt["fcl_bv_tests"] = nullptr;
+      if (!t.fcl.note.empty()) jt["fcl_note"] = t.fcl.note;
+    }
+    trees.push_back(jt);
+  }
+  j["trees"] = trees;
+  if (r.fcl_own.available)
+    j["fcl_own_obb_tree"] = {{"bv_tests", r.fcl_own.bv_tests},
+                             {"leaf_tests", r.fcl_own.leaf_tests},
+                             {"answer_disagreements", r.fcl_own.answer_disagreements},
+                             {"face_disagreements", r.fcl_own.face_disagreements}};
+  return j.dump(2) + "\n";
+}
+
+std::string format_text(const collision::ExperimentReport& r) {
+  using collision::reduction_pct;
+  std::string out;
+  char line[512];
+  const double unit = r.dynamic ? r.simulated_seconds : static_cast<double>(r.queries);
+  std::snprintf(line, sizeof line, "%s: %llu queries (%llu touching)%s%.3g s simulated; brute force agrees: %s\n",
+                r.dynamic ? "dynamic" : "static", static_cast<unsigned long long>(r.queries),
+                static_cast<unsigned long long>(r.touching_queries), r.dynamic ? ", " : ", ", r.simulated_seconds,
+                r.brute_force_agrees ? "yes" : ("NO (" + r.first_disagreement + ")").c_str());
+  out += line;
+  std::snprintf(line, sizeof line, "%-28s %14s %10s %14s %10s %12s %14s %10s %10s\n", "tree", "box tests",
+                r.dynamic ? "per s" : "per query", "leaf tests", "contacts", "narrow s", "fcl bv tests",
+                "change %", "fcl %");
+  out += line;
+  const auto& t0 = r.trees.front();
+  for (const auto& t : r.trees) {
+    std::snprintf(line, sizeof line, "%-28s %14llu %10.4g %14llu %10llu %12.3f %14llu %+10.2f %+10.2f\n",
+                  t.name.c_str(), static_cast<unsigned long long>(t.counts.box_tests), t.counts.box_tests / unit,
+                  static_cast<unsigned long long>(t.counts.leaf_tests),
+                  static_cast<unsigned long long>(t.counts.contacts), t.narrow_phase_seconds,
+                  static_cast<unsigned long long>(t.fcl.bv_tests),
+                  -reduction_pct(t0.counts.box_tests, t.counts.box_tests),
+                  -reduction_pct(t0.fcl.bv_tests, t.fcl.bv_tests));
+    out += line;
+  }
+  if (r.fcl_own.available) {
+    std::snprintf(line, sizeof line, "FCL's own OBB tree: %llu bv tests, %llu leaf tests\n",
+                  static_cast<unsigned long long>(r.fcl_own.bv_tests),
+                  static_cast<unsigned long long>(r.fcl_own.leaf_tests));
+    out += line;
+  }
+  return out;
+}
+
+}  // namespace
+
+CLI::App* add_collide_command(CLI::App& app, CollideFlags* f) {
+  CLI::App* c = app.add_subcommand(
+      "collide", "Collision experiment (paper §5): collider–box tests per tree, checked against brute force");
+  c->add_option("MESH", f->mesh, "The solid mesh the trees were built for")->required();
+  c->add_option("TREES", f->trees, "Tree files; reductions are relative to the first")->required();
+  c->add_option("--colliders", f->colliders, "Falling colliders (or static poses)")
+      ->capture_default_str()->check(CLI::Range(1, 10000000));
+  c->add_option("--seconds", f->seconds, "Simulated seconds (dynamic mode)")
+      ->capture_default_str()->check(CLI::Range(0.0, 1e6));
+  c->add_option("--seed", f->seed, "Seed of the collider stream")->capture_default_str();
+  c->add_flag("--static", f->static_mode, "No dynamics: poses sampled on and near the surface");
+  c->add_flag("--no-fcl", f->no_fcl, "Skip the FCL replay");
+  c->add_flag("--json", f->json, "Print JSON (DESIGN §7)");
+  c->add_option("-o,--output", f->output, "Write the report to this file (atomically) instead of stdout");
+  return c;
+}
+
+int run_collide_command(const CollideFlags& f) {
+  LoadedMesh mesh;
+  Status s = load_solid(f.mesh, &mesh);
+  if (!s) return refuse(s);
+  const std::string sha = mesh_sha256(mesh.mesh);
+  std::vector<Tree> trees(f.trees.size());
+  std::vector<collision::NamedTree> named;
+  for (size_t i = 0; i < f.trees.size(); ++i) {
+    s = read_tree(f.trees[i], &trees[i]);
+    if (!s) return refuse(s);
+    if (!trees[i].mesh_sha256.empty() && trees[i].mesh_sha256 != sha)
+      return refuse(Status::error(f.trees[i] + ": built for another mesh (sha256 differs)"));
+    named.push_back({f.trees[i], &trees[i]});
+  }
+  collision::ExperimentOptions opt;
+  opt.dynamic = !f.static_mode;
+  opt.colliders = f.colliders;
+  opt.seconds = f.seconds;
+  opt.seed = f.seed;
+  opt.fcl = !f.no_fcl;
+  collision::ExperimentReport report;
+  s = collision::run_collision_experiment(mesh.mesh, named, opt, &report);
+  if (!s) return refuse(s);
+  const std::string out = f.json ? format_json(f, report) : format_text(report);
+  if (f.output.empty()) {
+    std::fputs(out.c_str(), stdout);
+  } else {
+    s = write_file_atomic(f.output, out);
+    if (!s) return refuse(s);
+  }
+  if (!report.brute_force_agrees) {
+    std::fprintf(stderr, "vobb: collide: a tree disagrees with brute force: %s\n", report.first_disagreement.c_str());
+    return kExitCheckFailed;
+  }
+  return kExitOk;
+}
+
+}  // namespace vobb::app

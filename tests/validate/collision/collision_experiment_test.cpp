@@ -1,0 +1,195 @@
+// The collision experiment on small analytic meshes: every tree agrees with brute force, FCL's
+// replay of a baseline tree gives our yes/no answers, counts are repeatable by seed, a looser
+// tree never costs fewer tests, and bad trees are refused. Also `vobb collide` end to end.
+#include "validate/collision/collision_experiment.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include "common/io/mesh_io.h"
+#include "common/obb.h"
+#include "common/sha256.h"
+#include "common/tree_io.h"
+#include "data/analytic_meshes.h"
+#include "fast/obbtree_builder.h"
+#include "test_common.h"
+
+namespace vobb::collision {
+namespace {
+
+Tree baseline(const Mesh& mesh, int depth) {
+  ObbTreeOptions opt;
+  opt.depth = depth;
+  Tree t = build_obbtree(mesh, opt);
+  t.mesh_sha256 = mesh_sha256(mesh);
+  return t;
+}
+
+// The same tree with every box's half extents doubled: still conservative, never tighter.
+Tree inflated(const Tree& t) {
+  Tree out = t;
+  for (TreeNode& n : out.nodes) n.box.half *= 2;
+  out.method = "inflated";
+  return out;
+}
+
+ExperimentReport run(const Mesh& mesh, const std::vector<NamedTree>& trees, bool dynamic, int colliders,
+                     uint64_t seed = 1, double seconds = 2.0) {
+  ExperimentOptions opt;
+  opt.dynamic = dynamic;
+  opt.colliders = colliders;
+  opt.seconds = seconds;
+  opt.seed = seed;
+  ExperimentReport r;
+  const Status s = run_collision_experiment(mesh, trees, opt, &r);
+  EXPECT_TRUE(s) << s.message();
+  return r;
+}
+
+// 50 colliders on and near a torus: both trees agree with brute force on every query, and the
+// scene has touching and clear queries both (so the agreement is not vacuous).
+TEST(CollisionExperiment, StaticSceneAgreesWithBruteForce) {
+  const Mesh mesh = analytic::polygonal_torus().mesh;
+  const Tree base = baseline(mesh, 4), loose = inflated(base);
+  const ExperimentReport r = run(mesh, {{"base", &base}, {"loose", &loose}}, false, 50);
+  EXPECT_TRUE(r.brute_force_agrees) << r.first_disagreement;
+  EXPECT_EQ(r.queries, 50u);
+  EXPECT_GT(r.touching_queries, 0u);
+  EXPECT_LT(r.touching_queries, r.queries);
+  for (const TreeResult& t : r.trees) {
+    EXPECT_EQ(t.disagreements, 0u);
+    EXPECT_GE(t.counts.box_tests, r.queries);  // the root at least
+    EXPECT_GT(t.counts.contacts, 0u);
+  }
+  EXPECT_EQ(r.trees[0].counts.contacts, r.trees[1].counts.contacts);
+  // Inflated boxes contain the originals, so every node the baseline opens, they open too.
+  EXPECT_GE(r.trees[1].counts.box_tests, r.trees[0].counts.box_tests);
+  EXPECT_LE(reduction_pct(static_cast<double>(r.trees[0].counts.box_tests),
+                          static_cast<double>(r.trees[1].counts.box_tests)),
+            0.0);
+}
+
+// 50 falling colliders over the octahedron and the cube with a cavity (ODE): agreement on
+// every query the physics asks.
+TEST(CollisionExperiment, DynamicSceneAgreesWithBruteForce) {
+  for (const analytic::AnalyticMesh& am : {analytic::octahedron(), analytic::cube_with_cavity()}) {
+    SCOPED_TRACE(am.name);
+    const Tree base = baseline(am.mesh, 3);
+    const ExperimentReport r = run(am.mesh, {{"base", &base}}, true, 50, 3, 3.0);
+    EXPECT_TRUE(r.brute_force_agrees) << r.first_disagreement;
+    EXPECT_GT(r.queries, 50u);
+    EXPECT_GT(r.touching_queries, 0u);
+    EXPECT_GT(r.ode_contacts, 0u);
+    EXPECT_DOUBLE_EQ(r.simulated_seconds, 3.0);
+  }
+}
+
+// FCL, replaying the poses on the baseline tree loaded through our splitter and fitter, and on
+// its own OBB tree, gives the same yes/no answer as our traversal on every query.
+TEST(CollisionExperiment, FclReplayOfBaselineGivesOurAnswers) {
+  const Mesh mesh = analytic::polygonal_torus().mesh;
+  const Tree base = baseline(mesh, 4);
+  const ExperimentReport r = run(mesh, {{"base", &base}}, false, 300, 5);
+  ASSERT_TRUE(r.brute_force_agrees);
+  const FclCounts& f = r.trees[0].fcl;
+  ASSERT_TRUE(f.available) << f.note;
+  EXPECT_EQ(f.answer_disagreements, 0u);
+  EXPECT_EQ(r.fcl_own.answer_disagreements, 0u);
+  EXPECT_GT(f.bv_tests, 0u);
+  // Padding nodes only add tests; those on our nodes are at most our node count per query.
+  EXPECT_LE(f.tree_node_bv_tests, f.bv_tests);
+  EXPECT_LE(f.tree_node_bv_tests, r.queries * base.nodes.size());
+  EXPECT_GT(f.tree_node_bv_tests, 0u);
+}
+
+TEST(CollisionExperiment, SameSeedSameCounts) {
+  const Mesh mesh = analytic::polygonal_torus().mesh;
+  const Tree base = baseline(mesh, 4);
+  const ExperimentReport a = run(mesh, {{"base", &base}}, true, 40, 11, 1.0);
+  const ExperimentReport b = run(mesh, {{"base", &base}}, true, 40, 11, 1.0);
+  const ExperimentReport c = run(mesh, {{"base", &base}}, true, 40, 12, 1.0);
+  EXPECT_EQ(a.queries, b.queries);
+  EXPECT_EQ(a.trees[0].counts.box_tests, b.trees[0].counts.box_tests);
+  EXPECT_EQ(a.trees[0].counts.leaf_tests, b.trees[0].counts.leaf_tests);
+  EXPECT_EQ(a.trees[0].fcl.bv_tests, b.trees[0].fcl.bv_tests);
+  EXPECT_NE(a.trees[0].counts.box_tests, c.trees[0].counts.box_tests);
+}
+
+// A tree whose box misses one of its faces is refused before any query: pruning on it could
+// hide a touching face.
+TEST(CollisionExperiment, RefusesANonConservativeTree) {
+  const Mesh mesh = analytic::polygonal_torus().mesh;
+  Tree bad = baseline(mesh, 3);
+  bad.nodes.back().box.half *= 0.5;
+  ExperimentOptions opt;
+  opt.dynamic = false;
+  opt.colliders = 5;
+  ExperimentReport r;
+  const Status s = run_collision_experiment(mesh, {{"bad.json", &bad}}, opt, &r);
+  ASSERT_FALSE(s);
+  EXPECT_NE(s.message().find("bad.json: not conservative"), std::string::npos) << s.message();
+}
+
+struct CliRun {
+  int code;
+  std::string out, err;
+};
+
+CliRun vobb_cli(const std::string& args) {
+  const std::string err_path = test::temp_path("collide_stderr.txt");
+  const std::string cmd = std::string(VOBB_CLI) + " " + args + " 2>" + err_path;
+  CliRun r;
+  FILE* p = ::popen(cmd.c_str(), "r");
+  char buf[4096];
+  size_t n;
+  while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) r.out.append(buf, n);
+  const int status = ::pclose(p);
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::ifstream e(err_path);
+  std::stringstream ss;
+  ss << e.rdbuf();
+  r.err = ss.str();
+  std::remove(err_path.c_str());
+  return r;
+}
+
+TEST(CollideCli, StaticRunJsonAndBadInput) {
+  const Mesh torus = analytic::polygonal_torus().mesh, octa = analytic::octahedron().mesh;
+  const std::string mesh_path = test::temp_path("torus.off"), other_path = test::temp_path("octa.off");
+  const std::string tree_path = test::temp_path("torus_tree.json"), out_path = test::temp_path("collide.json");
+  ASSERT_TRUE(save_mesh(torus, mesh_path, MeshFormat::kOff));
+  ASSERT_TRUE(save_mesh(octa, other_path, MeshFormat::kOff));
+  ASSERT_TRUE(write_tree(baseline(torus, 3), tree_path));
+
+  CliRun r = vobb_cli("collide " + mesh_path + " " + tree_path + " " + tree_path +
+                      " --static --colliders 60 --json -o " + out_path);
+  EXPECT_EQ(r.code, 0) << r.err;
+  std::ifstream in(out_path);
+  const nlohmann::json j = nlohmann::json::parse(in);
+  EXPECT_EQ(j["queries"], 60);
+  EXPECT_EQ(j["brute_force_agrees"], true);
+  ASSERT_EQ(j["trees"].size(), 2u);
+  EXPECT_EQ(j["trees"][0]["box_tests"], j["trees"][1]["box_tests"]);
+  EXPECT_EQ(j["trees"][1]["reduction_pct"], 0.0);
+  for (const char* key : {"file", "box_tests", "leaf_tests", "contacts", "narrow_phase_seconds", "fcl_bv_tests",
+                          "reduction_pct"})
+    EXPECT_TRUE(j["trees"][0].contains(key)) << key;
+
+  // The tree belongs to another mesh: exit 2, one line naming the tree file.
+  r = vobb_cli("collide " + other_path + " " + tree_path + " --static --colliders 5");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_NE(r.err.find(tree_path), std::string::npos) << r.err;
+  r = vobb_cli("collide /nonexistent/mesh.off " + tree_path);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("mesh.off"), std::string::npos) << r.err;
+  for (const std::string& p : {mesh_path, other_path, tree_path, out_path}) std::remove(p.c_str());
+}
+
+}  // namespace
+}  // namespace vobb::collision
