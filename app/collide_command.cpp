@@ -87,19 +87,21 @@ std::string format_text(const collision::ExperimentReport& r) {
                 static_cast<unsigned long long>(r.touching_queries), r.dynamic ? ", " : ", ", r.simulated_seconds,
                 r.brute_force_agrees ? "yes" : ("NO (" + r.first_disagreement + ")").c_str());
   out += line;
-  std::snprintf(line, sizeof line, "%-28s %14s %10s %14s %10s %12s %14s %10s %10s\n", "tree", "box tests",
-                r.dynamic ? "per s" : "per query", "leaf tests", "contacts", "narrow s", "fcl bv tests",
-                "change %", "fcl %");
+  std::snprintf(line, sizeof line, "%-28s %14s %10s %14s %10s %10s %9s %14s %14s %9s %9s\n", "tree", "box tests",
+                r.dynamic ? "per s" : "per query", "leaf tests", "contacts", "narrow s", "change %", "fcl bv tests",
+                "fcl on nodes", "fcl %", "nodes %");
   out += line;
   const auto& t0 = r.trees.front();
   for (const auto& t : r.trees) {
-    std::snprintf(line, sizeof line, "%-28s %14llu %10.4g %14llu %10llu %12.3f %14llu %+10.2f %+10.2f\n",
+    std::snprintf(line, sizeof line, "%-28s %14llu %10.4g %14llu %10llu %10.3f %+9.2f %14llu %14llu %+9.2f %+9.2f\n",
                   t.name.c_str(), static_cast<unsigned long long>(t.counts.box_tests), t.counts.box_tests / unit,
                   static_cast<unsigned long long>(t.counts.leaf_tests),
                   static_cast<unsigned long long>(t.counts.contacts), t.narrow_phase_seconds,
-                  static_cast<unsigned long long>(t.fcl.bv_tests),
                   -reduction_pct(t0.counts.box_tests, t.counts.box_tests),
-                  -reduction_pct(t0.fcl.bv_tests, t.fcl.bv_tests));
+                  static_cast<unsigned long long>(t.fcl.bv_tests),
+                  static_cast<unsigned long long>(t.fcl.tree_node_bv_tests),
+                  -reduction_pct(t0.fcl.bv_tests, t.fcl.bv_tests),
+                  -reduction_pct(t0.fcl.tree_node_bv_tests, t.fcl.tree_node_bv_tests));
     out += line;
   }
   if (r.fcl_own.available) {
