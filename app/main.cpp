@@ -327,7 +327,8 @@ int run_obv(const std::string& mesh_path, const std::string& boxes_path, const s
 // Both builders on one mesh, both trees certified exactly; per layer the exact OMV of each and
 // the change, and each tree's weighted error e (DESIGN §1, §7).
 // With `figure_path`, also draws both trees' layers over the mesh (fast/tree_figure.h) to a PNG.
-int run_compare(const std::string& mesh_path, const BuildFlags& flags, bool json, const std::string& figure_path) {
+int run_compare(const std::string& mesh_path, const BuildFlags& flags, bool json, const std::string& figure_path,
+                const std::string& figure_up) {
   vobb::LoadedMesh loaded;
   vobb::Status s = vobb::load_solid(mesh_path, &loaded);
   if (!s) return refuse(s);
@@ -389,6 +390,8 @@ int run_compare(const std::string& mesh_path, const BuildFlags& flags, bool json
     const std::vector<vobb::FigureRow> rows = {{"obbtree", &r[0].tree}, {"variational", &r[1].tree}};
     vobb::FigureOptions fo;
     fo.levels = vobb::default_figure_levels(rows);
+    s = vobb::set_figure_up(figure_up, &fo);
+    if (!s) return refuse(s);
     vobb::RgbaImage image;
     s = vobb::render_tree_figure(gl ? gl->context() : *own, loaded.mesh, rows, fo, &image);
     if (s) s = vobb::write_png(figure_path, image);
@@ -474,6 +477,9 @@ int main(int argc, char** argv) {
   cmp->add_flag("--quiet", cf.quiet, "No progress on stderr");
   std::string compare_figure;
   cmp->add_option("--figure", compare_figure, "Also draw both trees' boxes at levels 1..8 over the mesh to this PNG");
+  std::string compare_figure_up = "y";
+  cmp->add_option("--figure-up", compare_figure_up, "The mesh's up axis in the figure: x, y, z, -x, -y or -z")
+      ->capture_default_str()->check(CLI::IsMember({"x", "y", "z", "-x", "-y", "-z"}));
 
   vobb::app::ValidateFlags validate_flags;
   CLI::App* validate_cmd = vobb::app::add_validate_command(app, &validate_flags);
@@ -506,7 +512,7 @@ int main(int argc, char** argv) {
   if (validate_cmd->parsed()) return vobb::app::run_validate_command(validate_flags);
   if (collide_cmd->parsed()) return vobb::app::run_collide_command(collide_flags);
   if (obv->parsed()) return run_obv(mesh, boxes_path, ms, backend, json);
-  if (cmp->parsed()) return run_compare(mesh, cf, compare_json, compare_figure);
+  if (cmp->parsed()) return run_compare(mesh, cf, compare_json, compare_figure, compare_figure_up);
   if (cert->parsed()) return run_certify(mesh, tree_path, json, rational, omv_path, quiet);
   return kExitBadInput;
 }

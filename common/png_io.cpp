@@ -46,15 +46,26 @@ Status encode_png(const RgbaImage& image, std::string* out, const std::string& d
   png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &sink, on_png_error, on_png_warning);
   if (png == nullptr) return Status::error(display + ": cannot encode PNG: out of memory");
   png_infop info = png_create_info_struct(png);
+  // An opaque image is written as RGB: a quarter fewer bytes to compress, same pixels on
+  // reading back (read_png restores alpha 255).
+  bool opaque = true;
+  for (size_t i = 3; i < image.rgba.size() && opaque; i += 4) opaque = image.rgba[i] == 255;
+  std::vector<uint8_t> rgb;
+  if (opaque) {
+    rgb.reserve(image.rgba.size() / 4 * 3);
+    for (size_t i = 0; i < image.rgba.size(); i += 4) rgb.insert(rgb.end(), &image.rgba[i], &image.rgba[i] + 3);
+  }
+  const size_t channels = opaque ? 3 : 4;
   std::vector<png_const_bytep> rows(image.height);
-  for (int y = 0; y < image.height; ++y) rows[y] = image.pixel(0, y);
+  for (int y = 0; y < image.height; ++y)
+    rows[y] = opaque ? rgb.data() + static_cast<size_t>(y) * image.width * channels : image.pixel(0, y);
   if (info == nullptr || setjmp(png_jmpbuf(png))) {
     png_destroy_write_struct(&png, &info);
     out->clear();
     return Status::error(display + ": cannot encode PNG: " + sink.message);
   }
   png_set_write_fn(png, out, append_to_string, flush_nothing);
-  png_set_IHDR(png, info, image.width, image.height, 8, PNG_COLOR_TYPE_RGBA, PNG_INTERLACE_NONE,
+  png_set_IHDR(png, info, image.width, image.height, 8, opaque ? PNG_COLOR_TYPE_RGB : PNG_COLOR_TYPE_RGBA, PNG_INTERLACE_NONE,
                PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
   png_set_compression_level(png, 9);
   png_write_info(png, info);

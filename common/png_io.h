@@ -14,8 +14,9 @@
 
 namespace vobb {
 
-// Encodes `image` as a PNG in memory. Precondition: width, height >= 1 and rgba.size() ==
-// width * height * 4 (checked: an error, not an abort).
+// Encodes `image` as a PNG in memory: RGB when every alpha is 255, else RGBA.
+// Precondition: width, height >= 1 and rgba.size() == width * height * 4 (checked: an error,
+// not an abort).
 Status encode_png(const RgbaImage& image, std::string* png, const std::string& display);
 
 // encode_png, then write_file_atomic to `path`.

@@ -104,33 +104,45 @@ std::string gl_error_name(GLenum e) {
   }
 }
 
-// The camera: world point p maps to q = (p - centre) / radius in the unit ball, and q to clip
-// coordinates by an orthographic projection along the view frame, with a margin of kMargin.
+// The view frame: z towards the viewer, x screen right, y screen up.
+struct ViewFrame {
+  Vec3 x, y, z;
+};
+
+ViewFrame view_frame(const FigureOptions& o) {
+  ViewFrame f;
+  f.z = o.view.normalized();
+  f.x = o.up.cross(f.z).normalized();
+  f.y = f.z.cross(f.x);
+  return f;
+}
+
+// The camera: world point p maps to q = (p - centre) / radius, inside the unit ball, and q to
+// clip coordinates by an orthographic projection along the view frame. Depth: NDC z = -z.q /
+// 1.01, inside (-1, 1) with room for the edges' depth bias. Screen: the square about the
+// midpoint of the drawn points' screen extent, its half side the larger half extent, maps to
+// the panel less a margin of `margin_px` on each side.
 struct Camera {
-  Vec3 centre;
-  double radius = 1;
   std::array<float, 16> view_proj{};  // column-major, applied to q
   Vec3 light;                          // unit, towards the light
 };
 
-constexpr double kMargin = 1.04;  // the ball's silhouette stays 2 % inside each panel edge
-
-Camera make_camera(const Vec3& centre, double radius, const FigureOptions& o) {
+Camera make_camera(const ViewFrame& f, const Vec3& lo, const Vec3& hi, double margin_px, int panel_px) {
+  // lo, hi: the extent of x.q and y.q over the drawn points (components 0 and 1).
   Camera cam;
-  cam.centre = centre;
-  cam.radius = radius;
-  const Vec3 z = o.view.normalized();       // towards the viewer
-  const Vec3 x = o.up.cross(z).normalized();  // screen right
-  const Vec3 y = z.cross(x);                  // screen up
-  const double s = 1.0 / kMargin;
-  // Rows of the 3x3 part: s x, s y, -s z (NDC depth grows away from the viewer); w = 1.
-  const Vec3 rows[3] = {s * x, s * y, -s * z};
+  const double half = std::max(hi[0] - lo[0], hi[1] - lo[1]) / 2;
+  const double s = (1.0 - 2.0 * margin_px / panel_px) / half;
+  const double mx = (lo[0] + hi[0]) / 2, my = (lo[1] + hi[1]) / 2;
+  const Vec3 rows[3] = {s * f.x, s * f.y, -f.z / 1.01};
+  const double shift[3] = {-s * mx, -s * my, 0};
   cam.view_proj.fill(0.0f);
-  for (int r = 0; r < 3; ++r)
+  for (int r = 0; r < 3; ++r) {
     for (int c = 0; c < 3; ++c) cam.view_proj[c * 4 + r] = static_cast<float>(rows[r][c]);
+    cam.view_proj[12 + r] = static_cast<float>(shift[r]);
+  }
   cam.view_proj[15] = 1.0f;
   // Light from the viewer's upper left, a little in front.
-  cam.light = (-0.45 * x + 0.65 * y + 0.9 * z).normalized();
+  cam.light = (-0.45 * f.x + 0.65 * f.y + 0.9 * f.z).normalized();
   return cam;
 }
 
@@ -183,6 +195,18 @@ std::array<uint8_t, 4> figure_box_color(size_t index) {
   return out;
 }
 
+Status set_figure_up(const std::string& axis, FigureOptions* o) {
+  const bool negative = !axis.empty() && axis[0] == '-';
+  const std::string name = negative ? axis.substr(1) : axis;
+  if (name.size() != 1 || name[0] < 'x' || name[0] > 'z')
+    return Status::error("figure up axis '" + axis + "': expected x, y, z, -x, -y or -z");
+  const int k = name[0] - 'x';
+  const Vec3 up = (negative ? -1.0 : 1.0) * Vec3::Unit(k);
+  o->up = up;
+  o->view = Vec3::Unit((k + 1) % 3) - 0.5 * Vec3::Unit((k + 2) % 3) + 0.45 * up;
+  return Status::ok();
+}
+
 PanelRect figure_panel(const FigureOptions& o, int row, int column) {
   PanelRect r;
   r.side = o.panel_px;
@@ -228,10 +252,29 @@ Status render_tree_figure(const GlContext& context, const Mesh& mesh, const std:
         for (const Vec3& c : corners(rows[r].tree->nodes[id].box)) radius = std::max(radius, (c - centre).norm());
     }
   if (!(radius > 0) || !std::isfinite(radius)) return fail("the mesh and boxes have no extent");
-  const Camera cam = make_camera(centre, radius, options);
   auto to_unit = [&](const Vec3& p, float q[3]) {
     for (int k = 0; k < 3; ++k) q[k] = static_cast<float>((p[k] - centre[k]) / radius);
   };
+  // The screen extent of everything drawn, in units of the ball.
+  const ViewFrame frame = view_frame(options);
+  Vec3 lo = Vec3::Constant(HUGE_VAL), hi = Vec3::Constant(-HUGE_VAL);
+  auto extend = [&](const Vec3& p) {
+    const Vec3 q = (p - centre) / radius;
+    const Vec3 screen(frame.x.dot(q), frame.y.dot(q), 0);
+    lo = lo.cwiseMin(screen);
+    hi = hi.cwiseMax(screen);
+  };
+  for (const Vec3& v : mesh.vertices) extend(v);
+  for (int r = 0; r < n_rows; ++r)
+    for (const auto& ids : layers[r])
+      for (int32_t id : ids)
+        for (const Vec3& c : corners(rows[r].tree->nodes[id].box)) extend(c);
+  if (!(std::max(hi[0] - lo[0], hi[1] - lo[1]) > 1e-9)) return fail("the mesh and boxes have no extent on screen");
+  // Margin: an edge's quad reaches half its width past the edge's end and to either side, so
+  // within edge_width_px of a drawn point; 2 px and 2 % more keep the panel's rim clear.
+  const double margin_px = options.edge_width_px + 2.0 + 0.02 * options.panel_px;
+  if (2 * margin_px >= options.panel_px) return fail("edges too wide for the panel");
+  const Camera cam = make_camera(frame, lo, hi, margin_px, options.panel_px);
 
   // Mesh: three vertices per face, each with the face's unit normal (flat shading).
   std::vector<float> mesh_data;

@@ -3,8 +3,9 @@
 //
 // Drawn offscreen through a GlContext (gl_context.h) into a multisampled framebuffer and read
 // back as RGBA8. Every panel uses the same orthographic camera: a fixed oblique view along
-// `FigureOptions::view`, fitted to the ball about the mesh's bounds centre that holds the mesh
-// and every box drawn, so all panels share one scale and nothing is cut off.
+// `FigureOptions::view`, framed so that the mesh and every box drawn in any panel fit inside
+// each panel with a margin of edge_width_px + 2 px + 2 %: all panels share one scale, nothing
+// is cut off, and a panel's rim shows the background.
 //
 // In a panel, layer L of a tree (tree.h: the nodes at level L and every leaf above it) is
 // drawn as each box's 12 edges in a colour of its own (figure_box_color) over a faint fill of
@@ -41,11 +42,16 @@ struct FigureOptions {
   int samples = 8;          // multisampling; clamped to what the renderer offers (1: none)
   float edge_width_px = 1.6f;  // box edges, pixels
   float fill_alpha = 0.12f;    // box faces' opacity; 0 draws no fill
-  Vec3 view = Vec3(1.0, 0.7, 1.5);  // towards the viewer (world coordinates); need not be unit
-  Vec3 up = Vec3(0.0, 1.0, 0.0);    // world up; must not be parallel to `view`
+  Vec3 view = Vec3(-0.5, 0.45, 1.0);  // towards the viewer (world coordinates); need not be unit
+  Vec3 up = Vec3(0.0, 1.0, 0.0);      // world up; must not be parallel to `view`
   std::array<uint8_t, 4> background = {255, 255, 255, 255};  // inside panels
   std::array<uint8_t, 4> gap_color = {190, 190, 190, 255};   // the border
 };
+
+// Sets `up` to a world axis, "x", "y" or "z", optionally signed ("-z"), and `view` to the same
+// oblique direction about it as the default about +y: up u = +-e_k, view = e_(k+1) - 0.5
+// e_(k+2) + 0.45 u (indices mod 3). Meshes come y-up or z-up; this stands either upright.
+Status set_figure_up(const std::string& axis, FigureOptions* options);
 
 // The default columns for these rows (see FigureOptions::levels).
 std::vector<int> default_figure_levels(const std::vector<FigureRow>& rows);

@@ -51,6 +51,9 @@ FigureOptions small_options() {
   o.panel_px = 96;
   o.gap_px = 2;
   o.edge_width_px = 3;  // wide enough for interior pixels that every sample covers
+  // Pinned, not the default, so that a change of the default look does not move the brick's
+  // coincident box edges (from which only one colour may show) under these checks.
+  o.view = Vec3(1.0, 0.7, 1.5);
   return o;
 }
 
@@ -61,6 +64,20 @@ TEST(TreeFigure, DefaultLevelsAreOneToDepthCappedAtEight) {
   EXPECT_EQ(default_figure_levels({{"a", &shallow}}), (std::vector<int>{1, 2, 3}));
   EXPECT_EQ(default_figure_levels({{"a", &shallow}, {"b", &deep}}), (std::vector<int>{1, 2, 3, 4, 5, 6, 7, 8}));
   EXPECT_EQ(default_figure_levels({{"a", &root_only}}), (std::vector<int>{0}));
+}
+
+TEST(TreeFigure, UpAxisSetsAnObliqueViewAboutIt) {
+  FigureOptions o;
+  ASSERT_TRUE(set_figure_up("y", &o));
+  const FigureOptions defaults;
+  EXPECT_EQ(o.view, defaults.view);
+  EXPECT_EQ(o.up, defaults.up);
+  ASSERT_TRUE(set_figure_up("-z", &o));
+  EXPECT_EQ(o.up, Vec3(0, 0, -1));
+  EXPECT_EQ(o.view, Vec3(1, -0.5, -0.45));
+  EXPECT_FALSE(set_figure_up("w", &o));
+  EXPECT_FALSE(set_figure_up("", &o));
+  EXPECT_FALSE(set_figure_up("--y", &o));
 }
 
 TEST(TreeFigure, BoxColoursOfALayerDiffer) {
@@ -89,8 +106,8 @@ TEST(TreeFigure, GridOfPanelsShowsMeshAndBoxes) {
     for (int c = 0; c < 2; ++c) {
       const PanelRect p = figure_panel(o, r, c);
       SCOPED_TRACE("panel row " + std::to_string(r) + " column " + std::to_string(c));
-      // The camera fits the ball holding mesh and boxes with a 4 % margin, so the panel's
-      // corner pixels (at sqrt 2 of the half side) lie outside it: the background, exactly.
+      // The camera keeps everything drawn at least edge width + 2 px from the panel's rim
+      // (tree_figure.h), so the corner pixels are the background, exactly.
       for (int x : {p.x0, p.x0 + p.side - 1})
         for (int y : {p.y0, p.y0 + p.side - 1}) EXPECT_TRUE(same_rgba(img.pixel(x, y), o.background));
       // The centre looks at the brick: most pixels of a 9x9 window there are the mesh's grey
@@ -138,9 +155,20 @@ TEST(TreeFigure, LevelsAndPanelSizeFollowOptions) {
   ASSERT_TRUE(s) << s.message();
   EXPECT_EQ(img.width, 4 * 40);
   EXPECT_EQ(img.height, 40);
-  // Level 5 shows the leaves, as level 2 does: the same pixels.
-  for (int y = 0; y < 40; ++y)
-    EXPECT_EQ(std::memcmp(img.pixel(2 * 40, y), img.pixel(3 * 40, y), 40 * 4), 0) << "row " << y;
+  // Level 5 shows the leaves, as level 2 does. The same scene at another window offset may
+  // rasterize a few edge pixels differently (float rounding of the viewport transform moves a
+  // vertex by a sub-pixel step, flipping a sample's coverage), so count differing pixels: a
+  // sliver along the edges, against a different layer (level 1) that differs far more.
+  auto differing = [&](int col_a, int col_b) {
+    int n = 0;
+    for (int y = 0; y < 40; ++y)
+      for (int x = 0; x < 40; ++x) n += std::memcmp(img.pixel(col_a * 40 + x, y), img.pixel(col_b * 40 + x, y), 4) != 0;
+    return n;
+  };
+  const int same_layer = differing(2, 3), other_layer = differing(1, 3);
+  std::printf("differing pixels: level 2 vs 5: %d, level 1 vs 5: %d\n", same_layer, other_layer);
+  EXPECT_LE(same_layer, 16) << "of 1600";
+  EXPECT_GE(other_layer, 4 * same_layer + 40);
 }
 
 TEST(TreeFigure, BadInputIsAStatusNotACrash) {
@@ -175,6 +203,20 @@ TEST(TreeFigure, PngRoundTripKeepsEveryPixel) {
   ASSERT_TRUE(r) << r.message();
   EXPECT_EQ(back.width, img.width);
   EXPECT_EQ(back.height, img.height);
+  EXPECT_TRUE(back.rgba == img.rgba);
+}
+
+TEST(PngIo, TranslucentImageRoundTripsAsRgba) {
+  RgbaImage img;
+  img.width = 5;
+  img.height = 3;
+  for (int i = 0; i < 5 * 3 * 4; ++i) img.rgba.push_back(static_cast<uint8_t>(i * 53 + 7));
+  const std::string path = test::temp_path("translucent.png");
+  ASSERT_TRUE(write_png(path, img));
+  RgbaImage back;
+  const Status r = read_png(path, &back);
+  std::remove(path.c_str());
+  ASSERT_TRUE(r) << r.message();
   EXPECT_TRUE(back.rgba == img.rgba);
 }
 
