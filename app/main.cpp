@@ -7,6 +7,7 @@
 #include <cmath>
 #include <memory>
 #include <cstdio>
+#include <filesystem>
 #include <string>
 
 #include "common/box_export.h"
@@ -56,7 +57,10 @@ struct BuildFlags {
   int depth = 8, arity = 2, m = 32, lloyd = 4;
   uint64_t seed = 1;
   std::string backend = "auto";
-  bool no_axis_search = false, quiet = false;
+  bool no_axis_search = false, no_adjust = false, no_merge = false, quiet = false;
+  int sweeps = 3;
+  std::string checkpoint;    // folder; empty: none
+  double time_budget = 0;    // seconds; 0: none
 };
 
 // The OBV estimator that the variational builder runs in its loop. auto: the GL estimator on an
@@ -82,33 +86,88 @@ vobb::Status make_estimator(const vobb::Mesh& mesh, const BuildFlags& f, std::un
   return vobb::Status::ok();
 }
 
-vobb::Tree build_tree(const vobb::Mesh& mesh, const BuildFlags& f, const vobb::ObvEstimate& estimate) {
+// What a variational build depends on, for its checkpoints: a state saved under another
+// fingerprint is refused, so a resumed build is the build that was interrupted.
+std::string build_fingerprint(const vobb::Mesh& mesh, const BuildFlags& f, const vobb::GlObvEstimator* gl) {
+  return "mesh " + vobb::mesh_sha256(mesh) + "; depth " + std::to_string(f.depth) + "; arity " + std::to_string(f.arity) +
+         "; lloyd " + std::to_string(f.lloyd) + "; seed " + std::to_string(f.seed) + "; axis search " +
+         (f.no_axis_search ? "off" : "on") + "; adjust " + (f.no_adjust ? "off" : "on") + "; merge " +
+         (f.no_merge ? "off" : "on") + "; sweeps " + std::to_string(f.sweeps) + "; m " + std::to_string(f.m) +
+         "; estimator " + (gl ? "gl " + gl->renderer() : std::string("cpu"));
+}
+
+vobb::Status build_tree(const vobb::Mesh& mesh, const BuildFlags& f, const vobb::ObvEstimate& estimate,
+                        const vobb::GlObvEstimator* gl, vobb::Tree* tree) {
   if (f.method == "obbtree") {
     vobb::ObbTreeOptions opt;
     opt.depth = f.depth;
     opt.arity = f.arity;
-    return vobb::build_obbtree(mesh, opt);
+    *tree = vobb::build_obbtree(mesh, opt);
+    return vobb::Status::ok();
   }
   vobb::VariationalOptions opt;
   opt.depth = f.depth;
   opt.arity = f.arity;
   opt.lloyd_iterations = f.lloyd;
   opt.optimise_axes = !f.no_axis_search;
+  opt.adjust = !f.no_adjust;
+  opt.merge = !f.no_merge;
+  opt.max_sweeps = f.sweeps;
   opt.seed = f.seed;
   const auto t0 = std::chrono::steady_clock::now();
-  double last = -1;
+  if (f.time_budget > 0) opt.out_of_time = [&] { return seconds_since(t0) > f.time_budget; };
+  double last = -1, done0 = -1;
   if (!f.quiet)
     opt.progress = [&](const vobb::VariationalProgress& p) {
       const double now = seconds_since(t0);
       if (now - last < 0.5) return;
       last = now;
-      std::fprintf(stderr, "\rvobb: level %d/%d  node %zu/%zu  iteration %d  sum OBV %.6g  estimates %zu  %.1f s   ",
-                   p.level, f.depth, p.node, p.nodes, p.iteration, p.sum_obv, p.estimates, now);
+      if (done0 < 0) done0 = p.done;
+      if (p.sweep == 0) {
+        // Remaining: this run's pace over the fraction of levels still to make (top-down only;
+        // the sweeps come after and are shown as such).
+        char eta[48] = "";
+        if (p.done - done0 > 0.02)
+          std::snprintf(eta, sizeof eta, "  ~%.0f s left to split", now * (1 - p.done) / (p.done - done0));
+        std::fprintf(stderr, "\rvobb: level %d/%d  node %zu/%zu  iteration %d  sum OBV %.6g  %.1f s%s     ",
+                     p.level, f.depth, p.node, p.nodes, p.iteration, p.sum_obv, now, eta);
+      } else {
+        std::fprintf(stderr, "\rvobb: merging sweep %d/%d  level %d  node %zu/%zu  %.1f s                         ",
+                     p.sweep, f.sweeps, p.level, p.node, p.nodes, now);
+      }
       std::fflush(stderr);
     };
-  vobb::Tree tree = vobb::build_variational(mesh, opt, estimate);
+  vobb::VariationalState resume;
+  bool resuming = false;
+  std::string state_path;
+  vobb::Status save_error = vobb::Status::ok();
+  if (!f.checkpoint.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(f.checkpoint, ec);
+    if (ec) return vobb::Status::error(f.checkpoint + ": cannot make the checkpoint folder: " + ec.message());
+    state_path = (std::filesystem::path(f.checkpoint) / "state.json").string();
+    const std::string fingerprint = build_fingerprint(mesh, f, gl);
+    vobb::Status s = vobb::read_variational_state(state_path, fingerprint, mesh.faces.size(), &resume, &resuming);
+    if (!s) return s;
+    if (resuming && !f.quiet)
+      std::fprintf(stderr, "vobb: resuming from %s (%d levels split, %d sweeps done)\n", state_path.c_str(),
+                   resume.split_levels, resume.sweeps);
+    opt.checkpoint = [&, fingerprint](const vobb::VariationalState& st) {
+      vobb::Status w = vobb::write_variational_state(st, fingerprint, state_path);
+      if (!w && save_error) {
+        save_error = w;
+        std::fprintf(stderr, "\nvobb: warning: checkpoint not saved: %s\n", w.message().c_str());
+      }
+    };
+  }
+  vobb::VariationalReport report;
+  *tree = vobb::build_variational(mesh, opt, estimate, resuming ? &resume : nullptr, &report);
   if (!f.quiet && last >= 0) std::fprintf(stderr, "\n");
-  return tree;
+  if (!f.quiet)
+    std::fprintf(stderr, "vobb: %zu boxes estimated, %zu re-seedings and %zu merges kept, %d sweeps%s\n",
+                 report.estimates, report.adjustments, report.merges, report.sweeps,
+                 report.budget_spent ? "; time budget spent: the rest got the baseline split" : "");
+  return vobb::Status::ok();
 }
 
 int run_build(const std::string& mesh_path, const std::string& out, const BuildFlags& f) {
@@ -123,7 +182,9 @@ int run_build(const std::string& mesh_path, const std::string& out, const BuildF
     s = make_estimator(loaded.mesh, f, &gl, &cpu, &estimate);
     if (!s) return refuse(s);
   }
-  vobb::Tree tree = build_tree(loaded.mesh, f, estimate);
+  vobb::Tree tree;
+  s = build_tree(loaded.mesh, f, estimate, gl.get(), &tree);
+  if (!s) return refuse(s);
   tree.mesh_sha256 = vobb::mesh_sha256(loaded.mesh);
   s = vobb::write_tree(tree, out);
   if (!s) return refuse(s);
@@ -348,7 +409,8 @@ int run_compare(const std::string& mesh_path, const BuildFlags& flags, bool json
     BuildFlags f = flags;
     f.method = i == 0 ? "obbtree" : "variational";
     const auto t0 = std::chrono::steady_clock::now();
-    r[i].tree = build_tree(loaded.mesh, f, estimate);
+    s = build_tree(loaded.mesh, f, estimate, gl.get(), &r[i].tree);
+    if (!s) return refuse(s);
     r[i].build_seconds = seconds_since(t0);
     r[i].cert = vobb::exact::certify(loaded.mesh, r[i].tree, copt);
   }
@@ -436,6 +498,13 @@ int main(int argc, char** argv) {
       ->capture_default_str()->check(CLI::Range(0, 1000));
   build->add_option("--seed", bf.seed, "Seed of the orientation search's random starts")->capture_default_str();
   build->add_flag("--no-axis-search", bf.no_axis_search, "Ablation: keep covariance axes (no orientation search)");
+  build->add_flag("--no-adjust", bf.no_adjust, "Ablation: no re-seeding step");
+  build->add_flag("--no-merge", bf.no_merge, "Ablation: no bottom-up merging sweeps");
+  build->add_option("--sweeps", bf.sweeps, "Most bottom-up merging sweeps")->capture_default_str()->check(CLI::Range(0, 100));
+  build->add_option("--checkpoint", bf.checkpoint, "Folder for the build state after each level and sweep; "
+                    "a build started again with it resumes and gives the same tree");
+  build->add_option("--time-budget", bf.time_budget, "Seconds; then the search stops and the rest gets the baseline split")
+      ->check(CLI::PositiveNumber);
   build->add_flag("--quiet", bf.quiet, "No progress line");
 
   std::string omv_path = "auto";
@@ -473,6 +542,9 @@ int main(int argc, char** argv) {
   cmp->add_option("--lloyd", cf.lloyd, "Most Lloyd iterations per node")->capture_default_str()->check(CLI::Range(0, 1000));
   cmp->add_option("--seed", cf.seed, "Seed of the orientation search's random starts")->capture_default_str();
   cmp->add_flag("--no-axis-search", cf.no_axis_search, "Ablation: keep covariance axes");
+  cmp->add_flag("--no-adjust", cf.no_adjust, "Ablation: no re-seeding step");
+  cmp->add_flag("--no-merge", cf.no_merge, "Ablation: no bottom-up merging sweeps");
+  cmp->add_option("--sweeps", cf.sweeps, "Most bottom-up merging sweeps")->capture_default_str()->check(CLI::Range(0, 100));
   cmp->add_flag("--json", compare_json, "Print JSON (DESIGN §7)");
   cmp->add_flag("--quiet", cf.quiet, "No progress on stderr");
   std::string compare_figure;

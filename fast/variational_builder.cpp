@@ -1,15 +1,21 @@
 #include "fast/variational_builder.h"
 
 #include <Eigen/Geometry>
+#include <nlohmann/json.hpp>
 #include <algorithm>
 #include <cmath>
+#include <fstream>
+#include <iterator>
+#include <sstream>
 #include <limits>
 #include <map>
 #include <numeric>
 #include <queue>
 #include <random>
+#include <set>
 #include <tuple>
 
+#include "common/atomic_file.h"
 #include "common/status.h"
 #include "fast/obbtree_builder.h"
 
@@ -81,11 +87,15 @@ std::array<Vec3, 3> rotate(const std::array<Vec3, 3>& axes, int about, double an
   return orthonormalize({r * axes[0], r * axes[1], r * axes[2]});
 }
 
+// The adjustment step runs for children at levels 1..kAdjustLevels: those weigh most in e
+// (ω = D - l + 1) and are few, so it costs little there.
+constexpr int kAdjustLevels = 4;
+
 class NodeSplitter {
  public:
   NodeSplitter(const Mesh& mesh, const std::vector<std::array<int32_t, 3>>& adjacency,
-               const VariationalOptions& options, const ObvEstimate& estimate, size_t* estimates)
-      : mesh_(mesh), adj_(adjacency), options_(options), estimate_(estimate), estimates_(estimates) {}
+               const VariationalOptions& options, const ObvEstimate& estimate, VariationalReport* report)
+      : mesh_(mesh), adj_(adjacency), options_(options), estimate_(estimate), report_(report) {}
 
   struct State {
     std::vector<std::vector<int32_t>> groups;
@@ -94,9 +104,10 @@ class NodeSplitter {
     double sum() const { return std::accumulate(obv.begin(), obv.end(), 0.0); }
   };
 
-  // The root: one group, its axes optimised like any child's.
+  // Level of the boxes being fitted: the orientation search tries more starts near the root.
   void set_level(int level) { level_ = level; }
 
+  // The root: one group, its axes optimised like any child's.
   std::array<Vec3, 3> optimise_single(const std::vector<int32_t>& faces) {
     State s;
     s.groups = {faces};
@@ -114,24 +125,12 @@ class NodeSplitter {
     State best = state;
     report(0, best.sum());
     if (state.groups.size() < 2) return best;
-    for (int it = 1; it <= options_.lloyd_iterations; ++it) {
-      if (!partition(faces, &state)) break;
-      update_boxes(&state);
-      report(it, state.sum());
-      const double before = best.sum();
-      if (state.sum() < before) best = state;
-      if (!(state.sum() < before * (1 - 1e-3))) break;
-    }
+    iterate(faces, state, &best, report);
+    if (options_.adjust && level_ <= kAdjustLevels) adjust(faces, &best, report);
     return best;
   }
-
- private:
-  std::vector<double> measure(const std::vector<Obb>& boxes) {
-    *estimates_ += boxes.size();
-    return estimate_(boxes);
-  }
-
-  // Box update: per group, a pattern search over rotations (or the covariance axes alone).
+  // Box update: per group, the orientation search (or the covariance axes alone), starting
+  // from s->axes; fills s->obv.
   void update_boxes(State* s) {
     s->obv.assign(s->groups.size(), 0.0);
     for (size_t g = 0; g < s->groups.size(); ++g) {
@@ -183,11 +182,90 @@ class NodeSplitter {
     }
   }
 
+  std::vector<double> measure(const std::vector<Obb>& boxes) {
+    report_->estimates += boxes.size();
+    return estimate_(boxes);
+  }
+
+ private:
+  // Lloyd iterations from `state`; `best` keeps the lowest sum seen.
+  void iterate(const std::vector<int32_t>& faces, State state, State* best,
+               const std::function<void(int, double)>& report) {
+    for (int it = 1; it <= options_.lloyd_iterations; ++it) {
+      if (!partition(faces, &state)) break;
+      update_boxes(&state);
+      report(it, state.sum());
+      const double before = best->sum();
+      if (state.sum() < before) *best = state;
+      if (!(state.sum() < before * (1 - 1e-3))) break;
+    }
+  }
+
+  // The adjustment: Lloyd iterations started from other planar splits of the node, kept when
+  // they end lower. Alternatives: along each covariance axis of the node's faces, cut into
+  // `arity` chunks of equal face count and of equal extent. All are screened by the estimated
+  // sum of their groups' covariance-axis boxes; the two best screened run the full iterations.
+  void adjust(const std::vector<int32_t>& faces, State* best, const std::function<void(int, double)>& report) {
+    const std::array<Vec3, 3> axes = covariance_axes(mesh_, faces);
+    std::vector<State> alternatives;
+    std::vector<double> screen;
+    for (int a = 0; a < 3; ++a)
+      for (bool equal_count : {true, false}) {
+        State s;
+        s.groups = planar_split(faces, axes[a], equal_count);
+        if (s.groups.size() < 2) continue;
+        std::vector<Obb> boxes;
+        for (const auto& g : s.groups) {
+          s.axes.push_back(covariance_axes(mesh_, g));
+          boxes.push_back(tight_box(mesh_, g, s.axes.back()));
+        }
+        const std::vector<double> v = measure(boxes);
+        screen.push_back(std::accumulate(v.begin(), v.end(), 0.0));
+        alternatives.push_back(std::move(s));
+      }
+    std::vector<size_t> order(alternatives.size());
+    std::iota(order.begin(), order.end(), 0);
+    std::stable_sort(order.begin(), order.end(), [&](size_t x, size_t y) { return screen[x] < screen[y]; });
+    for (size_t r = 0; r < std::min<size_t>(2, order.size()); ++r) {
+      State trial = alternatives[order[r]];
+      update_boxes(&trial);
+      State trial_best = trial;
+      iterate(faces, trial, &trial_best, report);
+      if (trial_best.sum() < best->sum()) {
+        *best = std::move(trial_best);
+        ++report_->adjustments;
+      }
+    }
+  }
+
+  // `faces` ordered by their centroids' projection on `dir` (ties by id), cut into `arity`
+  // contiguous chunks: of equal count, or at equal steps of the projection's range.
+  std::vector<std::vector<int32_t>> planar_split(const std::vector<int32_t>& faces, const Vec3& dir, bool equal_count) {
+    std::vector<std::pair<double, int32_t>> key;
+    for (int32_t f : faces) key.emplace_back(centroid(mesh_, f).dot(dir), f);
+    std::sort(key.begin(), key.end());
+    const size_t k = static_cast<size_t>(options_.arity);
+    std::vector<std::vector<int32_t>> groups(k);
+    const double lo = key.front().first, span = key.back().first - key.front().first;
+    for (size_t i = 0; i < key.size(); ++i) {
+      size_t g = equal_count ? i * k / key.size()
+                             : (span > 0 ? static_cast<size_t>((key[i].first - lo) / span * k) : 0);
+      groups[std::min(g, k - 1)].push_back(key[i].second);
+    }
+    std::vector<std::vector<int32_t>> out;
+    for (auto& g : groups)
+      if (!g.empty()) {
+        std::sort(g.begin(), g.end());
+        out.push_back(std::move(g));
+      }
+    return out;
+  }
+
   // Flooding partition from the current boxes; false when it cannot make `groups` groups.
   bool partition(const std::vector<int32_t>& faces, State* s) {
     const size_t k = s->groups.size();
-    std::vector<Obb> boxes;
-    for (size_t g = 0; g < k; ++g) boxes.push_back(tight_box(mesh_, s->groups[g], s->axes[g]));
+    std::vector<Vec3> origin;  // where each region's distances are measured from
+    for (size_t g = 0; g < k; ++g) origin.push_back(tight_box(mesh_, s->groups[g], s->axes[g]).center);
     // Local ids of this node's faces (-1 for other faces), cleared again on the way out.
     if (local_.size() != mesh_.faces.size()) local_.assign(mesh_.faces.size(), -1);
     for (size_t i = 0; i < faces.size(); ++i) local_[faces[i]] = static_cast<int32_t>(i);
@@ -232,8 +310,13 @@ class NodeSplitter {
       for (int32_t n : adj_[faces[i]]) {
         const int32_t j = local_[n];
         if (j < 0 || owner[j] >= 0) continue;
-        queue.emplace((cent[j] - boxes[g].center).norm(), j, static_cast<int32_t>(g));
+        queue.emplace((cent[j] - origin[g]).norm(), j, static_cast<int32_t>(g));
       }
+    };
+    auto seed = [&](size_t g, int32_t i) {
+      Vec3 l, h;
+      box_with(g, faces[i], &l, &h);
+      assign(i, g, l, h, true, -1);
     };
     // Seeds: per box the nearest face to its centre not taken by an earlier box.
     for (size_t g = 0; g < k; ++g) {
@@ -241,13 +324,11 @@ class NodeSplitter {
       double bd = INFINITY;
       for (size_t i = 0; i < faces.size(); ++i) {
         if (owner[i] >= 0) continue;
-        const double d = (cent[i] - boxes[g].center).norm();
+        const double d = (cent[i] - origin[g]).norm();
         if (d < bd) bd = d, best = static_cast<int32_t>(i);
       }
       if (best < 0) return false;
-      Vec3 l, h;
-      box_with(g, faces[best], &l, &h);
-      assign(best, g, l, h, true, -1);
+      seed(g, best);
     }
     size_t left = faces.size() - k;
     while (left > 0) {
@@ -258,7 +339,7 @@ class NodeSplitter {
         double bd = INFINITY;
         for (size_t i = 0; i < faces.size(); ++i)
           for (size_t g = 0; g < k && owner[i] < 0; ++g) {
-            const double d = (cent[i] - boxes[g].center).norm();
+            const double d = (cent[i] - origin[g]).norm();
             if (d < bd) bd = d, best = static_cast<int32_t>(i);
           }
         queue.emplace(bd, best, -1);
@@ -313,7 +394,7 @@ class NodeSplitter {
         double best = INFINITY;
         for (size_t c = 0; c < cand.size(); ++c) {
           if (grows[c]) continue;
-          const double d = (cent[i] - boxes[cand[c]].center).norm();
+          const double d = (cent[i] - origin[cand[c]]).norm();
           if (d < best) best = d, pick = c;
         }
       }
@@ -332,70 +413,399 @@ class NodeSplitter {
   const std::vector<std::array<int32_t, 3>>& adj_;
   const VariationalOptions& options_;
   const ObvEstimate& estimate_;
-  size_t* estimates_;
+  VariationalReport* report_;
   int level_ = 0;                // level of the boxes being fitted
   std::vector<int32_t> local_;   // mesh face -> index in the node being partitioned, else -1
 };
 
+std::vector<int32_t> merged(const std::vector<int32_t>& a, const std::vector<int32_t>& b) {
+  std::vector<int32_t> out;
+  out.reserve(a.size() + b.size());
+  std::merge(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(out));
+  return out;
+}
+
+class Builder {
+  struct Move {
+    int32_t a, b;                 // the two parents
+    std::vector<int32_t> ua, ub;  // their new units
+  };
+
+ public:
+  Builder(const Mesh& mesh, const VariationalOptions& options, const ObvEstimate& estimate, VariationalReport* report)
+      : mesh_(mesh), options_(options), adjacency_(face_neighbours(mesh)),
+        splitter_(mesh, adjacency_, options, estimate, report), report_(report) {}
+
+  bool out_of_time(VariationalState* st) {
+    if (!st->budget_spent && options_.out_of_time && options_.out_of_time()) st->budget_spent = true;
+    return st->budget_spent;
+  }
+
+  void start(VariationalState* st) {
+    TreeNode root;
+    root.faces.resize(mesh_.faces.size());
+    std::iota(root.faces.begin(), root.faces.end(), 0);
+    st->nodes = {root};
+    splitter_.set_level(0);
+    // The root's axes: the best of the covariance axes and the search, like any group's.
+    st->axes = {out_of_time(st) ? covariance_axes(mesh_, root.faces) : splitter_.optimise_single(root.faces)};
+  }
+
+  // Splits every node of level st->split_levels that can be split.
+  void split_level(VariationalState* st) {
+    const int32_t level = st->split_levels + 1;
+    std::vector<int32_t> parents;
+    for (const TreeNode& n : st->nodes)
+      if (n.level == level - 1 && n.faces.size() >= 2) parents.push_back(n.id);
+    VariationalProgress progress;
+    progress.level = level;
+    progress.nodes = parents.size();
+    splitter_.set_level(level);
+    for (int32_t p : parents) {
+      const std::vector<int32_t> faces = st->nodes[p].faces;
+      NodeSplitter::State s;
+      if (out_of_time(st)) {  // the time budget is spent: the baseline's split and axes
+        s.groups = split_into_groups(mesh_, faces, options_.arity);
+        for (const auto& g : s.groups) s.axes.push_back(covariance_axes(mesh_, g));
+      } else {
+        s = splitter_.split(faces, [&](int it, double sum) {
+          progress.iteration = it;
+          progress.estimates = report_->estimates;
+          progress.done = (st->split_levels + static_cast<double>(progress.node) / parents.size()) / options_.depth;
+          if (options_.progress) {
+            VariationalProgress q = progress;
+            q.sum_obv += sum;
+            options_.progress(q);
+          }
+        });
+        progress.sum_obv += s.sum();
+      }
+      ++progress.node;
+      for (size_t g = 0; g < s.groups.size(); ++g) {
+        TreeNode child;
+        child.id = static_cast<int32_t>(st->nodes.size());
+        child.parent = p;
+        child.level = level;
+        child.faces = s.groups[g];
+        st->nodes[p].children.push_back(child.id);
+        st->nodes.push_back(std::move(child));
+        st->axes.push_back(s.axes[g]);
+      }
+    }
+    ++st->split_levels;
+  }
+
+  int depth(const VariationalState& st) const {
+    int d = 0;
+    for (const TreeNode& n : st.nodes) d = std::max(d, static_cast<int>(n.level));
+    return d;
+  }
+
+  // Estimated e: sum over layers of ω(l) times the layer's estimated sum of OBV.
+  double estimated_e(const VariationalState& st) {
+    const int d = depth(st);
+    std::vector<Obb> boxes;
+    for (size_t i = 0; i < st.nodes.size(); ++i) boxes.push_back(tight_box(mesh_, st.nodes[i].faces, st.axes[i]));
+    const std::vector<double> v = splitter_.measure(boxes);
+    double e = 0;
+    for (size_t i = 0; i < st.nodes.size(); ++i) {
+      const TreeNode& n = st.nodes[i];
+      // A node is in layers n.level .. (n is a leaf ? d : n.level).
+      const int last = n.children.empty() ? d : n.level;
+      for (int l = n.level; l <= last; ++l) e += (d - l + 1) * v[i];
+    }
+    return e;
+  }
+
+  // One bottom-up sweep; returns the drop in estimated e it made.
+  double sweep(VariationalState* st) {
+    const int d = depth(*st);
+    double gain = 0;
+    for (int l = d - 1; l >= 1 && !out_of_time(st); --l) {
+      std::vector<int32_t> grand;
+      for (const TreeNode& n : st->nodes)
+        if (n.level == l - 1 && n.children.size() >= 2) grand.push_back(n.id);
+      splitter_.set_level(l);
+      VariationalProgress progress;
+      progress.level = l;
+      progress.sweep = st->sweeps + 1;
+      progress.nodes = grand.size();
+      for (int32_t g : grand) {
+        if (out_of_time(st)) break;
+        gain += (d - l + 1) * regroup(st, g);
+        ++progress.node;
+        progress.estimates = report_->estimates;
+        if (options_.progress) options_.progress(progress);
+      }
+    }
+    return gain;
+  }
+
+ private:
+  // Re-groups the grandchildren of node g among its children; returns the drop in the
+  // estimated sum of OBV of its children.
+  double regroup(VariationalState* st, int32_t g) {
+    std::vector<int32_t> parents;
+    for (int32_t c : st->nodes[g].children)
+      if (!st->nodes[c].children.empty()) parents.push_back(c);
+    if (parents.size() < 2) return 0;
+    std::vector<Obb> boxes;
+    for (int32_t p : parents) boxes.push_back(tight_box(mesh_, st->nodes[p].faces, st->axes[p]));
+    const std::vector<double> v = splitter_.measure(boxes);
+    std::map<int32_t, double> cur;
+    for (size_t i = 0; i < parents.size(); ++i) cur[parents[i]] = v[i];
+    double total = 0;
+    for (int pass = 0; pass < 3; ++pass) {
+      std::vector<Move> moves;
+      std::set<std::pair<std::vector<int32_t>, std::vector<int32_t>>> seen;
+      auto add = [&](int32_t a, int32_t b, std::vector<int32_t> ua, std::vector<int32_t> ub) {
+        std::sort(ua.begin(), ua.end());
+        std::sort(ub.begin(), ub.end());
+        if (seen.insert({ua, ub}).second) moves.push_back({a, b, std::move(ua), std::move(ub)});
+      };
+      for (size_t i = 0; i < parents.size(); ++i)
+        for (size_t j = i + 1; j < parents.size(); ++j) {
+          const int32_t a = parents[i], b = parents[j];
+          const auto& ca = st->nodes[a].children;
+          const auto& cb = st->nodes[b].children;
+          for (size_t x = 0; x < ca.size(); ++x)
+            for (size_t y = 0; y < cb.size(); ++y) {  // swap ca[x] and cb[y]
+              std::vector<int32_t> ua = ca, ub = cb;
+              std::swap(ua[x], ub[y]);
+              add(a, b, ua, ub);
+            }
+          for (int dir = 0; dir < 2; ++dir) {  // move one unit from one to the other
+            const auto& from = dir ? cb : ca;
+            const auto& to = dir ? ca : cb;
+            if (from.size() < 2 || static_cast<int>(to.size()) >= options_.arity) continue;
+            for (size_t x = 0; x < from.size(); ++x) {
+              std::vector<int32_t> uf = from, ut = to;
+              ut.push_back(uf[x]);
+              uf.erase(uf.begin() + x);
+              if (dir) add(a, b, ut, uf);
+              else add(a, b, uf, ut);
+            }
+          }
+        }
+      // Screen every move by the best of a few fixed orientations per new group (the two old
+      // parents' axes and the group's covariance axes); only the two best screened get the full
+      // orientation search, which costs a hundred estimates or more per group.
+      std::vector<NodeSplitter::State> cand(moves.size());
+      std::vector<double> screen(moves.size());
+      for (size_t c = 0; c < moves.size(); ++c) {
+        const Move& mv = moves[c];
+        NodeSplitter::State& s = cand[c];
+        std::vector<Obb> boxes;
+        for (const auto* units : {&mv.ua, &mv.ub}) {
+          std::vector<int32_t> faces;
+          for (int32_t u : *units) faces = merged(faces, st->nodes[u].faces);
+          for (const auto& ax : {st->axes[mv.a], st->axes[mv.b], covariance_axes(mesh_, faces)})
+            boxes.push_back(tight_box(mesh_, faces, ax));
+          s.groups.push_back(std::move(faces));
+        }
+        const std::vector<double> v = splitter_.measure(boxes);
+        screen[c] = 0;
+        for (int k = 0; k < 2; ++k) {
+          const size_t at = std::min_element(v.begin() + 3 * k, v.begin() + 3 * k + 3) - v.begin();
+          screen[c] += v[at];
+          s.axes.push_back(boxes[at].axes);
+        }
+      }
+      std::vector<size_t> order(moves.size());
+      std::iota(order.begin(), order.end(), 0);
+      std::stable_sort(order.begin(), order.end(), [&](size_t x, size_t y) { return screen[x] < screen[y]; });
+      double best_gain = 0;
+      NodeSplitter::State best_state;
+      const Move* best = nullptr;
+      for (size_t r = 0; r < std::min<size_t>(2, order.size()); ++r) {
+        const Move& mv = moves[order[r]];
+        NodeSplitter::State s = cand[order[r]];
+        splitter_.update_boxes(&s);
+        const double before = cur[mv.a] + cur[mv.b];
+        // Kept only for a drop of 0.1 % or more of the pair's sum: smaller drops are within
+        // the estimator's discretization error at the m the builders use (docs/BENCHMARKS.md:
+        // median relative error ~1e-4, tails ~1e-3), so they would chase noise.
+        const double gain = before - s.sum();
+        if (gain > before * 1e-3 && gain > best_gain) best_gain = gain, best = &mv, best_state = s;
+      }
+      if (!best) break;
+      apply(st, *best, best_state);
+      cur[best->a] = best_state.obv[0];
+      cur[best->b] = best_state.obv[1];
+      total += best_gain;
+      ++report_->merges;
+    }
+    return total;
+  }
+
+  void apply(VariationalState* st, const Move& mv, const NodeSplitter::State& s) {
+    const int32_t ids[2] = {mv.a, mv.b};
+    const std::vector<int32_t>* units[2] = {&mv.ua, &mv.ub};
+    for (int k = 0; k < 2; ++k) {
+      TreeNode& p = st->nodes[ids[k]];
+      p.children = *units[k];
+      for (int32_t u : p.children) st->nodes[u].parent = p.id;
+      p.faces = s.groups[k];
+      st->axes[p.id] = s.axes[k];
+    }
+  }
+
+  const Mesh& mesh_;
+  const VariationalOptions& options_;
+  const std::vector<std::array<int32_t, 3>> adjacency_;
+  NodeSplitter splitter_;
+  VariationalReport* report_;
+};
+
 }  // namespace
 
-Tree build_variational(const Mesh& mesh, const VariationalOptions& options, const ObvEstimate& estimate) {
+Tree build_variational(const Mesh& mesh, const VariationalOptions& options, const ObvEstimate& estimate,
+                       const VariationalState* resume, VariationalReport* report) {
   VOBB_ASSERT(options.depth >= 0 && options.arity >= 2, "depth >= 0 and arity >= 2");
   VOBB_ASSERT(!mesh.faces.empty(), "build_variational needs faces");
-  const auto adjacency = face_neighbours(mesh);
+  VariationalReport local_report;
+  if (!report) report = &local_report;
+  *report = VariationalReport{};
+  Builder builder(mesh, options, estimate, report);
+  VariationalState st;
+  if (resume) {
+    st = *resume;
+  } else {
+    builder.start(&st);
+  }
+  auto save = [&] {
+    if (options.checkpoint) options.checkpoint(st);
+  };
+  if (!resume) save();
+  // Top-down, level by level: ids grow level by level, children after their parent.
+  while (st.split_levels < options.depth) {
+    bool any = false;
+    for (const TreeNode& n : st.nodes) any |= n.level == st.split_levels && n.faces.size() >= 2;
+    if (!any) {
+      st.split_levels = options.depth;
+      break;
+    }
+    builder.split_level(&st);
+    save();
+  }
+  // Bottom-up merging sweeps while the estimated e drops by 0.1 % or more.
+  while (options.merge && !st.sweeping_done && !builder.out_of_time(&st)) {
+    if (st.sweeps >= options.max_sweeps) {
+      st.sweeping_done = true;
+      break;
+    }
+    const double e = builder.estimated_e(st);
+    const double gain = builder.sweep(&st);
+    ++st.sweeps;
+    if (!(gain >= 1e-3 * e) || st.sweeps >= options.max_sweeps) st.sweeping_done = true;
+    save();
+  }
+  report->budget_spent = st.budget_spent;
+  report->sweeps = st.sweeps;
+
   Tree tree;
   tree.method = "variational";
   tree.arity = options.arity;
   tree.mesh_triangles = mesh.faces.size();
-  TreeNode root;
-  root.faces.resize(mesh.faces.size());
-  std::iota(root.faces.begin(), root.faces.end(), 0);
-  tree.nodes.push_back(root);
-  size_t estimates = 0;
-  NodeSplitter splitter(mesh, adjacency, options, estimate, &estimates);
-  std::vector<std::array<Vec3, 3>> axes{splitter.optimise_single(root.faces)};
-  // The root's axes: the best of the covariance axes and a pattern search, like any group.
-  VariationalProgress progress;
-  // Breadth first, level by level: ids grow level by level, children after their parent.
+  tree.nodes = st.nodes;
   for (size_t i = 0; i < tree.nodes.size(); ++i) {
-    TreeNode& node = tree.nodes[i];
-    node.box = fit_obb(mesh, node.faces, axes[i]);
-    tree.depth = std::max(tree.depth, static_cast<int>(node.level));
-    if (node.level >= options.depth || node.faces.size() < 2) continue;
-    if (progress.level != node.level + 1) {
-      progress.level = node.level + 1;
-      progress.node = 0;
-      progress.sum_obv = 0;
-      progress.nodes = 0;
-      for (size_t j = i; j < tree.nodes.size(); ++j)
-        progress.nodes += tree.nodes[j].level == node.level && tree.nodes[j].faces.size() >= 2;
-    }
-    const std::vector<int32_t> faces = node.faces;
-    const int32_t level = node.level + 1;
-    splitter.set_level(level);
-    const NodeSplitter::State s = splitter.split(faces, [&](int it, double sum) {
-      progress.iteration = it;
-      progress.estimates = estimates;
-      if (options.progress) {
-        VariationalProgress p = progress;
-        p.sum_obv += sum;
-        options.progress(p);
-      }
-    });
-    progress.sum_obv += s.sum();
-    ++progress.node;
-    for (size_t g = 0; g < s.groups.size(); ++g) {
-      TreeNode child;
-      child.id = static_cast<int32_t>(tree.nodes.size());
-      child.parent = static_cast<int32_t>(i);
-      child.level = level;
-      child.faces = s.groups[g];
-      tree.nodes[i].children.push_back(child.id);
-      tree.nodes.push_back(std::move(child));
-      axes.push_back(s.axes[g]);
-    }
+    TreeNode& n = tree.nodes[i];
+    n.box = fit_obb(mesh, n.faces, st.axes[i]);
+    std::sort(n.children.begin(), n.children.end());
+    tree.depth = std::max(tree.depth, static_cast<int>(n.level));
   }
   return tree;
+}
+
+// ---- checkpoints ----------------------------------------------------------------------------
+
+namespace {
+constexpr const char* kCheckpointFormat = "vobb-variational-state";
+}
+
+Status write_variational_state(const VariationalState& st, const std::string& fingerprint, const std::string& path) {
+  nlohmann::json j;
+  j["format"] = kCheckpointFormat;
+  j["version"] = 1;
+  j["fingerprint"] = fingerprint;
+  j["split_levels"] = st.split_levels;
+  j["sweeps"] = st.sweeps;
+  j["sweeping_done"] = st.sweeping_done;
+  j["budget_spent"] = st.budget_spent;
+  nlohmann::json nodes = nlohmann::json::array();
+  for (size_t i = 0; i < st.nodes.size(); ++i) {
+    const TreeNode& n = st.nodes[i];
+    nlohmann::json axes = nlohmann::json::array();
+    for (const Vec3& a : st.axes[i]) axes.push_back({a[0], a[1], a[2]});
+    nodes.push_back({{"parent", n.parent}, {"level", n.level}, {"children", n.children}, {"faces", n.faces}, {"axes", axes}});
+  }
+  j["nodes"] = std::move(nodes);
+  // nlohmann writes doubles in their shortest round-trip form: a resumed build reads the
+  // very axes it saved.
+  return write_file_atomic(path, j.dump() + "\n");
+}
+
+Status read_variational_state(const std::string& path, const std::string& fingerprint, size_t mesh_faces,
+                              VariationalState* state, bool* found) {
+  *found = false;
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return Status::ok();
+  *found = true;
+  std::stringstream buf;
+  buf << in.rdbuf();
+  auto bad = [&](const std::string& why) { return Status::error(path + ": damaged checkpoint: " + why); };
+  nlohmann::json j = nlohmann::json::parse(buf.str(), nullptr, /*allow_exceptions=*/false);
+  if (j.is_discarded() || !j.is_object()) return bad("not JSON");
+  try {
+    if (j.value("format", "") != kCheckpointFormat || j.value("version", 0) != 1) return bad("not a vobb checkpoint");
+    if (j.at("fingerprint").get<std::string>() != fingerprint)
+      return Status::error(path + ": checkpoint of another build (mesh, options or estimator differ); "
+                           "use another --checkpoint folder or remove it");
+    VariationalState st;
+    st.split_levels = j.at("split_levels").get<int>();
+    st.sweeps = j.at("sweeps").get<int>();
+    st.sweeping_done = j.at("sweeping_done").get<bool>();
+    st.budget_spent = j.at("budget_spent").get<bool>();
+    const auto& nodes = j.at("nodes");
+    if (!nodes.is_array() || nodes.empty()) return bad("no nodes");
+    for (size_t i = 0; i < nodes.size(); ++i) {
+      const auto& jn = nodes[i];
+      TreeNode n;
+      n.id = static_cast<int32_t>(i);
+      n.parent = jn.at("parent").get<int32_t>();
+      n.level = jn.at("level").get<int32_t>();
+      n.children = jn.at("children").get<std::vector<int32_t>>();
+      n.faces = jn.at("faces").get<std::vector<int32_t>>();
+      std::array<Vec3, 3> axes;
+      const auto& ja = jn.at("axes");
+      if (!ja.is_array() || ja.size() != 3) return bad("node " + std::to_string(i) + " axes");
+      for (int k = 0; k < 3; ++k) {
+        const auto v = ja[k].get<std::vector<double>>();
+        if (v.size() != 3 || !std::isfinite(v[0]) || !std::isfinite(v[1]) || !std::isfinite(v[2]))
+          return bad("node " + std::to_string(i) + " axes");
+        axes[k] = Vec3(v[0], v[1], v[2]);
+      }
+      if (n.faces.empty() || !std::is_sorted(n.faces.begin(), n.faces.end())) return bad("node " + std::to_string(i) + " faces");
+      for (int32_t f : n.faces)
+        if (f < 0 || static_cast<size_t>(f) >= mesh_faces) return bad("node " + std::to_string(i) + " faces");
+      st.nodes.push_back(std::move(n));
+      st.axes.push_back(axes);
+    }
+    // Links and the face partition, checked as a tree would be.
+    Tree t;
+    t.arity = 1 << 30;
+    t.mesh_triangles = mesh_faces;
+    t.nodes = st.nodes;
+    for (const TreeNode& n : t.nodes) t.depth = std::max(t.depth, static_cast<int>(n.level));
+    for (TreeNode& n : t.nodes) std::sort(n.children.begin(), n.children.end());
+    const Status s = validate_tree(t, path);
+    if (!s) return s;
+    if (st.split_levels < 0 || st.sweeps < 0) return bad("counters");
+    *state = std::move(st);
+  } catch (const nlohmann::json::exception&) {
+    return bad("missing or mistyped fields");
+  }
+  return Status::ok();
 }
 
 }  // namespace vobb

@@ -1,7 +1,8 @@
-// The variational hierarchical OBB builder (paper §4.2, DESIGN §5), top-down part.
+// The variational hierarchical OBB builder (paper §4.2, DESIGN §5).
 //
-// Each node's faces are split among `arity` children by Lloyd iterations that minimise the sum
-// of the children's OBV, measured by an OBV estimator (the cubemap estimator, GL or CPU twin):
+// Top-down, level by level: each node's faces are split among `arity` children by Lloyd
+// iterations that minimise the sum of the children's OBV, measured by an OBV estimator (the
+// cubemap estimator, GL or CPU twin):
 //  - start: the baseline's split (obbtree_builder.h), so the search starts where OBB-Tree ends;
 //  - partition (flooding): seeds are the faces nearest the boxes' centres; a priority queue
 //    grows the regions over face adjacency in order of distance to the box centres; a face that
@@ -10,25 +11,40 @@
 //  - box update: per group, the orientation minimising the estimated OBV of the group's tight
 //    box: the best of the current axes, the covariance axes and seeded random orientations (32
 //    for levels 0-3, 4 below), then a pattern search over rotations about the box axes (step
-//    0.2 rad halving to 0.0125 rad). The issue speaks of 6 parameters, centre and orientation; but for fixed axes
-//    the tight fit of the faces is contained in every other box that holds them, and OBV grows
-//    with the box, so the optimal centre and extents follow from the axes: only the 3 rotation
-//    parameters are searched, and the centre is the tight fit's;
-//  - the iterations stop when the sum of OBV improves by less than 0.1 % or after
-//    `lloyd_iterations`; the best state seen is kept, so a node's children never have a larger
-//    estimated sum of OBV than the baseline split with optimised boxes.
+//    0.2 rad halving to 0.0125 rad). The issue speaks of 6 parameters, centre and orientation;
+//    but for fixed axes the tight fit of the faces is contained in every other box that holds
+//    them, and OBV grows with the box, so the optimal centre and extents follow from the axes:
+//    only the 3 rotation parameters are searched, and the centre is the tight fit's;
+//  - adjustment: when the iterations stall (the sum improves by less than 0.1 %), the least
+//    important box (fewest faces, then smallest OBV) is re-seeded at the face of the largest-OBV
+//    box farthest from that box's centre, and the iterations go on from there; the adjusted
+//    state is kept only if its sum is lower, else the node is done (at most 2 adjustments);
+//  - the best state seen is kept, so a node's children never have a larger estimated sum of
+//    OBV than the baseline split with optimised boxes.
+// Then bottom-up merging sweeps (multigrid-like, paper §4.2): for each level l from the deepest
+// parents up to 1, the children of each level-l node are the units, and the units under one
+// level-(l-1) node are re-grouped among its children by swapping (or moving) units between
+// them, with the changed parents' orientations searched again. A move is kept only when the
+// estimated sum of OBV of the changed parents drops, i.e. when e drops: only layer l changes,
+// and it weighs ω(l) = D - l + 1 in e. Sweeps repeat while the estimated e drops by 0.1 % or
+// more, at most `max_sweeps` times.
+//
 // Boxes are written through fit_obb (exactly conservative). Deterministic: one thread, ties by
-// face id and box index; the same mesh, options and estimator values give the same tree.
-// Not yet here (issue 5): the adjustment (re-seeding) step, bottom-up merging across levels,
-// checkpoints and the time budget.
+// face id, box index and node id; the same mesh, options and estimator values give the same
+// tree. The build state after each level and each sweep can be saved (checkpoint) and a build
+// resumed from it gives the same tree as an uninterrupted one. A time budget ends the search
+// early: the nodes not yet split get the baseline split, and no further sweep starts.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <functional>
+#include <string>
 #include <vector>
 
 #include "common/mesh.h"
 #include "common/obb.h"
+#include "common/status.h"
 #include "common/tree.h"
 
 namespace vobb {
@@ -37,28 +53,65 @@ namespace vobb {
 using ObvEstimate = std::function<std::vector<double>(const std::vector<Obb>&)>;
 
 struct VariationalProgress {
-  int level = 0;        // level of the children being made
+  int level = 0;        // level of the children being made, or of the parents being merged
+  int sweep = 0;        // 0 in the top-down pass, then the merging sweep (1, 2, ...)
   size_t node = 0;      // nodes done at that level
-  size_t nodes = 0;     // nodes to split at that level
+  size_t nodes = 0;     // nodes to do at that level
   int iteration = 0;    // Lloyd iteration within the node
   double sum_obv = 0;   // estimated sum of OBV of the finished children at this level
   size_t estimates = 0; // boxes estimated so far
+  double done = 0;      // rough fraction of the whole build done, for a remaining-time guess
+};
+
+// The state of a build between two steps: what a checkpoint holds.
+struct VariationalState {
+  int split_levels = 0;   // levels made by the top-down pass (0: only the root)
+  int sweeps = 0;         // merging sweeps done
+  bool sweeping_done = false;
+  bool budget_spent = false;
+  std::vector<TreeNode> nodes;              // boxes unset; faces sorted ascending
+  std::vector<std::array<Vec3, 3>> axes;    // per node: the searched orientation
 };
 
 struct VariationalOptions {
   int depth = 8;             // >= 0
   int arity = 2;             // >= 2
-  int lloyd_iterations = 4;  // most partition + update rounds per node
+  int lloyd_iterations = 4;  // most partition + update rounds per node (and per adjustment)
   bool optimise_axes = true; // ablation: false keeps the groups' covariance axes
+  bool adjust = true;        // ablation: the re-seeding step
+  bool merge = true;         // ablation: the bottom-up merging sweeps
+  int max_sweeps = 3;
   uint64_t seed = 1;         // the random starts of the orientation search
   std::function<void(const VariationalProgress&)> progress;  // called often; may be empty
+  std::function<bool()> out_of_time;                          // may be empty: no budget
+  // Called after each level and each sweep with the state to save; may be empty.
+  std::function<void(const VariationalState&)> checkpoint;
 };
 
-// Precondition: the mesh is a solid. Fills every field but mesh_sha256.
-Tree build_variational(const Mesh& mesh, const VariationalOptions& options, const ObvEstimate& estimate);
+struct VariationalReport {
+  bool budget_spent = false;  // the time budget ended the search early
+  int sweeps = 0;             // merging sweeps done
+  size_t merges = 0;          // unit swaps or moves kept by the sweeps
+  size_t adjustments = 0;     // re-seedings kept
+  size_t estimates = 0;       // boxes estimated
+};
+
+// Precondition: the mesh is a solid. Fills every field of the tree but mesh_sha256. `resume`,
+// when given, is a state saved by the checkpoint callback of a build with the same mesh,
+// options and estimator; the build goes on from it.
+Tree build_variational(const Mesh& mesh, const VariationalOptions& options, const ObvEstimate& estimate,
+                       const VariationalState* resume = nullptr, VariationalReport* report = nullptr);
 
 // The tight box of the faces' vertices along the given (orthonormal) axes, in double, without
 // the conservative padding of fit_obb: what the optimiser measures.
 Obb tight_box(const Mesh& mesh, const std::vector<int32_t>& faces, const std::array<Vec3, 3>& axes);
+
+// Checkpoint files: JSON with a `fingerprint` naming everything the build depends on (the
+// caller's: mesh hash, options, estimator and m). Doubles round-trip bit for bit. Writes are
+// atomic (temp file + rename). Reading checks the fingerprint and the state's structure.
+Status write_variational_state(const VariationalState& state, const std::string& fingerprint, const std::string& path);
+// Not found: ok with *found = false. Wrong fingerprint or a damaged file: an error.
+Status read_variational_state(const std::string& path, const std::string& fingerprint, size_t mesh_faces,
+                              VariationalState* state, bool* found);
 
 }  // namespace vobb

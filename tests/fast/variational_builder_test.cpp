@@ -2,10 +2,14 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdio>
+#include <fstream>
+
 #include "common/tree_io.h"
 #include "data/analytic_meshes.h"
 #include "fast/cpu_estimator.h"
 #include "fast/obbtree_builder.h"
+#include "test_common.h"
 
 namespace vobb {
 namespace {
@@ -86,6 +90,98 @@ TEST(VariationalBuilder, EstimatedLayerSumsAtMostTheBaselines) {
   // a sum by far less than 1e-9 relative.
   for (int level = 0; level <= 3; ++level)
     EXPECT_LE(layer_sum(cpu, v, level, m), layer_sum(cpu, base, level, m) * (1 + 1e-9)) << level;
+}
+
+// A build interrupted after any saved state and resumed from it (through the checkpoint file,
+// so the JSON round trip is covered too) gives the same bytes as the uninterrupted build.
+TEST(VariationalBuilder, ResumedBuildEqualsUninterrupted) {
+  const Mesh mesh = analytic::polygonal_torus().mesh;
+  const CpuObvEstimator cpu(mesh);
+  VariationalOptions o;
+  o.depth = 4;
+  std::vector<VariationalState> saved;
+  o.checkpoint = [&](const VariationalState& st) { saved.push_back(st); };
+  const std::string whole = tree_to_json(build_variational(mesh, o, cpu_at(cpu, 8)));
+  // The root, 4 levels, and at least one sweep.
+  ASSERT_GE(saved.size(), 6u);
+  EXPECT_EQ(saved[2].split_levels, 2);
+  const std::string path = test::temp_path("state.json");
+  for (size_t k = 0; k < saved.size(); ++k) {
+    SCOPED_TRACE(k);
+    ASSERT_TRUE(write_variational_state(saved[k], "fp", path));
+    VariationalState back;
+    bool found = false;
+    ASSERT_TRUE(read_variational_state(path, "fp", mesh.faces.size(), &back, &found));
+    ASSERT_TRUE(found);
+    VariationalOptions r = o;
+    r.checkpoint = nullptr;
+    EXPECT_EQ(tree_to_json(build_variational(mesh, r, cpu_at(cpu, 8), &back)), whole);
+  }
+  std::remove(path.c_str());
+}
+
+TEST(VariationalBuilder, CheckpointOfAnotherBuildOrDamagedIsRefused) {
+  const Mesh mesh = analytic::cube_with_cavity().mesh;
+  const CpuObvEstimator cpu(mesh);
+  VariationalOptions o;
+  o.depth = 2;
+  VariationalState last;
+  o.checkpoint = [&](const VariationalState& st) { last = st; };
+  build_variational(mesh, o, cpu_at(cpu, 8));
+  const std::string path = test::temp_path("state.json");
+  ASSERT_TRUE(write_variational_state(last, "build A", path));
+  VariationalState back;
+  bool found = false;
+  const Status other = read_variational_state(path, "build B", mesh.faces.size(), &back, &found);
+  EXPECT_FALSE(other);
+  EXPECT_NE(other.message().find("another build"), std::string::npos) << other.message();
+  // Faces beyond the mesh: a damaged state, refused rather than crashed on.
+  EXPECT_FALSE(read_variational_state(path, "build A", mesh.faces.size() / 2, &back, &found));
+  {
+    std::ofstream(path) << "{\"format\":\"vobb-variational-state\",\"version\":1,\"fingerprint\":\"build A\"";
+  }
+  EXPECT_FALSE(read_variational_state(path, "build A", mesh.faces.size(), &back, &found));
+  std::remove(path.c_str());
+  EXPECT_TRUE(read_variational_state(path, "build A", mesh.faces.size(), &back, &found));
+  EXPECT_FALSE(found);
+}
+
+// Each merging move is kept only when it lowers the changed parents' estimated sum, and it
+// changes only their layer: so with the same estimator, every layer's estimated sum of OBV
+// after the sweeps is at most the one before (fit_obb's padding aside, see above).
+TEST(VariationalBuilder, MergingNeverRaisesALayersEstimatedSum) {
+  const Mesh mesh = analytic::polygonal_torus().mesh;
+  const CpuObvEstimator cpu(mesh);
+  const int m = 16;
+  VariationalOptions o;
+  o.depth = 4;
+  o.merge = false;
+  const Tree before = build_variational(mesh, o, cpu_at(cpu, m));
+  o.merge = true;
+  VariationalReport report;
+  const Tree after = build_variational(mesh, o, cpu_at(cpu, m), nullptr, &report);
+  EXPECT_GT(report.merges, 0u) << "no merge was kept: the check below would be empty";
+  EXPECT_TRUE(validate_tree(after, "merged"));
+  EXPECT_TRUE(check_conservative(mesh, after).ok());
+  for (int level = 0; level <= 4; ++level)
+    EXPECT_LE(layer_sum(cpu, after, level, m), layer_sum(cpu, before, level, m) * (1 + 1e-9)) << level;
+}
+
+// The time budget: spent at once, the build still writes a valid, conservative tree of the
+// requested depth (the baseline's splits), and says so.
+TEST(VariationalBuilder, SpentTimeBudgetGivesAValidTree) {
+  const Mesh mesh = analytic::polygonal_torus().mesh;
+  const CpuObvEstimator cpu(mesh);
+  VariationalOptions o;
+  o.depth = 3;
+  o.out_of_time = [] { return true; };
+  VariationalReport report;
+  const Tree t = build_variational(mesh, o, cpu_at(cpu, 8), nullptr, &report);
+  EXPECT_TRUE(report.budget_spent);
+  EXPECT_EQ(report.estimates, 0u);
+  EXPECT_EQ(t.depth, 3);
+  EXPECT_TRUE(validate_tree(t, "budget"));
+  EXPECT_TRUE(check_conservative(mesh, t).ok());
 }
 
 }  // namespace
