@@ -2,6 +2,10 @@
 // output, and the bad-input corpus in tests/data/bad.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
+#include <unistd.h>
+
+#include <csignal>
+#include <cstdlib>
 
 #include <cstdio>
 #include <fstream>
@@ -168,6 +172,51 @@ TEST(Cli, BuildExportAndInfoOnAnAnalyticMesh) {
   r = vobb_cli("certify " + mesh + " " + tree + " --quiet");
   EXPECT_EQ(r.code, 0) << r.out << r.err;
   for (const std::string& p : {mesh, tree, boxes}) std::remove(p.c_str());
+}
+
+std::string slurp(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
+// A variational build killed (SIGKILL) once its checkpoint holds two split levels, then started
+// again with the same folder, writes the same bytes as an uninterrupted build; a build with
+// other options refuses that folder with exit 2.
+TEST(Cli, KilledBuildResumesToTheSameTree) {
+  const std::string mesh = test::real_mesh("dino");
+  if (!test::exists(mesh)) GTEST_SKIP() << "real meshes not fetched (data/fetch_meshes.sh)";
+  const std::string dir = test::temp_path("ckpt"), state = dir + "/state.json";
+  const std::string whole = test::temp_path("whole.json"), resumed = test::temp_path("resumed.json");
+  const std::string pid_file = test::temp_path("pid.txt");
+  std::system(("rm -rf " + dir).c_str());
+  // Small settings: the test is about resuming, not about quality (about 15 s a build here).
+  const std::string args = " --depth 3 --m 8 --lloyd 1 --backend cpu --quiet";
+  ASSERT_EQ(vobb_cli("build " + mesh + " -o " + whole + args).code, 0);
+  ASSERT_EQ(std::system((std::string(VOBB_CLI) + " build " + mesh + " -o " + resumed + args + " --checkpoint " + dir +
+                         " >/dev/null 2>&1 & echo $! > " + pid_file).c_str()), 0);
+  const int pid = std::stoi(slurp(pid_file));
+  bool killed = false;
+  for (int i = 0; i < 6000 && !killed; ++i) {  // up to 2 minutes
+    if (slurp(state).find("\"split_levels\":2") != std::string::npos) {
+      killed = ::kill(pid, SIGKILL) == 0;
+      break;
+    }
+    ::usleep(20000);
+  }
+  ASSERT_TRUE(killed) << "the build ended before its level-2 checkpoint was seen";
+  ::waitpid(pid, nullptr, 0);
+  EXPECT_FALSE(test::exists(resumed)) << "the killed build wrote its tree";
+  const CliRun again = vobb_cli("build " + mesh + " -o " + resumed + " --depth 3 --m 8 --lloyd 1 --backend cpu --checkpoint " + dir);
+  ASSERT_EQ(again.code, 0) << again.err;
+  EXPECT_NE(again.err.find("resuming from"), std::string::npos) << again.err;
+  EXPECT_EQ(slurp(resumed), slurp(whole));
+  const CliRun other = vobb_cli("build " + mesh + " -o " + resumed + args + " --seed 2 --checkpoint " + dir);
+  EXPECT_EQ(other.code, 2);
+  EXPECT_NE(other.err.find("checkpoint of another build"), std::string::npos) << other.err;
+  std::system(("rm -rf " + dir).c_str());
+  for (const std::string& p : {whole, resumed, pid_file}) std::remove(p.c_str());
 }
 
 }  // namespace
