@@ -15,11 +15,14 @@
 //    but for fixed axes the tight fit of the faces is contained in every other box that holds
 //    them, and OBV grows with the box, so the optimal centre and extents follow from the axes:
 //    only the 3 rotation parameters are searched, and the centre is the tight fit's;
-//  - adjustment: when the iterations stall (the sum improves by less than 0.1 %), the least
-//    important box (fewest faces, then smallest OBV) is re-seeded at the face of the largest-OBV
-//    box farthest from that box's centre, and the iterations go on from there; the adjusted
-//    state is kept only if its sum is lower, else the node is done (at most 2 adjustments);
-//  - the best state seen is kept, so a node's children never have a larger estimated sum of
+//  - adjustment (off by default, `adjust`): for children at levels 1-4, Lloyd iterations are
+//    also started from other planar splits of the node (each covariance axis, cut into equal
+//    counts and equal extents; the two best by a cheap screen), and the lowest sum is kept.
+//    It is off because, measured exactly on dino at depth 8 (docs/BENCHMARKS.md), it raised e:
+//    the sum of OBV it lowers counts overlaps twice, and the splits it finds overlap more, so
+//    their OMV, and their subtrees', is worse. The re-seeding of the least important box
+//    (moved to the farthest face of the largest box) was worse still (e +19 %), and is gone;
+////  - the best state seen is kept, so a node's children never have a larger estimated sum of
 //    OBV than the baseline split with optimised boxes.
 // Then bottom-up merging sweeps (multigrid-like, paper §4.2): for each level l from the deepest
 // parents up to 1, the children of each level-l node are the units, and the units under one
@@ -78,7 +81,7 @@ struct VariationalOptions {
   int arity = 2;             // >= 2
   int lloyd_iterations = 4;  // most partition + update rounds per node (and per adjustment)
   bool optimise_axes = true; // ablation: false keeps the groups' covariance axes
-  bool adjust = true;        // ablation: the re-seeding step
+  bool adjust = false;       // the adjustment step (see above: measured to hurt, so off)
   bool merge = true;         // ablation: the bottom-up merging sweeps
   int max_sweeps = 3;
   uint64_t seed = 1;         // the random starts of the orientation search
@@ -92,7 +95,7 @@ struct VariationalReport {
   bool budget_spent = false;  // the time budget ended the search early
   int sweeps = 0;             // merging sweeps done
   size_t merges = 0;          // unit swaps or moves kept by the sweeps
-  size_t adjustments = 0;     // re-seedings kept
+  size_t adjustments = 0;     // adjusted splits kept
   size_t estimates = 0;       // boxes estimated
 };
 
