@@ -22,14 +22,15 @@
 //    the sum of OBV it lowers counts overlaps twice, and the splits it finds overlap more, so
 //    their OMV, and their subtrees', is worse. The re-seeding of the least important box
 //    (moved to the farthest face of the largest box) was worse still (e +19 %), and is gone;
-////  - the best state seen is kept, so a node's children never have a larger estimated sum of
+//  - the best state seen is kept, so a node's children never have a larger estimated sum of
 //    OBV than the baseline split with optimised boxes.
 // Then bottom-up merging sweeps (multigrid-like, paper §4.2): for each level l from the deepest
 // parents up to 1, the children of each level-l node are the units, and the units under one
 // level-(l-1) node are re-grouped among its children by swapping (or moving) units between
 // them, with the changed parents' orientations searched again. A move is kept only when the
-// estimated sum of OBV of the changed parents drops, i.e. when e drops: only layer l changes,
-// and it weighs ω(l) = D - l + 1 in e. Sweeps repeat while the estimated e drops by 0.1 % or
+// estimated sum of OBV of the changed parents drops by 0.1 % or more, i.e. when the estimated
+// e drops: only layer l changes, and it weighs ω(l) = D - l + 1 in e. Each move's candidates are
+// screened with fixed orientations; the two best get the full search. Sweeps repeat while the estimated e drops by 0.1 % or
 // more, at most `max_sweeps` times.
 //
 // Boxes are written through fit_obb (exactly conservative). Deterministic: one thread, ties by
