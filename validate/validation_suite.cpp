@@ -68,11 +68,11 @@ Plan suite_plan(SuiteKind kind) {
     p.fit = {"dino", "elephant", "fandisk"};
     p.held_out = {"knot1", "armadillo", "triceratops", "homer", "bunny00"};
     p.trees = {"dino", "elephant", "knot1"};
-    p.boxes_per_size = 12;
+    p.boxes_per_size = 20;
     p.nef_boxes_per_size = 3;
     p.depth = 8;
     p.lloyd = 4;
-    p.sweeps = 1;  // one bottom-up merging sweep keeps the three depth-8 builds within the hour
+    p.sweeps = 3;  // the builder's defaults
   }
   return p;
 }
@@ -130,6 +130,12 @@ std::string gp_header(const std::string& name, const std::string& title) {
   return "set terminal pngcairo size 960,640 font 'sans,11'\nset output '" + name + ".png.tmp'\nset title '" + title +
          "'\nset datafile separator ','\nset key outside right top\nset grid\n";
 }
+
+// The stated bound of the committed full run (docs/validation, commit b232937: fitted on dino,
+// elephant and fandisk, 12 boxes per size, and checked there on five held-out meshes at
+// 2.62 %). Every later run checks its whole corpus against it at the same level alpha: a
+// regression that a run's own refit would absorb still shows here.
+constexpr double kCommittedC = 0.3074, kCommittedP = 2.04;
 
 }  // namespace
 
@@ -276,6 +282,18 @@ Status run_validation_suite(const SuiteOptions& options, SuiteReport* report) {
   check("held-out violation rate of B(m)", B.holds() && B.held_out_n > 0,
         pct(B.held_out_rate()) + " of " + std::to_string(B.held_out_n) + " held-out estimates above B(m); stated level " +
             pct(B.alpha));
+  {
+    size_t n = 0, above = 0;
+    for (const StudyEval& e : d.evals) {
+      const StudySample& sm = d.samples[e.sample];
+      ++n;
+      above += !(e.abs_error(sm) <= kCommittedC * std::pow(double(e.m), -kCommittedP) * sm.box_volume);
+    }
+    const double rate = n ? double(above) / n : 1.0;
+    check("within the committed full run's B(m)", n > 0 && rate <= dc.alpha,
+          pct(rate) + " of " + std::to_string(n) + " estimates above " + g(kCommittedC) + " m^-" + g(kCommittedP) +
+              " vol(O); stated level " + pct(dc.alpha));
+  }
   check("Nef == clipping (exact)", d.nef_agrees, std::to_string(d.nef_compared) + " boxes compared as rationals");
   {
     size_t layers = 0, hold = 0;
@@ -445,7 +463,7 @@ Status run_validation_suite(const SuiteOptions& options, SuiteReport* report) {
     plots.push_back("pareto");
 
     s = gp_header("upper_bound", "Gap (sum OBV - OMV) / OMV per layer, exact") +
-        "set xlabel 'layer (level)'\nset ylabel '(sum OBV - OMV) / OMV'\nset datafile separator ','\n";
+        "set xlabel 'layer (level)'\nset xtics 1\nset ylabel '(sum OBV - OMV) / OMV'\nset datafile separator ','\n";
     std::string pl;
     int idx = 0;
     for (const std::string& mesh : plan.trees)
@@ -525,7 +543,7 @@ Status run_validation_suite(const SuiteOptions& options, SuiteReport* report) {
     md << "\n![error against m](error_vs_m.png)\n";
 
     md << "\n## 2. The stated bound B(m)\n\n";
-    md << "**B(m) = " << g(B.c, 4) << " · m^-" << g(B.p, 3) << " · vol(O)**, stated at level α = " << pct(B.alpha)
+    md << "**B(m) = " << g(B.c, 6) << " · m^-" << g(B.p, 6) << " · vol(O)**, stated at level α = " << pct(B.alpha)
        << ": at most " << pct(B.alpha) << " of estimates may exceed it. Fitted on the fit corpus ("
        << B.fit_n << " estimates, both backends): per m the " << pct(B.quantile)
        << " quantile q_m of |E-V|/vol(O); p from the least-squares slope of log q_m; the constant the smallest that puts "
