@@ -5,6 +5,7 @@ set datafile separator ','
 set key outside right top
 set grid
 set xlabel 'layer (level)'
+set xtics 1
 set ylabel '(sum OBV - OMV) / OMV'
 set datafile separator ','
 plot 'upper_bound.csv' using (strcol(1) eq 'dino' && strcol(2) eq 'obbtree' ? $3 : NaN):10 with linespoints lw 2 pt 5 title 'dino obbtree', \
