@@ -14,15 +14,6 @@ double since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-// The bottom-up merging sweeps are being added to the variational builder (issue 5) while this
-// suite is written: set their count where VariationalOptions has it, and do nothing before.
-template <typename Options>
-auto set_max_sweeps(Options& o, int sweeps, int) -> decltype(o.max_sweeps = sweeps, void()) {
-  o.max_sweeps = sweeps;
-}
-template <typename Options>
-void set_max_sweeps(Options&, int, long) {}
-
 }  // namespace
 
 bool UpperBoundResult::all_exact_hold() const {
@@ -65,7 +56,7 @@ UpperBoundResult run_upper_bound_study(const UpperBoundConfig& config, const Sta
         VariationalOptions o;
         o.depth = config.depth;
         o.lloyd_iterations = config.lloyd_iterations;
-        set_max_sweeps(o, config.max_sweeps, 0);
+        o.max_sweeps = config.max_sweeps;
         tree = build_variational(mesh, o, estimate);
       }
       TreeCheck tc{nm.name, builder};
