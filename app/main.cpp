@@ -89,7 +89,8 @@ vobb::Status make_estimator(const vobb::Mesh& mesh, const BuildFlags& f, std::un
 // What a variational build depends on, for its checkpoints: a state saved under another
 // fingerprint is refused, so a resumed build is the build that was interrupted.
 std::string build_fingerprint(const vobb::Mesh& mesh, const BuildFlags& f, const vobb::GlObvEstimator* gl) {
-  return "mesh " + vobb::mesh_sha256(mesh) + "; depth " + std::to_string(f.depth) + "; arity " + std::to_string(f.arity) +
+  // "builder 2": bump when the builder's decisions change, so that older states are refused.
+  return "builder 2; mesh " + vobb::mesh_sha256(mesh) + "; depth " + std::to_string(f.depth) + "; arity " + std::to_string(f.arity) +
          "; lloyd " + std::to_string(f.lloyd) + "; seed " + std::to_string(f.seed) + "; axis search " +
          (f.no_axis_search ? "off" : "on") + "; adjust " + (f.adjust ? "on" : "off") + "; merge " +
          (f.no_merge ? "off" : "on") + "; sweeps " + std::to_string(f.sweeps) + "; m " + std::to_string(f.m) +
@@ -162,6 +163,8 @@ vobb::Status build_tree(const vobb::Mesh& mesh, const BuildFlags& f, const vobb:
   }
   vobb::VariationalReport report;
   *tree = vobb::build_variational(mesh, opt, estimate, resuming ? &resume : nullptr, &report);
+  vobb::Status valid = vobb::validate_tree(*tree, "variational tree");
+  VOBB_ASSERT(valid, valid.message().c_str());  // a builder bug, not bad input
   if (!f.quiet && last >= 0) std::fprintf(stderr, "\n");
   if (!f.quiet)
     std::fprintf(stderr, "vobb: %zu boxes estimated, %zu adjusted splits and %zu merges kept, %d sweeps%s\n",

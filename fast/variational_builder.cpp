@@ -772,8 +772,15 @@ Status read_variational_state(const std::string& path, const std::string& finger
       const auto& jn = nodes[i];
       TreeNode n;
       n.id = static_cast<int32_t>(i);
-      n.parent = jn.at("parent").get<int32_t>();
-      n.level = jn.at("level").get<int32_t>();
+      auto integer = [&](const nlohmann::json& v) {
+        if (!v.is_number_integer() || v.get<int64_t>() < -1 || v.get<int64_t>() > (int64_t{1} << 31) - 1)
+          throw nlohmann::json::type_error::create(302, "not an index", nullptr);
+        return static_cast<int32_t>(v.get<int64_t>());
+      };
+      n.parent = integer(jn.at("parent"));
+      n.level = integer(jn.at("level"));
+      for (const auto& c : jn.at("children")) integer(c);
+      for (const auto& f : jn.at("faces")) integer(f);
       n.children = jn.at("children").get<std::vector<int32_t>>();
       n.faces = jn.at("faces").get<std::vector<int32_t>>();
       std::array<Vec3, 3> axes;
@@ -785,6 +792,12 @@ Status read_variational_state(const std::string& path, const std::string& finger
           return bad("node " + std::to_string(i) + " axes");
         axes[k] = Vec3(v[0], v[1], v[2]);
       }
+      // Orthonormal as the builder leaves them (orthonormalize: within a few ulps); anything
+      // else is not a state this builder saved, and would break the boxes fitted from it.
+      for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b)
+          if (!(std::abs(axes[a].dot(axes[b]) - (a == b ? 1.0 : 0.0)) <= 1e-9))
+            return bad("node " + std::to_string(i) + " axes are not orthonormal");
       if (n.faces.empty() || !std::is_sorted(n.faces.begin(), n.faces.end())) return bad("node " + std::to_string(i) + " faces");
       for (int32_t f : n.faces)
         if (f < 0 || static_cast<size_t>(f) >= mesh_faces) return bad("node " + std::to_string(i) + " faces");
@@ -801,6 +814,11 @@ Status read_variational_state(const std::string& path, const std::string& finger
     const Status s = validate_tree(t, path);
     if (!s) return s;
     if (st.split_levels < 0 || st.sweeps < 0) return bad("counters");
+    // The levels made so far are split_levels: no node deeper, and every splittable node
+    // above it split (else a resumed build would split it again).
+    for (const TreeNode& n : st.nodes)
+      if (n.level > st.split_levels || (n.level < st.split_levels && n.faces.size() >= 2 && n.children.empty()))
+        return bad("levels do not match split_levels");
     *state = std::move(st);
   } catch (const nlohmann::json::exception&) {
     return bad("missing or mistyped fields");

@@ -37,7 +37,8 @@
 // face id, box index and node id; the same mesh, options and estimator values give the same
 // tree. The build state after each level and each sweep can be saved (checkpoint) and a build
 // resumed from it gives the same tree as an uninterrupted one. A time budget ends the search
-// early: the nodes not yet split get the baseline split, and no further sweep starts.
+// early: the nodes not yet split get the baseline split, and no further sweep starts. A state
+// saved after the budget was spent keeps it spent when resumed.
 #pragma once
 
 #include <array>

@@ -206,7 +206,7 @@ TEST(Cli, KilledBuildResumesToTheSameTree) {
     ::usleep(20000);
   }
   ASSERT_TRUE(killed) << "the build ended before its level-2 checkpoint was seen";
-  ::waitpid(pid, nullptr, 0);
+  for (int i = 0; i < 500 && ::kill(pid, 0) == 0; ++i) ::usleep(10000);  // not our child: poll till gone
   EXPECT_FALSE(test::exists(resumed)) << "the killed build wrote its tree";
   const CliRun again = vobb_cli("build " + mesh + " -o " + resumed + " --depth 3 --m 8 --lloyd 1 --backend cpu --checkpoint " + dir);
   ASSERT_EQ(again.code, 0) << again.err;

@@ -95,15 +95,20 @@ TEST(VariationalBuilder, EstimatedLayerSumsAtMostTheBaselines) {
 // The adjustment step only adds starting splits and keeps the lowest sum: the root's children,
 // measured by the same estimator, never get a larger estimated sum with it than without.
 TEST(VariationalBuilder, AdjustmentNeverRaisesTheRootChildrensEstimatedSum) {
-  const Mesh mesh = analytic::cube_with_cavity().mesh;
+  const Mesh mesh = analytic::polygonal_torus().mesh;
   const CpuObvEstimator cpu(mesh);
   const int m = 16;
   double sums[2];
   for (bool adjust : {false, true}) {
     VariationalOptions o;
-    o.depth = 1;
+    o.depth = 3;
+    o.merge = false;  // merging would re-group the root's grandchildren: compare the top-down split
     o.adjust = adjust;
-    const Tree t = build_variational(mesh, o, cpu_at(cpu, m));
+    VariationalReport report;
+    const Tree t = build_variational(mesh, o, cpu_at(cpu, m), nullptr, &report);
+    if (adjust) {
+      EXPECT_GT(report.adjustments, 0u) << "no adjusted split was kept: the check below would be empty";
+    }
     EXPECT_TRUE(check_conservative(mesh, t).ok());
     std::vector<Obb> boxes;
     for (int32_t c : t.nodes[0].children) boxes.push_back(tight_box(mesh, t.nodes[c].faces, t.nodes[c].box.axes));
@@ -122,9 +127,13 @@ TEST(VariationalBuilder, ResumedBuildEqualsUninterrupted) {
   o.depth = 4;
   std::vector<VariationalState> saved;
   o.checkpoint = [&](const VariationalState& st) { saved.push_back(st); };
-  const std::string whole = tree_to_json(build_variational(mesh, o, cpu_at(cpu, 8)));
-  // The root, 4 levels, and at least one sweep.
-  ASSERT_GE(saved.size(), 6u);
+  VariationalReport report;
+  const std::string whole = tree_to_json(build_variational(mesh, o, cpu_at(cpu, 8), nullptr, &report));
+  // The root, 4 levels, and at least two sweeps, with merges kept: resuming between sweeps
+  // must carry the merged structure.
+  ASSERT_GE(saved.size(), 7u);
+  EXPECT_GE(report.sweeps, 2);
+  EXPECT_GT(report.merges, 0u);
   EXPECT_EQ(saved[2].split_levels, 2);
   const std::string path = test::temp_path("state.json");
   for (size_t k = 0; k < saved.size(); ++k) {
@@ -158,6 +167,17 @@ TEST(VariationalBuilder, CheckpointOfAnotherBuildOrDamagedIsRefused) {
   EXPECT_NE(other.message().find("another build"), std::string::npos) << other.message();
   // Faces beyond the mesh: a damaged state, refused rather than crashed on.
   EXPECT_FALSE(read_variational_state(path, "build A", mesh.faces.size() / 2, &back, &found));
+  // Axes that are not orthonormal, and levels beyond split_levels: refused too.
+  VariationalState skew = last;
+  skew.axes[0][1] = skew.axes[0][0];
+  ASSERT_TRUE(write_variational_state(skew, "build A", path));
+  EXPECT_FALSE(read_variational_state(path, "build A", mesh.faces.size(), &back, &found));
+  VariationalState behind = last;
+  behind.split_levels = 1;
+  ASSERT_TRUE(write_variational_state(behind, "build A", path));
+  const Status levels = read_variational_state(path, "build A", mesh.faces.size(), &back, &found);
+  EXPECT_FALSE(levels);
+  EXPECT_NE(levels.message().find("split_levels"), std::string::npos) << levels.message();
   {
     std::ofstream(path) << "{\"format\":\"vobb-variational-state\",\"version\":1,\"fingerprint\":\"build A\"";
   }
