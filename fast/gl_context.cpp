@@ -141,4 +141,46 @@ GlContext::~GlContext() {
 
 void GlContext::make_current() const { eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, context_); }
 
+unsigned gl_program(std::initializer_list<std::pair<unsigned, const char*>> stages, std::string* log) {
+  auto one_line = [](std::string text) {
+    for (char& c : text)
+      if (c == '\n' || c == '\r') c = ' ';
+    while (!text.empty() && text.back() == ' ') text.pop_back();
+    return text;
+  };
+  char buf[2048] = {0};
+  std::vector<GLuint> shaders;
+  bool ok = true;
+  for (const auto& [type, source] : stages) {
+    const GLuint s = glCreateShader(type);
+    shaders.push_back(s);
+    glShaderSource(s, 1, &source, nullptr);
+    glCompileShader(s);
+    GLint compiled = 0;
+    glGetShaderiv(s, GL_COMPILE_STATUS, &compiled);
+    if (!compiled) {
+      glGetShaderInfoLog(s, sizeof buf - 1, nullptr, buf);
+      *log = one_line(buf);
+      ok = false;
+      break;
+    }
+  }
+  GLuint p = 0;
+  if (ok) {
+    p = glCreateProgram();
+    for (GLuint s : shaders) glAttachShader(p, s);
+    glLinkProgram(p);
+    GLint linked = 0;
+    glGetProgramiv(p, GL_LINK_STATUS, &linked);
+    if (!linked) {
+      glGetProgramInfoLog(p, sizeof buf - 1, nullptr, buf);
+      *log = one_line(buf);
+      glDeleteProgram(p);
+      p = 0;
+    }
+  }
+  for (GLuint s : shaders) glDeleteShader(s);
+  return p;
+}
+
 }  // namespace vobb

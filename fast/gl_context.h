@@ -8,8 +8,10 @@
 // exercise the fallback); VOBB_EGL_PLATFORM=device|surfaceless tries only that platform.
 #pragma once
 
+#include <initializer_list>
 #include <memory>
 #include <string>
+#include <utility>
 
 #include "common/status.h"
 
@@ -34,5 +36,11 @@ class GlContext {
   void* context_ = nullptr;
   std::string renderer_, platform_;
 };
+
+// Builds a GL program from (stage type, GLSL source) pairs, e.g. {{GL_VERTEX_SHADER, vs},
+// {GL_FRAGMENT_SHADER, fs}}, in the current context: compiles each stage, links, and deletes the
+// shaders whatever the outcome. 0 on failure, with the compiler's or linker's log on one line
+// in `log`.
+unsigned gl_program(std::initializer_list<std::pair<unsigned, const char*>> stages, std::string* log);
 
 }  // namespace vobb

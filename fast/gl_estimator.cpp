@@ -33,46 +33,6 @@ double pow2_normalizer(double a, double b, double c, double d = 0) {
   return std::ldexp(1.0, -e);
 }
 
-GLuint compile(GLenum type, const char* source, std::string* log) {
-  const GLuint s = glCreateShader(type);
-  glShaderSource(s, 1, &source, nullptr);
-  glCompileShader(s);
-  GLint ok = 0;
-  glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
-  if (!ok) {
-    char buf[2048] = {0};
-    glGetShaderInfoLog(s, sizeof buf - 1, nullptr, buf);
-    *log = buf;
-    glDeleteShader(s);
-    return 0;
-  }
-  return s;
-}
-
-GLuint link(std::initializer_list<GLuint> shaders, std::string* log) {
-  const GLuint p = glCreateProgram();
-  for (GLuint s : shaders) glAttachShader(p, s);
-  glLinkProgram(p);
-  for (GLuint s : shaders) glDeleteShader(s);
-  GLint ok = 0;
-  glGetProgramiv(p, GL_LINK_STATUS, &ok);
-  if (!ok) {
-    char buf[2048] = {0};
-    glGetProgramInfoLog(p, sizeof buf - 1, nullptr, buf);
-    *log = buf;
-    glDeleteProgram(p);
-    return 0;
-  }
-  return p;
-}
-
-std::string one_line(std::string s) {
-  for (char& c : s)
-    if (c == '\n' || c == '\r') c = ' ';
-  while (!s.empty() && s.back() == ' ') s.pop_back();
-  return s;
-}
-
 }  // namespace
 
 struct GlObvEstimator::Gl {
@@ -108,13 +68,11 @@ Status GlObvEstimator::create(const Mesh& mesh, std::unique_ptr<GlObvEstimator>*
   if (!s) return s;
   Gl& g = *e->gl_;
   std::string log;
-  const GLuint vs = compile(GL_VERTEX_SHADER, shaders::kShader_texel_spans_vert, &log);
-  const GLuint fs = vs ? compile(GL_FRAGMENT_SHADER, shaders::kShader_texel_spans_frag, &log) : 0;
-  if (fs) g.spans_program = link({vs, fs}, &log);
-  if (!g.spans_program) return Status::error("GL estimator: texel_spans shaders: " + one_line(log));
-  const GLuint cs = compile(GL_COMPUTE_SHADER, shaders::kShader_reduce_tiles_comp, &log);
-  if (cs) g.reduce_program = link({cs}, &log);
-  if (!g.reduce_program) return Status::error("GL estimator: reduce_tiles shader: " + one_line(log));
+  g.spans_program = gl_program({{GL_VERTEX_SHADER, shaders::kShader_texel_spans_vert},
+                                {GL_FRAGMENT_SHADER, shaders::kShader_texel_spans_frag}}, &log);
+  if (!g.spans_program) return Status::error("GL estimator: texel_spans shaders: " + log);
+  g.reduce_program = gl_program({{GL_COMPUTE_SHADER, shaders::kShader_reduce_tiles_comp}}, &log);
+  if (!g.reduce_program) return Status::error("GL estimator: reduce_tiles shader: " + log);
 
   glGenVertexArrays(1, &g.vao);
   glBindVertexArray(g.vao);

@@ -16,50 +16,9 @@ namespace {
 
 constexpr int kMaxLevel = 30;  // as the command line's --depth
 
-std::string one_line(std::string s) {
-  for (char& c : s)
-    if (c == '\n' || c == '\r') c = ' ';
-  while (!s.empty() && s.back() == ' ') s.pop_back();
-  return s;
-}
-
-GLuint compile(GLenum type, const char* source, std::string* log) {
-  const GLuint s = glCreateShader(type);
-  glShaderSource(s, 1, &source, nullptr);
-  glCompileShader(s);
-  GLint ok = 0;
-  glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
-  if (ok) return s;
-  char buf[2048] = {0};
-  glGetShaderInfoLog(s, sizeof buf - 1, nullptr, buf);
-  *log = buf;
-  glDeleteShader(s);
-  return 0;
-}
-
 // Links a vertex and a fragment shader; 0 with `log` set on failure.
 GLuint program(const char* vert, const char* frag, std::string* log) {
-  const GLuint vs = compile(GL_VERTEX_SHADER, vert, log);
-  if (!vs) return 0;
-  const GLuint fs = compile(GL_FRAGMENT_SHADER, frag, log);
-  if (!fs) {
-    glDeleteShader(vs);
-    return 0;
-  }
-  const GLuint p = glCreateProgram();
-  glAttachShader(p, vs);
-  glAttachShader(p, fs);
-  glLinkProgram(p);
-  glDeleteShader(vs);
-  glDeleteShader(fs);
-  GLint ok = 0;
-  glGetProgramiv(p, GL_LINK_STATUS, &ok);
-  if (ok) return p;
-  char buf[2048] = {0};
-  glGetProgramInfoLog(p, sizeof buf - 1, nullptr, buf);
-  *log = buf;
-  glDeleteProgram(p);
-  return 0;
+  return gl_program({{GL_VERTEX_SHADER, vert}, {GL_FRAGMENT_SHADER, frag}}, log);
 }
 
 // Every GL object of one render, deleted on the way out whatever the outcome (the context is
@@ -349,11 +308,11 @@ Status render_tree_figure(const GlContext& context, const Mesh& mesh, const std:
 
   std::string log;
   g.mesh_program = program(shaders::kShader_figure_mesh_vert, shaders::kShader_figure_mesh_frag, &log);
-  if (!g.mesh_program) return fail("figure_mesh shaders: " + one_line(log));
+  if (!g.mesh_program) return fail("figure_mesh shaders: " + log);
   g.fill_program = program(shaders::kShader_figure_fill_vert, shaders::kShader_figure_fill_frag, &log);
-  if (!g.fill_program) return fail("figure_fill shaders: " + one_line(log));
+  if (!g.fill_program) return fail("figure_fill shaders: " + log);
   g.lines_program = program(shaders::kShader_figure_lines_vert, shaders::kShader_figure_fill_frag, &log);
-  if (!g.lines_program) return fail("figure_lines shaders: " + one_line(log));
+  if (!g.lines_program) return fail("figure_lines shaders: " + log);
 
   // Framebuffers: draw into the multisampled one, resolve into the plain one, read that.
   glGenRenderbuffers(3, g.renderbuffers);

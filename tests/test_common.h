@@ -4,8 +4,13 @@
 
 #include <gtest/gtest.h>
 
-#include <string>
 #include <sys/stat.h>
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <string>
 #include <vector>
 
 namespace vobb::test {
@@ -36,6 +41,29 @@ inline const std::vector<std::string>& clean_real_meshes() {
 inline std::string temp_path(const std::string& name) {
   const char* dir = std::getenv("TMPDIR");
   return std::string(dir ? dir : "/tmp") + "/vobb_test_" + std::to_string(::getpid()) + "_" + name;
+}
+
+// Runs the `vobb` command line with `args` (a shell word list): exit code, stdout, stderr.
+struct CliRun {
+  int code;
+  std::string out, err;
+};
+inline CliRun vobb_cli(const std::string& args) {
+  const std::string err_path = temp_path("stderr.txt");
+  const std::string cmd = std::string(VOBB_CLI) + " " + args + " 2>" + err_path;
+  CliRun r;
+  FILE* p = ::popen(cmd.c_str(), "r");
+  char buf[4096];
+  size_t n;
+  while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) r.out.append(buf, n);
+  const int status = ::pclose(p);
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::ifstream e(err_path);
+  std::stringstream ss;
+  ss << e.rdbuf();
+  r.err = ss.str();
+  std::remove(err_path.c_str());
+  return r;
 }
 
 }  // namespace vobb::test

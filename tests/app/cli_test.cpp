@@ -17,28 +17,8 @@
 namespace vobb {
 namespace {
 
-struct CliRun {
-  int code;
-  std::string out, err;
-};
-
-CliRun vobb_cli(const std::string& args) {
-  const std::string err_path = test::temp_path("stderr.txt");
-  const std::string cmd = std::string(VOBB_CLI) + " " + args + " 2>" + err_path;
-  CliRun r;
-  FILE* p = ::popen(cmd.c_str(), "r");
-  char buf[4096];
-  size_t n;
-  while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) r.out.append(buf, n);
-  const int status = ::pclose(p);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::ifstream e(err_path);
-  std::stringstream ss;
-  ss << e.rdbuf();
-  r.err = ss.str();
-  std::remove(err_path.c_str());
-  return r;
-}
+using test::CliRun;
+using test::vobb_cli;
 
 size_t line_count(const std::string& s) { return std::count(s.begin(), s.end(), '\n'); }
 
