@@ -25,8 +25,11 @@
 #include "vobb/config.h"
 #include "app/validate_command.h"
 #include "app/collide_command.h"
+#include "common/stopwatch.h"
 
 namespace {
+
+using vobb::seconds_since;
 
 constexpr int kExitOk = 0;
 constexpr int kExitCheckFailed = 1;
@@ -35,10 +38,6 @@ constexpr int kExitBadInput = 2;
 int refuse(const vobb::Status& s) {
   std::fprintf(stderr, "vobb: %s\n", s.message().c_str());
   return kExitBadInput;
-}
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
 int run_info(const std::string& mesh, bool json, bool rational) {

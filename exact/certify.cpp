@@ -5,15 +5,9 @@
 #include <memory>
 
 #include "exact/outer_volume.h"
+#include "common/stopwatch.h"
 
 namespace vobb::exact {
-namespace {
-
-double since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-
-}  // namespace
 
 bool Certificate::ok() const {
   if (!containment.ok()) return false;
@@ -39,7 +33,7 @@ Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& op
       const auto tn = std::chrono::steady_clock::now();
       nef = std::make_unique<NefSolver>(mesh);
       char buf[64];
-      std::snprintf(buf, sizeof buf, "%.2f s", since(tn));
+      std::snprintf(buf, sizeof buf, "%.2f s", seconds_since(tn));
       say(std::string("Nef polyhedron of the mesh built in ") + buf);
     }
     return *nef;
@@ -88,7 +82,7 @@ Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& op
         lc.omv_path = "both";
       }
     }
-    lc.seconds = since(tl);
+    lc.seconds = seconds_since(tl);
     weighted.push_back(Rational(tree.depth - level + 1) * lc.omv);
     char buf[200];
     std::snprintf(buf, sizeof buf, "layer %d/%d: %zu boxes (%zu overlapping), OMV %s, sum OBV %s%s, %.2f s",
@@ -98,7 +92,7 @@ Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& op
     cert.layers.push_back(std::move(lc));
   }
   cert.weighted_error = sum_pairwise(weighted);
-  cert.seconds = since(t0);
+  cert.seconds = seconds_since(t0);
   return cert;
 }
 

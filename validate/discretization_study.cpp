@@ -7,16 +7,9 @@
 #include <limits>
 
 #include "exact/outer_volume.h"
+#include "common/stopwatch.h"
 
 namespace vobb::validate {
-namespace {
-
-double since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-
-}  // namespace
-
 double StudyEval::abs_error(const StudySample& s) const { return std::abs(estimate - s.exact); }
 
 double StatedBound::per_volume(int m) const { return c * std::pow(double(m), -p); }
@@ -165,7 +158,7 @@ DiscretizationResult run_discretization_study(const DiscretizationConfig& config
     if (time_nef) {
       const auto tn = std::chrono::steady_clock::now();
       nef = std::make_unique<exact::NefSolver>(mesh);
-      r.exact_timings.push_back({"nef (build Nef(X) once)", 1, since(tn), nm.name});
+      r.exact_timings.push_back({"nef (build Nef(X) once)", 1, seconds_since(tn), nm.name});
     }
     const size_t first = r.samples.size();
     std::vector<Obb> boxes;
@@ -183,14 +176,14 @@ DiscretizationResult run_discretization_study(const DiscretizationConfig& config
         s.centre = est.centre_location(part[i]);
         const auto te = std::chrono::steady_clock::now();
         const Rational v = clip.obv(part[i]);
-        s.exact_seconds = since(te);
+        s.exact_seconds = seconds_since(te);
         s.exact = to_double_nearest(v);
         clip_seconds += s.exact_seconds;
         ++clip_n;
         if (nef && static_cast<int>(i) < config.nef_boxes_per_size) {
           const auto tn = std::chrono::steady_clock::now();
           const Rational w = nef->obv(part[i]);
-          nef_seconds += since(tn);
+          nef_seconds += seconds_since(tn);
           clip_on_nef_boxes += s.exact_seconds;
           ++r.nef_compared;
           if (!(w == v)) r.nef_agrees = false;  // exact: equal rationals or a finding
@@ -290,7 +283,7 @@ DiscretizationResult run_discretization_study(const DiscretizationConfig& config
       row.cover_two = double(c2) / row.n;
       r.richardson.push_back(row);
     }
-  r.seconds = since(t0);
+  r.seconds = seconds_since(t0);
   return r;
 }
 

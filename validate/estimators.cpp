@@ -1,17 +1,10 @@
 #include "validate/estimators.h"
+#include "common/stopwatch.h"
 
 #include <chrono>
 #include <limits>
 
 namespace vobb::validate {
-namespace {
-
-double since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-
-}  // namespace
-
 const char* to_string(Backend b) { return b == Backend::kCpu ? "cpu" : "gl"; }
 
 EstimatorSet::EstimatorSet(const Mesh& mesh, bool want_gl, EstimatePerturbation perturb)
@@ -39,13 +32,13 @@ std::vector<double> EstimatorSet::estimate(Backend backend, const std::vector<Ob
     for (size_t i = 0; i < boxes.size(); ++i) {
       const auto t0 = std::chrono::steady_clock::now();
       out.push_back(cpu_.estimate(boxes[i], m));
-      (*seconds)[i] = since(t0);
+      (*seconds)[i] = seconds_since(t0);
     }
   } else {
     VOBB_ASSERT(gl_ != nullptr && m <= gl_->max_m(), "GL estimator present and m within its limit");
     const auto t0 = std::chrono::steady_clock::now();
     out = gl_->estimate(boxes, m);
-    const double each = boxes.empty() ? 0.0 : since(t0) / boxes.size();
+    const double each = boxes.empty() ? 0.0 : seconds_since(t0) / boxes.size();
     seconds->assign(boxes.size(), each);
   }
   if (perturb_)

@@ -6,16 +6,9 @@
 #include "exact/certify.h"
 #include "fast/obbtree_builder.h"
 #include "fast/variational_builder.h"
+#include "common/stopwatch.h"
 
 namespace vobb::validate {
-namespace {
-
-double since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-
-}  // namespace
-
 bool UpperBoundResult::all_exact_hold() const {
   for (const LayerBoundRow& l : layers)
     if (!l.exact_holds) return false;
@@ -60,7 +53,7 @@ UpperBoundResult run_upper_bound_study(const UpperBoundConfig& config, const Sta
         tree = build_variational(mesh, o, estimate);
       }
       TreeCheck tc{nm.name, builder};
-      tc.build_seconds = since(tb);
+      tc.build_seconds = seconds_since(tb);
       exact::CertifyOptions co;
       co.path = exact::OmvPath::kAuto;
       const exact::Certificate cert = exact::certify(mesh, tree, co);
@@ -107,7 +100,7 @@ UpperBoundResult run_upper_bound_study(const UpperBoundConfig& config, const Sta
       say(buf);
     }
   }
-  r.seconds = since(t0);
+  r.seconds = seconds_since(t0);
   return r;
 }
 

@@ -17,15 +17,12 @@
 #include "validate/discretization_study.h"
 #include "validate/stiff_cases.h"
 #include "validate/upper_bound_study.h"
+#include "common/stopwatch.h"
 
 namespace vobb::validate {
 namespace {
 
 namespace fs = std::filesystem;
-
-double since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 std::string g(double v, int digits = 4) {
   char buf[64];
@@ -215,7 +212,7 @@ Status run_validation_suite(const SuiteOptions& options, SuiteReport* report) {
   sc.perturb = options.perturb;
   sc.progress = say;
   const std::vector<StiffCaseResult> stiff = run_stiff_cases(sc, B);
-  const double stiff_seconds = since(t_stiff);
+  const double stiff_seconds = seconds_since(t_stiff);
 
   // ---- checks --------------------------------------------------------------------------
   auto check = [&](const std::string& name, bool passed, const std::string& detail) {
@@ -486,7 +483,7 @@ Status run_validation_suite(const SuiteOptions& options, SuiteReport* report) {
 
   // ---- summary.md -----------------------------------------------------------------------
   std::ostringstream md;
-  report->seconds = since(t0);
+  report->seconds = seconds_since(t0);
   {
     char date[64];
     const std::time_t now = std::time(nullptr);

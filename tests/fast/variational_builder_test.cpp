@@ -26,6 +26,16 @@ double layer_sum(const CpuObvEstimator& cpu, const Tree& t, int level, int m) {
   return s;
 }
 
+// Estimated sum of OBV of the root's children, through tight boxes of the same groups and axes
+// (fit_obb pads each written box by a few ulps, which would blur exact comparisons).
+double root_children_sum(const CpuObvEstimator& cpu, const Mesh& mesh, const Tree& t, int m) {
+  std::vector<Obb> boxes;
+  for (int32_t c : t.nodes[0].children) boxes.push_back(tight_box(mesh, t.nodes[c].faces, t.nodes[c].box.axes));
+  double s = 0;
+  for (double v : cpu.estimate(boxes, m)) s += v;
+  return s;
+}
+
 TEST(VariationalBuilder, WritesAValidConservativeTree) {
   const Mesh mesh = analytic::polygonal_torus().mesh;
   const CpuObvEstimator cpu(mesh);
@@ -61,11 +71,7 @@ TEST(VariationalBuilder, MoreLloydIterationsNeverRaiseTheEstimatedSum) {
     o.depth = 1;
     o.lloyd_iterations = iterations;
     const Tree t = build_variational(mesh, o, cpu_at(cpu, m));
-    // fit_obb pads each box by a few ulps: compare through tight boxes of the same groups.
-    std::vector<Obb> boxes;
-    for (int32_t c : t.nodes[0].children) boxes.push_back(tight_box(mesh, t.nodes[c].faces, t.nodes[c].box.axes));
-    double sum = 0;
-    for (double v : cpu.estimate(boxes, m)) sum += v;
+    const double sum = root_children_sum(cpu, mesh, t, m);
     EXPECT_LE(sum, previous) << iterations;
     previous = sum;
   }
@@ -110,10 +116,7 @@ TEST(VariationalBuilder, AdjustmentNeverRaisesTheRootChildrensEstimatedSum) {
       EXPECT_GT(report.adjustments, 0u) << "no adjusted split was kept: the check below would be empty";
     }
     EXPECT_TRUE(check_conservative(mesh, t).ok());
-    std::vector<Obb> boxes;
-    for (int32_t c : t.nodes[0].children) boxes.push_back(tight_box(mesh, t.nodes[c].faces, t.nodes[c].box.axes));
-    sums[adjust] = 0;
-    for (double v : cpu.estimate(boxes, m)) sums[adjust] += v;
+    sums[adjust] = root_children_sum(cpu, mesh, t, m);
   }
   EXPECT_LE(sums[1], sums[0]);
 }
