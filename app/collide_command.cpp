@@ -46,6 +46,7 @@ std::string format_json(const CollideFlags& f, const collision::ExperimentReport
     jt["arity"] = t.arity;
     jt["nodes"] = t.nodes;
     jt["box_tests"] = t.counts.box_tests;
+    jt["box_tests_by_level"] = t.counts.box_tests_by_level;
     jt["leaf_tests"] = t.counts.leaf_tests;
     jt["contacts"] = t.counts.contacts;
     jt["narrow_phase_seconds"] = t.narrow_phase_seconds;
@@ -103,6 +104,20 @@ std::string format_text(const collision::ExperimentReport& r) {
                   -reduction_pct(t0.fcl.bv_tests, t.fcl.bv_tests),
                   -reduction_pct(t0.fcl.tree_node_bv_tests, t.fcl.tree_node_bv_tests));
     out += line;
+  }
+  out += "box tests by level (root = 0), change % against the first tree:\n";
+  for (const auto& t : r.trees) {
+    out += "  " + t.name + ":";
+    for (size_t l = 0; l < t.counts.box_tests_by_level.size(); ++l) {
+      const uint64_t n = t.counts.box_tests_by_level[l];
+      std::snprintf(line, sizeof line, " %llu", static_cast<unsigned long long>(n));
+      out += line;
+      if (&t != &t0 && l < t0.counts.box_tests_by_level.size()) {
+        std::snprintf(line, sizeof line, " (%+.1f)", -reduction_pct(t0.counts.box_tests_by_level[l], n));
+        out += line;
+      }
+    }
+    out += "\n";
   }
   if (r.fcl_own.available) {
     std::snprintf(line, sizeof line, "FCL's own OBB tree: %llu bv tests, %llu leaf tests\n",

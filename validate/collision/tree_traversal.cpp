@@ -19,15 +19,28 @@ TreeTraversal::TreeTraversal(const Mesh& mesh, const Tree& tree) : mesh_(mesh) {
       faces_.insert(faces_.end(), t.faces.begin(), t.faces.end());
     }
   }
+  // Levels from the root down (validate_tree has checked that the children form a tree).
+  std::vector<int32_t> todo{0};
+  while (!todo.empty()) {
+    const Node& n = nodes_[todo.back()];
+    todo.pop_back();
+    levels_ = std::max(levels_, n.level + 1);
+    for (int32_t k = 0; k < n.num_children; ++k) {
+      nodes_[children_[n.first_child + k]].level = n.level + 1;
+      todo.push_back(children_[n.first_child + k]);
+    }
+  }
 }
 
 void TreeTraversal::query(const PreparedCollider& c, std::vector<int32_t>* faces, QueryCounts* counts) const {
   faces->clear();
+  if (counts->box_tests_by_level.size() < static_cast<size_t>(levels_)) counts->box_tests_by_level.resize(levels_, 0);
   stack_.assign(1, 0);
   while (!stack_.empty()) {
     const Node& n = nodes_[stack_.back()];
     stack_.pop_back();
     ++counts->box_tests;
+    ++counts->box_tests_by_level[n.level];
     if (!may_touch_box(c, n.box)) continue;
     // Children pushed in reverse so that they are visited in stored order (depth first).
     for (int32_t k = n.num_children - 1; k >= 0; --k) stack_.push_back(children_[n.first_child + k]);

@@ -4,7 +4,8 @@
 // A query walks the tree from the root. Each visited node costs one collider–box test
 // (`may_touch_box`, conservative); a node that may touch is opened, and at a leaf each face
 // costs one leaf triangle test (`touches_triangle`). There is no early exit: a query finds
-// every touching face. Precondition: the tree's boxes contain their faces (check_conservative);
+// every touching face. Preconditions: the tree is well formed (validate_tree) and its boxes contain
+// their faces (check_conservative);
 // then the faces found equal brute force's (`brute_force_touching`).
 #pragma once
 
@@ -21,6 +22,9 @@ struct QueryCounts {
   uint64_t box_tests = 0;   // collider–box tests (every visited node, the root included)
   uint64_t leaf_tests = 0;  // collider–triangle tests at the leaves
   uint64_t contacts = 0;    // touching faces found
+  // box_tests split by the tested node's level (root = 0); sums to box_tests. Level 0 counts
+  // one test per query, whatever the tree below it.
+  std::vector<uint64_t> box_tests_by_level;
 };
 
 class TreeTraversal {
@@ -35,10 +39,12 @@ class TreeTraversal {
     PreparedBox box;
     int32_t first_child = 0, num_children = 0;  // into children_
     int32_t first_face = 0, num_faces = 0;      // into faces_ (leaves only)
+    int32_t level = 0;                          // root = 0
   };
   const Mesh& mesh_;
   std::vector<Node> nodes_;
   std::vector<int32_t> children_, faces_;
+  int32_t levels_ = 1;  // 1 + the deepest node's level
   mutable std::vector<int32_t> stack_;
 };
 

@@ -65,6 +65,16 @@ TEST(CollisionExperiment, StaticSceneAgreesWithBruteForce) {
     EXPECT_EQ(t.disagreements, 0u);
     EXPECT_GE(t.counts.box_tests, r.queries);  // the root at least
     EXPECT_GT(t.counts.contacts, 0u);
+    // The split by level: one root test per query, a test at every level of the depth-4 tree
+    // (some queries touch), and the parts add up to the total.
+    ASSERT_EQ(t.counts.box_tests_by_level.size(), 5u);
+    EXPECT_EQ(t.counts.box_tests_by_level[0], r.queries);
+    uint64_t sum = 0;
+    for (uint64_t n : t.counts.box_tests_by_level) {
+      EXPECT_GT(n, 0u);
+      sum += n;
+    }
+    EXPECT_EQ(sum, t.counts.box_tests);
   }
   EXPECT_EQ(r.trees[0].counts.contacts, r.trees[1].counts.contacts);
   // Inflated boxes contain the originals, so every node the baseline opens, they open too.
@@ -156,7 +166,8 @@ TEST(CollideCli, StaticRunJsonAndBadInput) {
   ASSERT_EQ(j["trees"].size(), 2u);
   EXPECT_EQ(j["trees"][0]["box_tests"], j["trees"][1]["box_tests"]);
   EXPECT_EQ(j["trees"][1]["reduction_pct"], 0.0);
-  for (const char* key : {"file", "box_tests", "leaf_tests", "contacts", "narrow_phase_seconds", "fcl_bv_tests",
+  EXPECT_EQ(j["trees"][0]["box_tests_by_level"][0], 60);
+  for (const char* key : {"file", "box_tests", "box_tests_by_level", "leaf_tests", "contacts", "narrow_phase_seconds", "fcl_bv_tests",
                           "reduction_pct"})
     EXPECT_TRUE(j["trees"][0].contains(key)) << key;
 
