@@ -1,0 +1,60 @@
+#!/usr/bin/env python3
+"""Summarises `vobb collide --json` runs of a baseline tree (first) against a variational tree
+(second) into the Markdown table of docs/BENCHMARKS.md (issue 7).
+
+Usage: collide_summary.py RUN.json [RUN.json ...]
+Runs are grouped by (mesh, depth, mode); seeds of one group are averaged, and the spread is
+the sample standard deviation over seeds (n - 1), or '-' for one seed.
+"""
+import json
+import statistics
+import sys
+from collections import defaultdict
+
+
+def change(a, b):
+    """% change of b against a (negative: fewer)."""
+    return 100.0 * (b / a - 1.0)
+
+
+def main(paths):
+    groups = defaultdict(list)
+    for path in paths:
+        with open(path) as f:
+            run = json.load(f)
+        base, var = run["trees"][0], run["trees"][1]
+        if not run["brute_force_agrees"] or base["disagreements"] or var["disagreements"]:
+            sys.exit(f"{path}: a tree disagrees with brute force")
+        mesh = run["mesh"].split("/")[-1].rsplit(".", 1)[0]
+        groups[(mesh, base["depth"], run["mode"])].append((run, base, var))
+
+    def stat(values, fmt="{:+.1f}", spread_fmt=" ± {:.1f}"):
+        mean = statistics.mean(values)
+        spread = statistics.stdev(values) if len(values) > 1 else None
+        return fmt.format(mean) + (spread_fmt.format(spread) if spread is not None else "")
+
+    print("| mesh | D | mode | seeds | queries per run (touching) | box tests per unit, baseline → variational "
+          "| **box-test change %** | FCL on our nodes % | levels ≥ 2 only % | leaf tests × | box + leaf % |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    for (mesh, depth, mode), runs in sorted(groups.items(), key=lambda g: (g[0][1], g[0][0], g[0][2])):
+        unit = [r["simulated_seconds"] if mode == "dynamic" else r["queries"] for r, _, _ in runs]
+        per_base = statistics.mean(b["box_tests"] / u for (_, b, _), u in zip(runs, unit))
+        per_var = statistics.mean(v["box_tests"] / u for (_, _, v), u in zip(runs, unit))
+        box = [change(b["box_tests"], v["box_tests"]) for _, b, v in runs]
+        fcl = [change(b["fcl_tree_node_bv_tests"], v["fcl_tree_node_bv_tests"]) for _, b, v in runs
+               if b.get("fcl_tree_node_bv_tests") and v.get("fcl_tree_node_bv_tests")]
+        deep = [change(sum(b["box_tests_by_level"][2:]), sum(v["box_tests_by_level"][2:])) for _, b, v in runs]
+        leaf = [v["leaf_tests"] / b["leaf_tests"] for _, b, v in runs]
+        both = [change(b["box_tests"] + b["leaf_tests"], v["box_tests"] + v["leaf_tests"]) for _, b, v in runs]
+        queries = statistics.mean(r["queries"] for r, _, _ in runs)
+        touching = statistics.mean(r["touching_queries"] for r, _, _ in runs)
+        fmt_unit = "{:,.0f} /s" if mode == "dynamic" else "{:.2f}"
+        print(f"| {mesh} | {depth} | {mode} | {len(runs)} | {queries:,.0f} ({touching:,.0f}) | "
+              f"{fmt_unit.format(per_base)} → {fmt_unit.format(per_var)} | **{stat(box)}** | "
+              f"{stat(fcl) if fcl else '-'} | {stat(deep)} | {stat(leaf, '{:.2f}', ' ± {:.2f}')} | {stat(both)} |")
+
+
+if __name__ == "__main__":
+    if len(sys.argv) < 2:
+        sys.exit(__doc__)
+    main(sys.argv[1:])
