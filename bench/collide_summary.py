@@ -31,11 +31,12 @@ def main(paths):
     def stat(values, fmt="{:+.1f}", spread_fmt=" ± {:.1f}"):
         mean = statistics.mean(values)
         spread = statistics.stdev(values) if len(values) > 1 else None
-        return fmt.format(mean) + (spread_fmt.format(spread) if spread is not None else "")
+        text = fmt.format(mean) + (spread_fmt.format(spread) if spread is not None else "")
+        return text.replace("-", "\u2212")  # the minus sign of the rest of docs/BENCHMARKS.md
 
     print("| mesh | D | mode | seeds | queries per run (touching) | box tests per unit, baseline → variational "
-          "| **box-test change %** | FCL on our nodes % | levels ≥ 2 only % | leaf tests × | box + leaf % |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|")
+          "| **box-test change %** | seeds' range | FCL on our nodes % | FCL raw % | levels ≥ 2 only % | leaf tests × | box + leaf % | narrow-phase time × |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for (mesh, depth, mode), runs in sorted(groups.items(), key=lambda g: (g[0][1], g[0][0], g[0][2])):
         unit = [r["simulated_seconds"] if mode == "dynamic" else r["queries"] for r, _, _ in runs]
         per_base = statistics.mean(b["box_tests"] / u for (_, b, _), u in zip(runs, unit))
@@ -43,15 +44,20 @@ def main(paths):
         box = [change(b["box_tests"], v["box_tests"]) for _, b, v in runs]
         fcl = [change(b["fcl_tree_node_bv_tests"], v["fcl_tree_node_bv_tests"]) for _, b, v in runs
                if b.get("fcl_tree_node_bv_tests") and v.get("fcl_tree_node_bv_tests")]
+        raw = [change(b["fcl_bv_tests"], v["fcl_bv_tests"]) for _, b, v in runs
+               if b.get("fcl_bv_tests") and v.get("fcl_bv_tests")]
         deep = [change(sum(b["box_tests_by_level"][2:]), sum(v["box_tests_by_level"][2:])) for _, b, v in runs]
         leaf = [v["leaf_tests"] / b["leaf_tests"] for _, b, v in runs]
         both = [change(b["box_tests"] + b["leaf_tests"], v["box_tests"] + v["leaf_tests"]) for _, b, v in runs]
+        # Wall time of the traversals, as a ratio within each run (the two trees ran on the same
+        # queries, interleaved, so load affects both alike).
+        seconds = [v["narrow_phase_seconds"] / b["narrow_phase_seconds"] for _, b, v in runs]
         queries = statistics.mean(r["queries"] for r, _, _ in runs)
         touching = statistics.mean(r["touching_queries"] for r, _, _ in runs)
         fmt_unit = "{:,.0f} /s" if mode == "dynamic" else "{:.2f}"
         print(f"| {mesh} | {depth} | {mode} | {len(runs)} | {queries:,.0f} ({touching:,.0f}) | "
-              f"{fmt_unit.format(per_base)} → {fmt_unit.format(per_var)} | **{stat(box)}** | "
-              f"{stat(fcl) if fcl else '-'} | {stat(deep)} | {stat(leaf, '{:.2f}', ' ± {:.2f}')} | {stat(both)} |")
+              f"{fmt_unit.format(per_base)} → {fmt_unit.format(per_var)} | **{stat(box)}** | {stat([min(box)])} … {stat([max(box)])} | "
+              f"{stat(fcl) if fcl else '-'} | {stat(raw) if raw else '-'} | {stat(deep)} | {stat(leaf, '{:.2f}', ' ± {:.2f}')} | {stat(both)} | {stat(seconds, '{:.2f}', ' ± {:.2f}')} |")
 
 
 if __name__ == "__main__":
