@@ -10,6 +10,8 @@ TreeTraversal::TreeTraversal(const Mesh& mesh, const Tree& tree) : mesh_(mesh) {
     const TreeNode& t = tree.nodes[i];
     Node& n = nodes_[i];
     n.box = prepare_box(t.box);
+    n.level = t.level;
+    levels_ = std::max(levels_, t.level + 1);
     n.first_child = static_cast<int32_t>(children_.size());
     n.num_children = static_cast<int32_t>(t.children.size());
     children_.insert(children_.end(), t.children.begin(), t.children.end());
@@ -17,17 +19,6 @@ TreeTraversal::TreeTraversal(const Mesh& mesh, const Tree& tree) : mesh_(mesh) {
       n.first_face = static_cast<int32_t>(faces_.size());
       n.num_faces = static_cast<int32_t>(t.faces.size());
       faces_.insert(faces_.end(), t.faces.begin(), t.faces.end());
-    }
-  }
-  // Levels from the root down (validate_tree has checked that the children form a tree).
-  std::vector<int32_t> todo{0};
-  while (!todo.empty()) {
-    const Node& n = nodes_[todo.back()];
-    todo.pop_back();
-    levels_ = std::max(levels_, n.level + 1);
-    for (int32_t k = 0; k < n.num_children; ++k) {
-      nodes_[children_[n.first_child + k]].level = n.level + 1;
-      todo.push_back(children_[n.first_child + k]);
     }
   }
 }

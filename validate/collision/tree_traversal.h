@@ -39,7 +39,7 @@ class TreeTraversal {
     PreparedBox box;
     int32_t first_child = 0, num_children = 0;  // into children_
     int32_t first_face = 0, num_faces = 0;      // into faces_ (leaves only)
-    int32_t level = 0;                          // root = 0
+    int32_t level = 0;                          // root = 0 (the tree's, checked by validate_tree)
   };
   const Mesh& mesh_;
   std::vector<Node> nodes_;
