@@ -4,7 +4,8 @@
 
 Usage: collide_summary.py RUN.json [RUN.json ...]
 Runs are grouped by (mesh, depth, mode); seeds of one group are averaged, and the spread is
-the sample standard deviation over seeds (n - 1), or '-' for one seed.
+the sample standard deviation over seeds (n - 1), left out for one seed. A run where a tree
+disagrees with brute force, or FCL's answers disagree with brute force, stops the summary.
 """
 import json
 import statistics
@@ -25,6 +26,13 @@ def main(paths):
         base, var = run["trees"][0], run["trees"][1]
         if not run["brute_force_agrees"] or base["disagreements"] or var["disagreements"]:
             sys.exit(f"{path}: a tree disagrees with brute force")
+        fcl_sides = [t for t in run["trees"] if t.get("fcl_bv_tests") is not None]
+        if "fcl_own_obb_tree" in run:
+            fcl_sides.append(run["fcl_own_obb_tree"])
+        for t in fcl_sides:
+            if t.get("fcl_answer_disagreements", t.get("answer_disagreements")) or \
+               t.get("fcl_face_disagreements", t.get("face_disagreements")):
+                sys.exit(f"{path}: FCL's answers disagree with brute force")
         mesh = run["mesh"].split("/")[-1].rsplit(".", 1)[0]
         groups[(mesh, base["depth"], run["mode"])].append((run, base, var))
 

@@ -4,14 +4,13 @@
 
 namespace vobb::collision {
 
-TreeTraversal::TreeTraversal(const Mesh& mesh, const Tree& tree) : mesh_(mesh) {
+TreeTraversal::TreeTraversal(const Mesh& mesh, const Tree& tree) : mesh_(mesh), levels_(tree.depth + 1) {
   nodes_.resize(tree.nodes.size());
   for (size_t i = 0; i < tree.nodes.size(); ++i) {
     const TreeNode& t = tree.nodes[i];
     Node& n = nodes_[i];
     n.box = prepare_box(t.box);
     n.level = t.level;
-    levels_ = std::max(levels_, t.level + 1);
     n.first_child = static_cast<int32_t>(children_.size());
     n.num_children = static_cast<int32_t>(t.children.size());
     children_.insert(children_.end(), t.children.begin(), t.children.end());

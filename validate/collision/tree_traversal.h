@@ -44,7 +44,7 @@ class TreeTraversal {
   const Mesh& mesh_;
   std::vector<Node> nodes_;
   std::vector<int32_t> children_, faces_;
-  int32_t levels_ = 1;  // 1 + the deepest node's level
+  int32_t levels_;  // tree.depth + 1
   mutable std::vector<int32_t> stack_;
 };
 
