@@ -14,6 +14,7 @@
 #include "common/io/mesh_report.h"
 #include "common/png_io.h"
 #include "common/sha256.h"
+#include "common/text_util.h"
 #include "common/tree_io.h"
 #include "exact/certify.h"
 #include "exact/outer_volume.h"
@@ -58,6 +59,7 @@ struct BuildFlags {
   std::string backend = "auto";
   bool no_axis_search = false, adjust = false, no_merge = false, quiet = false;
   int sweeps = 3;
+  double collider_margin = 0;  // world units; 0: the paper's objective
   std::string checkpoint;    // folder; empty: none
   double time_budget = 0;    // seconds; 0: none
 };
@@ -85,6 +87,12 @@ vobb::Status make_estimator(const vobb::Mesh& mesh, const BuildFlags& f, std::un
   return vobb::Status::ok();
 }
 
+std::string margin_text(double margin) {
+  std::string t;
+  vobb::append_double(&t, margin);
+  return t;
+}
+
 // What a variational build depends on, for its checkpoints: a state saved under another
 // fingerprint is refused, so a resumed build is the build that was interrupted.
 std::string build_fingerprint(const vobb::Mesh& mesh, const BuildFlags& f, const vobb::GlObvEstimator* gl) {
@@ -93,7 +101,9 @@ std::string build_fingerprint(const vobb::Mesh& mesh, const BuildFlags& f, const
          "; lloyd " + std::to_string(f.lloyd) + "; seed " + std::to_string(f.seed) + "; axis search " +
          (f.no_axis_search ? "off" : "on") + "; adjust " + (f.adjust ? "on" : "off") + "; merge " +
          (f.no_merge ? "off" : "on") + "; sweeps " + std::to_string(f.sweeps) + "; m " + std::to_string(f.m) +
-         "; estimator " + (gl ? "gl " + gl->renderer() : std::string("cpu"));
+         "; estimator " + (gl ? "gl " + gl->renderer() : std::string("cpu")) +
+         // Named only when set, so that states saved before the option existed still resume.
+         (f.collider_margin > 0 ? "; collider margin " + margin_text(f.collider_margin) : std::string());
 }
 
 vobb::Status build_tree(const vobb::Mesh& mesh, const BuildFlags& f, const vobb::ObvEstimate& estimate,
@@ -114,6 +124,7 @@ vobb::Status build_tree(const vobb::Mesh& mesh, const BuildFlags& f, const vobb:
   opt.merge = !f.no_merge;
   opt.max_sweeps = f.sweeps;
   opt.seed = f.seed;
+  opt.margin = f.collider_margin;
   const auto t0 = std::chrono::steady_clock::now();
   if (f.time_budget > 0) opt.out_of_time = [&] { return seconds_since(t0) > f.time_budget; };
   double last = -1, done0 = -1;
@@ -174,9 +185,22 @@ vobb::Status build_tree(const vobb::Mesh& mesh, const BuildFlags& f, const vobb:
 
 int run_build(const std::string& mesh_path, const std::string& out, const BuildFlags& f) {
   const auto t0 = std::chrono::steady_clock::now();
+  if (!std::isfinite(f.collider_margin) || f.collider_margin < 0)
+    return refuse(vobb::Status::error("--collider-margin must be a finite length >= 0"));
+  if (f.collider_margin > 0 && f.method != "variational")
+    return refuse(vobb::Status::error("--collider-margin applies to --method variational only"));
   vobb::LoadedMesh loaded;
   vobb::Status s = vobb::load_solid(mesh_path, &loaded);
   if (!s) return refuse(s);
+  if (f.collider_margin > 0) {
+    // A margin beyond the model's size is no collider of this model, and it keeps the grown
+    // boxes' volumes far from overflow.
+    vobb::Vec3 lo = loaded.mesh.vertices[0], hi = lo;
+    for (const vobb::Vec3& v : loaded.mesh.vertices) lo = lo.cwiseMin(v), hi = hi.cwiseMax(v);
+    if (f.collider_margin > (hi - lo).norm())
+      return refuse(vobb::Status::error("--collider-margin " + margin_text(f.collider_margin) +
+                                        " exceeds the mesh's bounding-box diagonal " + margin_text((hi - lo).norm())));
+  }
   std::unique_ptr<vobb::GlObvEstimator> gl;
   std::unique_ptr<vobb::CpuObvEstimator> cpu;
   vobb::ObvEstimate estimate;
@@ -503,6 +527,10 @@ int main(int argc, char** argv) {
   build->add_flag("--adjust", bf.adjust, "Also run the adjustment step (Lloyd from other planar splits at levels 1-4; measured to raise e, so off)");
   build->add_flag("--no-merge", bf.no_merge, "Ablation: no bottom-up merging sweeps");
   build->add_option("--sweeps", bf.sweeps, "Most bottom-up merging sweeps")->capture_default_str()->check(CLI::Range(0, 100));
+  build->add_option("--collider-margin", bf.collider_margin,
+                    "Variational: minimise the OBV of each box grown by this length on every side (world units), "
+                    "for colliders of about this radius; 0 is the paper's objective. The stored boxes stay tight")
+      ->capture_default_str();
   build->add_option("--checkpoint", bf.checkpoint, "Folder for the build state after each level and sweep; "
                     "a build started again with it resumes and gives the same tree");
   build->add_option("--time-budget", bf.time_budget, "Seconds; then the search stops and the rest gets the baseline split")

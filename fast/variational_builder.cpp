@@ -182,9 +182,13 @@ class NodeSplitter {
     }
   }
 
+  // The objective of each box: its estimated OBV, grown by the collider margin first.
   std::vector<double> measure(const std::vector<Obb>& boxes) {
     report_->estimates += boxes.size();
-    return estimate_(boxes);
+    if (options_.margin == 0) return estimate_(boxes);
+    std::vector<Obb> grown = boxes;
+    for (Obb& b : grown) b.half.array() += options_.margin;
+    return estimate_(grown);
   }
 
  private:
@@ -663,6 +667,7 @@ Tree build_variational(const Mesh& mesh, const VariationalOptions& options, cons
                        const VariationalState* resume, VariationalReport* report) {
   VOBB_ASSERT(options.depth >= 0 && options.arity >= 2, "depth >= 0 and arity >= 2");
   VOBB_ASSERT(!mesh.faces.empty(), "build_variational needs faces");
+  VOBB_ASSERT(std::isfinite(options.margin) && options.margin >= 0, "margin finite and >= 0");
   VariationalReport local_report;
   if (!report) report = &local_report;
   *report = VariationalReport{};

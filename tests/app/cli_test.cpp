@@ -59,7 +59,9 @@ TEST(CliBadInput, MissingFileDirectoryAndUsage) {
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("is a directory"), std::string::npos) << r.err;
   for (const char* args : {"", "frobnicate", "info", "build x.off", "build x.off -o t.json --depth -1",
-                           "build x.off -o t.json --arity 1", "export t.json -o b.obj"}) {
+                           "build x.off -o t.json --arity 1", "export t.json -o b.obj",
+                           "build x.off -o t.json --collider-margin -1", "build x.off -o t.json --collider-margin nan",
+                           "build x.off -o t.json --collider-margin 0.1 --method obbtree"}) {
     r = vobb_cli(args);
     EXPECT_EQ(r.code, 2) << args;
     EXPECT_EQ(line_count(r.err), 1u) << args << ": " << r.err;
@@ -86,6 +88,13 @@ TEST(Cli, BuildExportAndInfoOnAnAnalyticMesh) {
   ASSERT_TRUE(read_tree(tree, &t));
   EXPECT_EQ(t.mesh_triangles, 12u);
   EXPECT_EQ(t.mesh_sha256.size(), 64u);
+  // A collider margin beyond the cube's diagonal (sqrt 3) is refused, and no tree is written.
+  const std::string margin_tree = test::temp_path("margin_tree.json");
+  r = vobb_cli("build " + mesh + " -o " + margin_tree + " --collider-margin 1.8 --backend cpu --depth 1");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(line_count(r.err), 1u) << r.err;
+  EXPECT_NE(r.err.find("bounding-box diagonal"), std::string::npos) << r.err;
+  EXPECT_FALSE(test::exists(margin_tree));
   const std::string boxes = test::temp_path("layer.obj");
   r = vobb_cli("export " + tree + " --level 2 -o " + boxes);
   ASSERT_EQ(r.code, 0) << r.err;

@@ -57,6 +57,45 @@ TEST(VariationalBuilder, SameInputSameBytes) {
             tree_to_json(build_variational(mesh, o, cpu_at(cpu, 8))));
 }
 
+// The collider margin is defined as measuring each box grown by the margin: a build with
+// margin d and estimator E must make the same tree, byte for byte, as a build with margin 0
+// and the estimator E applied to the grown boxes. The second check keeps the first from
+// passing vacuously: on this mesh the grown objective does change the tree.
+TEST(VariationalBuilder, ColliderMarginMeasuresGrownBoxes) {
+  const Mesh mesh = analytic::polygonal_torus().mesh;
+  const CpuObvEstimator cpu(mesh);
+  const double d = 0.15;  // the torus spans about 3 units: a collider of 5 % of its size
+  const ObvEstimate grown = [&cpu, d](const std::vector<Obb>& boxes) {
+    std::vector<Obb> g = boxes;
+    for (Obb& b : g) b.half.array() += d;
+    return cpu.estimate(g, 8);
+  };
+  VariationalOptions o;
+  o.depth = 3;
+  VariationalOptions with_margin = o;
+  with_margin.margin = d;
+  const std::string by_option = tree_to_json(build_variational(mesh, with_margin, cpu_at(cpu, 8)));
+  EXPECT_EQ(by_option, tree_to_json(build_variational(mesh, o, grown)));
+  EXPECT_NE(by_option, tree_to_json(build_variational(mesh, o, cpu_at(cpu, 8))));
+}
+
+// The margin changes what is measured, not what is stored: every box is its faces' tight box
+// along its axes, padded by fit_obb only (a few ulps of the coordinates, far below d / 100).
+TEST(VariationalBuilder, ColliderMarginKeepsTheStoredBoxesTight) {
+  const Mesh mesh = analytic::polygonal_torus().mesh;
+  const CpuObvEstimator cpu(mesh);
+  VariationalOptions o;
+  o.depth = 3;
+  o.margin = 0.15;
+  const Tree t = build_variational(mesh, o, cpu_at(cpu, 8));
+  ASSERT_TRUE(validate_tree(t, "variational"));
+  EXPECT_TRUE(check_conservative(mesh, t).ok());
+  for (const TreeNode& n : t.nodes) {
+    const Obb tight = tight_box(mesh, n.faces, n.box.axes);
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(n.box.half[k], tight.half[k], o.margin / 100) << "node " << n.id;
+  }
+}
+
 // Lloyd iterations keep the best state seen, starting from the baseline's split with optimised
 // boxes: the root's children never get a larger estimated sum of OBV, in the estimator's own
 // measure, from more iterations (the same estimator at the same m decides, so no noise enters).
