@@ -4,27 +4,41 @@
 # the dynamic scene (1,000 colliders, 10 s) and the static one (5,000 poses) for seeds 1..SEEDS,
 # and prints the summary table (bench/collide_summary.py).
 #
-# Usage: bench/collide_bench.sh VOBB OUTDIR [SEEDS]   (run from the repository root)
+# Usage: bench/collide_bench.sh VOBB OUTDIR [SEEDS [MARGIN]]   (run from the repository root)
+# With MARGIN, a third tree joins every run: the variational build with --collider-margin set
+# to MARGIN times the mesh's bounding-box half diagonal (X_margin_D.json).
 # Trees and runs already in OUTDIR are kept, so an interrupted run can be started again.
+# DEPTHS and MESHES (environment) narrow the set, e.g. to run two meshes side by side.
 set -euo pipefail
-vobb=$1 out=$2 seeds=${3:-5}
+vobb=$1 out=$2 seeds=${3:-5} margin=${4:-}
 mkdir -p "$out"
-for depth in 8 12; do
-  for mesh in dino elephant knot1; do
+for depth in ${DEPTHS:-8 12}; do
+  for mesh in ${MESHES:-dino elephant knot1}; do
     off=data/real/$mesh.off
-    for method in obbtree variational; do
+    trees=()
+    for method in obbtree variational ${margin:+margin}; do
       tree=$out/${mesh}_${method}_$depth.json
-      [ -s "$tree" ] || /usr/bin/time -f "$mesh $method depth $depth: %e s wall, %U s user" -a -o "$out/build_times.txt" \
-        "$vobb" build "$off" -o "$tree" --method "$method" --depth "$depth" --backend cpu --quiet
+      trees+=("$tree")
+      [ -s "$tree" ] && continue
+      if [ "$method" = margin ]; then
+        length=$("$vobb" info "$off" --json | python3 -c "import json, math, sys
+b = json.load(sys.stdin)['bbox']
+print(repr($margin * 0.5 * math.dist(b['min'], b['max'])))")
+        echo "$mesh: collider margin $length" >> "$out/build_times.txt"
+        args=(--method variational --collider-margin "$length")
+      else
+        args=(--method "$method")
+      fi
+      /usr/bin/time -f "$mesh $method depth $depth: %e s wall, %U s user" -a -o "$out/build_times.txt" \
+        "$vobb" build "$off" -o "$tree" "${args[@]}" --depth "$depth" --backend cpu --quiet
     done
     for seed in $(seq 1 "$seeds"); do
       for mode in dynamic static; do
         run=$out/run_${mesh}_${depth}_${mode}_s$seed.json
         [ -s "$run" ] && continue
-        if [ "$mode" = dynamic ]; then args="--colliders 1000 --seconds 10"; else args="--static --colliders 5000"; fi
+        if [ "$mode" = dynamic ]; then scene="--colliders 1000 --seconds 10"; else scene="--static --colliders 5000"; fi
         # shellcheck disable=SC2086
-        "$vobb" collide "$off" "$out/${mesh}_obbtree_$depth.json" "$out/${mesh}_variational_$depth.json" \
-          $args --seed "$seed" --json -o "$run"
+        "$vobb" collide "$off" "${trees[@]}" $scene --seed "$seed" --json -o "$run"
       done
     done
   done

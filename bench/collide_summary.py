@@ -1,6 +1,8 @@
 #!/usr/bin/env python3
-"""Summarises `vobb collide --json` runs of a baseline tree (first) against a variational tree
-(second) into the Markdown table of docs/BENCHMARKS.md (issue 7).
+"""Summarises `vobb collide --json` runs of a baseline tree (first) against each later tree
+(the variational tree, and the collider-margin tree when the run has one) into the Markdown
+table of docs/BENCHMARKS.md (issue 7). A tree is named by its file name less the mesh and the
+depth: dino_margin_8.json is "margin".
 
 Usage: collide_summary.py RUN.json [RUN.json ...]
 Runs are grouped by (mesh, depth, mode); seeds of one group are averaged, and the spread is
@@ -23,8 +25,8 @@ def main(paths):
     for path in paths:
         with open(path) as f:
             run = json.load(f)
-        base, var = run["trees"][0], run["trees"][1]
-        if not run["brute_force_agrees"] or base["disagreements"] or var["disagreements"]:
+        base = run["trees"][0]
+        if not run["brute_force_agrees"] or any(t["disagreements"] for t in run["trees"]):
             sys.exit(f"{path}: a tree disagrees with brute force")
         fcl_sides = [t for t in run["trees"] if t.get("fcl_bv_tests") is not None]
         if "fcl_own_obb_tree" in run:
@@ -34,7 +36,10 @@ def main(paths):
                t.get("fcl_face_disagreements", t.get("face_disagreements")):
                 sys.exit(f"{path}: FCL's answers disagree with brute force")
         mesh = run["mesh"].split("/")[-1].rsplit(".", 1)[0]
-        groups[(mesh, base["depth"], run["mode"])].append((run, base, var))
+        for var in run["trees"][1:]:
+            name = var["file"].split("/")[-1].rsplit(".", 1)[0]
+            name = name.removeprefix(mesh + "_").removesuffix(f"_{var['depth']}")
+            groups[(mesh, base["depth"], run["mode"], name)].append((run, base, var))
 
     def stat(values, fmt="{:+.1f}", spread_fmt=" ± {:.1f}"):
         mean = statistics.mean(values)
@@ -42,10 +47,10 @@ def main(paths):
         text = fmt.format(mean) + (spread_fmt.format(spread) if spread is not None else "")
         return text.replace("-", "\u2212")  # the minus sign of the rest of docs/BENCHMARKS.md
 
-    print("| mesh | D | mode | seeds | queries per run (touching) | box tests per unit, baseline → variational "
+    print("| mesh | D | mode | tree | seeds | queries per run (touching) | box tests per unit, baseline → tree "
           "| **box-test change %** | seeds' range | FCL on our nodes % | FCL raw % | levels ≥ 2 only % | leaf tests × | box + leaf % | narrow-phase time × |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
-    for (mesh, depth, mode), runs in sorted(groups.items(), key=lambda g: (g[0][1], g[0][0], g[0][2])):
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    for (mesh, depth, mode, name), runs in sorted(groups.items(), key=lambda g: (g[0][1], g[0][0], g[0][2], g[0][3] != "variational", g[0][3])):
         unit = [r["simulated_seconds"] if mode == "dynamic" else r["queries"] for r, _, _ in runs]
         per_base = statistics.mean(b["box_tests"] / u for (_, b, _), u in zip(runs, unit))
         per_var = statistics.mean(v["box_tests"] / u for (_, _, v), u in zip(runs, unit))
@@ -63,7 +68,7 @@ def main(paths):
         queries = statistics.mean(r["queries"] for r, _, _ in runs)
         touching = statistics.mean(r["touching_queries"] for r, _, _ in runs)
         fmt_unit = "{:,.0f} /s" if mode == "dynamic" else "{:.2f}"
-        print(f"| {mesh} | {depth} | {mode} | {len(runs)} | {queries:,.0f} ({touching:,.0f}) | "
+        print(f"| {mesh} | {depth} | {mode} | {name} | {len(runs)} | {queries:,.0f} ({touching:,.0f}) | "
               f"{fmt_unit.format(per_base)} → {fmt_unit.format(per_var)} | **{stat(box)}** | {stat([min(box)])} … {stat([max(box)])} | "
               f"{stat(fcl) if fcl else '-'} | {stat(raw) if raw else '-'} | {stat(deep)} | {stat(leaf, '{:.2f}', ' ± {:.2f}')} | {stat(both)} | {stat(seconds, '{:.2f}', ' ± {:.2f}')} |")
 
