@@ -195,11 +195,11 @@ int run_build(const std::string& mesh_path, const std::string& out, const BuildF
   if (f.collider_margin > 0) {
     // A margin beyond the model's size is no collider of this model, and it keeps the grown
     // boxes' volumes far from overflow.
-    vobb::Vec3 lo = loaded.mesh.vertices[0], hi = lo;
-    for (const vobb::Vec3& v : loaded.mesh.vertices) lo = lo.cwiseMin(v), hi = hi.cwiseMax(v);
-    if (f.collider_margin > (hi - lo).norm())
+    const vobb::Aabb box = loaded.mesh.bounds();
+    const double diagonal = (box.hi - box.lo).norm();
+    if (f.collider_margin > diagonal)
       return refuse(vobb::Status::error("--collider-margin " + margin_text(f.collider_margin) +
-                                        " exceeds the mesh's bounding-box diagonal " + margin_text((hi - lo).norm())));
+                                        " exceeds the mesh's bounding-box diagonal " + margin_text(diagonal)));
   }
   std::unique_ptr<vobb::GlObvEstimator> gl;
   std::unique_ptr<vobb::CpuObvEstimator> cpu;
