@@ -140,8 +140,9 @@ vobb::Status build_tree(const vobb::Mesh& mesh, const BuildFlags& f, const vobb:
         char eta[48] = "";
         if (p.done - done0 > 0.02)
           std::snprintf(eta, sizeof eta, "  ~%.0f s left to split", now * (1 - p.done) / (p.done - done0));
-        std::fprintf(stderr, "\rvobb: level %d/%d  node %zu/%zu  iteration %d  sum OBV %.6g  %.1f s%s     ",
-                     p.level, f.depth, p.node, p.nodes, p.iteration, p.sum_obv, now, eta);
+        std::fprintf(stderr, "\rvobb: level %d/%d  node %zu/%zu  iteration %d  sum %s %.6g  %.1f s%s     ",
+                     p.level, f.depth, p.node, p.nodes, p.iteration,
+                     f.collider_margin > 0 ? "grown OBV" : "OBV", p.sum_obv, now, eta);
       } else {
         std::fprintf(stderr, "\rvobb: merging sweep %d/%d  level %d  node %zu/%zu  %.1f s                         ",
                      p.sweep, f.sweeps, p.level, p.node, p.nodes, now);
@@ -529,7 +530,8 @@ int main(int argc, char** argv) {
   build->add_option("--sweeps", bf.sweeps, "Most bottom-up merging sweeps")->capture_default_str()->check(CLI::Range(0, 100));
   build->add_option("--collider-margin", bf.collider_margin,
                     "Variational: minimise the OBV of each box grown by this length on every side (world units), "
-                    "for colliders of about this radius; 0 is the paper's objective. The stored boxes stay tight")
+                    "for colliders of about this radius; 0 is the paper's objective, and at most the mesh's "
+                    "bounding-box diagonal. The stored boxes stay tight")
       ->capture_default_str();
   build->add_option("--checkpoint", bf.checkpoint, "Folder for the build state after each level and sweep; "
                     "a build started again with it resumes and gives the same tree");

@@ -5,22 +5,27 @@
 # and prints the summary table (bench/collide_summary.py).
 #
 # Usage: bench/collide_bench.sh VOBB OUTDIR [SEEDS [MARGIN]]   (run from the repository root)
-# With MARGIN, a third tree joins every run: the variational build with --collider-margin set
-# to MARGIN times the mesh's bounding-box half diagonal (X_margin_D.json).
+# With MARGIN (> 0), a third tree joins every run: the variational build with --collider-margin
+# set to MARGIN times the mesh's bounding-box half diagonal (X_marginMARGIN_D.json); such runs
+# are named run_X_D_MODE_sS_marginMARGIN.json, apart from the two-tree runs.
 # Trees and runs already in OUTDIR are kept, so an interrupted run can be started again.
 # DEPTHS and MESHES (environment) narrow the set, e.g. to run two meshes side by side.
 set -euo pipefail
 vobb=$1 out=$2 seeds=${3:-5} margin=${4:-}
 mkdir -p "$out"
+if [ -n "$margin" ]; then
+  python3 -c "import math, sys; m = float(sys.argv[1]); sys.exit(0 if math.isfinite(m) and m > 0 else 1)" "$margin" ||
+    { echo "collide_bench.sh: MARGIN must be a number > 0, not '$margin'" >&2; exit 2; }
+fi
 for depth in ${DEPTHS:-8 12}; do
   for mesh in ${MESHES:-dino elephant knot1}; do
     off=data/real/$mesh.off
     trees=()
-    for method in obbtree variational ${margin:+margin}; do
+    for method in obbtree variational ${margin:+margin$margin}; do
       tree=$out/${mesh}_${method}_$depth.json
       trees+=("$tree")
       [ -s "$tree" ] && continue
-      if [ "$method" = margin ]; then
+      if [ "$method" = "margin$margin" ]; then
         length=$("$vobb" info "$off" --json | python3 -c "import json, math, sys
 b = json.load(sys.stdin)['bbox']
 print(repr($margin * 0.5 * math.dist(b['min'], b['max'])))")
@@ -34,7 +39,7 @@ print(repr($margin * 0.5 * math.dist(b['min'], b['max'])))")
     done
     for seed in $(seq 1 "$seeds"); do
       for mode in dynamic static; do
-        run=$out/run_${mesh}_${depth}_${mode}_s$seed.json
+        run=$out/run_${mesh}_${depth}_${mode}_s$seed${margin:+_margin$margin}.json
         [ -s "$run" ] && continue
         if [ "$mode" = dynamic ]; then scene="--colliders 1000 --seconds 10"; else scene="--static --colliders 5000"; fi
         # shellcheck disable=SC2086

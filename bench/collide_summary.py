@@ -2,14 +2,15 @@
 """Summarises `vobb collide --json` runs of a baseline tree (first) against each later tree
 (the variational tree, and the collider-margin tree when the run has one) into the Markdown
 table of docs/BENCHMARKS.md (issue 7). A tree is named by its file name less the mesh and the
-depth: dino_margin_8.json is "margin".
+depth: dino_margin0.1_8.json is "margin0.1".
 
 Usage: collide_summary.py RUN.json [RUN.json ...]
-Runs are grouped by (mesh, depth, mode); seeds of one group are averaged, and the spread is
+Runs are grouped by (mesh, depth, mode, tree); seeds of one group are averaged, and the spread is
 the sample standard deviation over seeds (n - 1), left out for one seed. A run where a tree
 disagrees with brute force, or FCL's answers disagree with brute force, stops the summary.
 """
 import json
+import re
 import statistics
 import sys
 from collections import defaultdict
@@ -36,9 +37,12 @@ def main(paths):
                t.get("fcl_face_disagreements", t.get("face_disagreements")):
                 sys.exit(f"{path}: FCL's answers disagree with brute force")
         mesh = run["mesh"].split("/")[-1].rsplit(".", 1)[0]
+        names = set()
         for var in run["trees"][1:]:
-            name = var["file"].split("/")[-1].rsplit(".", 1)[0]
-            name = name.removeprefix(mesh + "_").removesuffix(f"_{var['depth']}")
+            name = re.sub(r"_\d+$", "", var["file"].split("/")[-1].rsplit(".", 1)[0]).removeprefix(mesh + "_")
+            if name in names:
+                sys.exit(f"{path}: two trees named {name}")
+            names.add(name)
             groups[(mesh, base["depth"], run["mode"], name)].append((run, base, var))
 
     def stat(values, fmt="{:+.1f}", spread_fmt=" ± {:.1f}"):
@@ -62,7 +66,7 @@ def main(paths):
         deep = [change(sum(b["box_tests_by_level"][2:]), sum(v["box_tests_by_level"][2:])) for _, b, v in runs]
         leaf = [v["leaf_tests"] / b["leaf_tests"] for _, b, v in runs]
         both = [change(b["box_tests"] + b["leaf_tests"], v["box_tests"] + v["leaf_tests"]) for _, b, v in runs]
-        # Wall time of the traversals, as a ratio within each run (the two trees ran on the same
+        # Wall time of the traversals, as a ratio within each run (the trees ran on the same
         # queries, interleaved, so load affects both alike).
         seconds = [v["narrow_phase_seconds"] / b["narrow_phase_seconds"] for _, b, v in runs]
         queries = statistics.mean(r["queries"] for r, _, _ in runs)

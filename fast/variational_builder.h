@@ -71,7 +71,8 @@ struct VariationalProgress {
   size_t node = 0;      // nodes done at that level
   size_t nodes = 0;     // nodes to do at that level
   int iteration = 0;    // Lloyd iteration within the node
-  double sum_obv = 0;   // estimated sum of OBV of the finished children at this level
+  double sum_obv = 0;   // estimated sum of OBV of the finished children at this level (of the
+                        // boxes grown by the margin, when there is one)
   size_t estimates = 0; // boxes estimated so far
   double done = 0;      // rough fraction of the whole build done, for a remaining-time guess
 };

@@ -22,6 +22,13 @@ using test::vobb_cli;
 
 size_t line_count(const std::string& s) { return std::count(s.begin(), s.end(), '\n'); }
 
+std::string slurp(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
 // Every file in the corpus: exit 2, exactly one line on stderr naming the file and the
 // defect phrase from EXPECTED.tsv; `build` on it writes no tree file.
 TEST(CliBadInput, CorpusGivesExitTwoAndOneClearLine) {
@@ -59,12 +66,18 @@ TEST(CliBadInput, MissingFileDirectoryAndUsage) {
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("is a directory"), std::string::npos) << r.err;
   for (const char* args : {"", "frobnicate", "info", "build x.off", "build x.off -o t.json --depth -1",
-                           "build x.off -o t.json --arity 1", "export t.json -o b.obj",
-                           "build x.off -o t.json --collider-margin -1", "build x.off -o t.json --collider-margin nan",
+                           "build x.off -o t.json --arity 1", "export t.json -o b.obj"}) {
+    r = vobb_cli(args);
+    EXPECT_EQ(r.code, 2) << args;
+    EXPECT_EQ(line_count(r.err), 1u) << args << ": " << r.err;
+  }
+  // A bad margin is refused before the mesh is read, so the line names the flag, not x.off.
+  for (const char* args : {"build x.off -o t.json --collider-margin -1", "build x.off -o t.json --collider-margin nan",
                            "build x.off -o t.json --collider-margin 0.1 --method obbtree"}) {
     r = vobb_cli(args);
     EXPECT_EQ(r.code, 2) << args;
     EXPECT_EQ(line_count(r.err), 1u) << args << ": " << r.err;
+    EXPECT_NE(r.err.find("--collider-margin"), std::string::npos) << args << ": " << r.err;
   }
 }
 
@@ -95,6 +108,14 @@ TEST(Cli, BuildExportAndInfoOnAnAnalyticMesh) {
   EXPECT_EQ(line_count(r.err), 1u) << r.err;
   EXPECT_NE(r.err.find("bounding-box diagonal"), std::string::npos) << r.err;
   EXPECT_FALSE(test::exists(margin_tree));
+  // Within the diagonal it builds, and the margin reaches the builder: the tree differs from
+  // the margin-0 build of the same flags (the same difference the builder test pins down).
+  const std::string plain_tree = test::temp_path("plain_tree.json");
+  r = vobb_cli("build " + mesh + " -o " + margin_tree + " --collider-margin 0.5 --backend cpu --depth 2 --m 8 --quiet");
+  ASSERT_EQ(r.code, 0) << r.err;
+  r = vobb_cli("build " + mesh + " -o " + plain_tree + " --backend cpu --depth 2 --m 8 --quiet");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(slurp(margin_tree), slurp(plain_tree));
   const std::string boxes = test::temp_path("layer.obj");
   r = vobb_cli("export " + tree + " --level 2 -o " + boxes);
   ASSERT_EQ(r.code, 0) << r.err;
@@ -163,13 +184,6 @@ TEST(Cli, BuildExportAndInfoOnAnAnalyticMesh) {
   for (const std::string& p : {mesh, tree, boxes}) std::remove(p.c_str());
 }
 
-std::string slurp(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
-
 // A variational build killed (SIGKILL) once its checkpoint holds two split levels, then started
 // again with the same folder, writes the same bytes as an uninterrupted build; a build with
 // other options refuses that folder with exit 2.
@@ -204,6 +218,10 @@ TEST(Cli, KilledBuildResumesToTheSameTree) {
   const CliRun other = vobb_cli("build " + mesh + " -o " + resumed + args + " --seed 2 --checkpoint " + dir);
   EXPECT_EQ(other.code, 2);
   EXPECT_NE(other.err.find("checkpoint of another build"), std::string::npos) << other.err;
+  // A margin is part of what the checkpoint names: the margin-0 state is refused.
+  const CliRun margin = vobb_cli("build " + mesh + " -o " + resumed + args + " --collider-margin 0.1 --checkpoint " + dir);
+  EXPECT_EQ(margin.code, 2);
+  EXPECT_NE(margin.err.find("checkpoint of another build"), std::string::npos) << margin.err;
   std::system(("rm -rf " + dir).c_str());
   for (const std::string& p : {whole, resumed, pid_file}) std::remove(p.c_str());
 }
