@@ -87,12 +87,6 @@ vobb::Status make_estimator(const vobb::Mesh& mesh, const BuildFlags& f, std::un
   return vobb::Status::ok();
 }
 
-std::string margin_text(double margin) {
-  std::string t;
-  vobb::append_double(&t, margin);
-  return t;
-}
-
 // What a variational build depends on, for its checkpoints: a state saved under another
 // fingerprint is refused, so a resumed build is the build that was interrupted.
 std::string build_fingerprint(const vobb::Mesh& mesh, const BuildFlags& f, const vobb::GlObvEstimator* gl) {
@@ -103,7 +97,7 @@ std::string build_fingerprint(const vobb::Mesh& mesh, const BuildFlags& f, const
          (f.no_merge ? "off" : "on") + "; sweeps " + std::to_string(f.sweeps) + "; m " + std::to_string(f.m) +
          "; estimator " + (gl ? "gl " + gl->renderer() : std::string("cpu")) +
          // Named only when set, so that states saved before the option existed still resume.
-         (f.collider_margin > 0 ? "; collider margin " + margin_text(f.collider_margin) : std::string());
+         (f.collider_margin > 0 ? "; collider margin " + vobb::format_double(f.collider_margin) : std::string());
 }
 
 vobb::Status build_tree(const vobb::Mesh& mesh, const BuildFlags& f, const vobb::ObvEstimate& estimate,
@@ -199,8 +193,8 @@ int run_build(const std::string& mesh_path, const std::string& out, const BuildF
     const vobb::Aabb box = loaded.mesh.bounds();
     const double diagonal = (box.hi - box.lo).norm();
     if (f.collider_margin > diagonal)
-      return refuse(vobb::Status::error("--collider-margin " + margin_text(f.collider_margin) +
-                                        " exceeds the mesh's bounding-box diagonal " + margin_text(diagonal)));
+      return refuse(vobb::Status::error("--collider-margin " + vobb::format_double(f.collider_margin) +
+                                        " exceeds the mesh's bounding-box diagonal " + vobb::format_double(diagonal)));
   }
   std::unique_ptr<vobb::GlObvEstimator> gl;
   std::unique_ptr<vobb::CpuObvEstimator> cpu;

@@ -25,6 +25,12 @@ void append_double(std::string* s, double v) {
   s->append(buf, res.ptr);
 }
 
+std::string format_double(double v) {
+  std::string s;
+  append_double(&s, v);
+  return s;
+}
+
 void append_xyz(std::string* s, const Vec3& v) {
   append_double(s, v[0]);
   *s += ' ';

@@ -14,6 +14,8 @@ std::string basename_of(const std::string& path);
 std::string extension_of(const std::string& path);
 // Appends the shortest decimal form that reads back as the same double (std::to_chars).
 void append_double(std::string* s, double v);
+// The same form as a string.
+std::string format_double(double v);
 // Appends "x y z" with append_double, and no newline.
 void append_xyz(std::string* s, const Vec3& v);
 

@@ -6,17 +6,6 @@
 #include "common/text_util.h"
 
 namespace vobb {
-namespace {
-
-// Bounding-box coordinates are the file's own doubles: shortest form that reads back exactly.
-std::string num(double v) {
-  std::string s;
-  append_double(&s, v);
-  return s;
-}
-
-}  // namespace
-
 Status inspect_mesh(const std::string& path, MeshReport* report) {
   report->file = path;
   Status s = load_mesh(path, &report->loaded);
@@ -53,8 +42,9 @@ std::string format_report_text(const MeshReport& r, bool rational) {
   o << "\nedges:     " << s.edges << "\nshells:    " << s.shells << "\n";
   const Aabb b = r.loaded.mesh.bounds();
   if (!b.empty() && b.lo.allFinite() && b.hi.allFinite())
-    o << "bbox:      [" << num(b.lo[0]) << ", " << num(b.lo[1]) << ", " << num(b.lo[2]) << "] .. ["
-      << num(b.hi[0]) << ", " << num(b.hi[1]) << ", " << num(b.hi[2]) << "]\n";
+    // The file's own doubles: the shortest form that reads back exactly.
+    o << "bbox:      [" << format_double(b.lo[0]) << ", " << format_double(b.lo[1]) << ", " << format_double(b.lo[2]) << "] .. ["
+      << format_double(b.hi[0]) << ", " << format_double(b.hi[1]) << ", " << format_double(b.hi[2]) << "]\n";
   if (s.volume_known) {
     o << "volume:    " << format_nearest(s.volume) << " (exact, rounded to nearest)\n";
     if (rational) o << "rational:  " << s.volume.get_str() << "\n";

@@ -181,7 +181,7 @@ TEST(Cli, BuildExportAndInfoOnAnAnalyticMesh) {
   ASSERT_EQ(r.code, 0) << r.err;
   r = vobb_cli("certify " + mesh + " " + tree + " --quiet");
   EXPECT_EQ(r.code, 0) << r.out << r.err;
-  for (const std::string& p : {mesh, tree, boxes}) std::remove(p.c_str());
+  for (const std::string& p : {mesh, tree, boxes, margin_tree, plain_tree}) std::remove(p.c_str());
 }
 
 // A variational build killed (SIGKILL) once its checkpoint holds two split levels, then started
