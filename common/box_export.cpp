@@ -4,10 +4,6 @@
 #include "common/text_util.h"
 
 namespace vobb {
-namespace {
-
-}  // namespace
-
 Status export_boxes(const std::vector<Obb>& boxes, const std::vector<std::string>& names,
                     const std::string& path) {
   const std::string ext = extension_of(path);
