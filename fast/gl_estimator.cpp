@@ -23,16 +23,6 @@ struct SpanRecord {
 };
 static_assert(sizeof(SpanRecord) == 84, "SpanRecord is read with a fixed stride");
 
-// Scale factor 2^-e bringing the largest |x_i| into [0.5, 1): exact in binary, so it keeps
-// zeros, signs, exact negations between the faces of a shared edge, and the ratio plane/nd.
-double pow2_normalizer(double a, double b, double c, double d = 0) {
-  const double big = std::max({std::abs(a), std::abs(b), std::abs(c), std::abs(d)});
-  if (big == 0 || !std::isfinite(big)) return 1;
-  int e;
-  std::frexp(big, &e);
-  return std::ldexp(1.0, -e);
-}
-
 }  // namespace
 
 struct GlObvEstimator::Gl {
@@ -230,109 +220,27 @@ void GlObvEstimator::flush(int m) {
 
 // ---- the deviation bound -----------------------------------------------------------------
 //
-// The shaders see the plan's doubles rounded to float (after exact power-of-two scaling) and
-// compute, per texel and span, with u = 2^-24 (float unit round-off):
-//  - the direction d: components -1 + (2i+1)/m; GLSL allows 2.5 ulp for a division and the
-//    quotient is at most 2 in magnitude, so each of the two varying components is off by at
-//    most 2.5u*2 + u (the subtraction) < 8u, absolutely; the axis component +-1 is exact;
-//  - dot products d.E with E rounded (relative u) and three roundings of a 3-term sum (gamma_3):
-//    |fl(d.E) - d.E| <= 8u (|E_a| + |E_b|) + 5u sum_i |d_i E_i| =: err(E).
-//    An edge test whose |d.E| <= err(E) may come out either way ("uncertain"), as may one with
-//    a float-underflowing input;
-//  - zeta = plane / nd: nd has relative error r = err(n) / |nd|; with the plane rounded (u) and
-//    the division (2.5u, taken as 3u), zeta's relative error is at most
-//    z = (1 + r) / (1 - r) (1 + u)(1 + 3u) - 1, and zeta^3's at most (1 + z)^3 (1 + u)^2 - 1 =: z3;
-//  - a hit's value s (1 - zeta^3) (or -s zeta^3) is then off by at most zeta^3 z3 + u (1 + zeta^3 (1 + z3)).
-//  - A hit whose zeta lies within its error of a threshold (0 or 1) may be counted or not: at
-//    1 the two sides differ by |1 - zeta^3| plus the error above. At 0 the float zeta keeps
-//    the exact sign as long as r < 1/2 and the plane does not underflow; otherwise (a grazing
-//    ray, or a centre within float underflow of the face's plane) the pair is uncertain.
-//  - An uncertain (texel, face) pair adds 2: each side's value lies in [-1, 1].
-//  - Sums (assuming round-to-nearest float blending, which GL does not promise but every
-//    implementation we know does): each texel blends its hits in float, and the reduction adds per lane
-//    ceil(6m^2 / 256) texels and then 8 tree levels: all in all at most K = H + ceil(6m^2/256)
-//    + 8 additions per term, H the most hits in one texel, so the summation error is at most
-//    gamma_K sum |values| (the recursive-summation bound, Higham, Accuracy and Stability of
-//    Numerical Algorithms, 2nd ed., eq. 4.4).
-// The double side (the CPU twin) has round-off some 2^29 times smaller, far below this bound.
-// The bound is first-principles, not fitted: the test asserts it, and reports how close the
-// observed deviations come to it.
+// |GL - CPU| <= |GL - exact(plan)| + |CPU - exact(plan)|. The first term is the plan evaluated
+// with u = 2^-24 (analyse_plan_rounding, texel_plan.cpp, derives the per-pair terms) and GL's
+// summation: each texel blends its hits in float (assuming round-to-nearest float blending,
+// which GL does not promise but every implementation we know does), and the reduction adds per
+// lane ceil(6m^2 / 256) texels and then 8 tree levels: at most K = H + ceil(6m^2/256) + 8
+// additions per term, H the most terms in one texel, so the summation error is at most
+// gamma_K sum |values| (Higham, Accuracy and Stability of Numerical Algorithms, 2nd ed.,
+// eq. 4.4). GLSL may flush subnormals, hence the FLT_MIN terms. The read-back sum is then
+// assembled in double exactly as the CPU twin does, so the second term, cpu_rounding_bound,
+// also covers that assembly. The bound is first-principles, not fitted: the test asserts it,
+// and reports how close the observed deviations come to it.
 double gl_deviation_bound(const BoxPlan& plan, int m) {
-  if (plan.flat || plan.spans.empty()) return 0.0;
+  if (plan.flat || plan.spans.empty()) return cpu_rounding_bound(plan, m);
   constexpr double u = 1.0 / (1 << 24);
-  auto gamma = [&](double n) { return n * u / (1 - n * u); };
   constexpr double kFloatMin = 1.1754943508222875e-38;
-  double sum_abs = 0, errors = 0, uncertain = 0;
-  std::vector<uint16_t> hits(6 * static_cast<size_t>(m) * m, 0);
-  for (const TexelSpan& span : plan.spans) {
-    const LocalTriangle& t = plan.tris[span.tri];
-    const int k = span.face / 2, a = (k + 1) % 3, b = (k + 2) % 3;
-    const double fn = pow2_normalizer(t.normal[0], t.normal[1], t.normal[2]);
-    // zeta = plane / nd with |nd| up to 3 (|d_i| <= 1, |n_i| < 1 after scaling): a plane below
-    // 3 FLT_MIN may give a subnormal zeta, which GLSL may flush to 0.
-    const bool plane_underflows = t.plane != 0 && std::abs(t.plane * fn) < 3 * kFloatMin;
-    double fe[3];  // the shader's power-of-two scale of each edge cross
-    for (int e = 0; e < 3; ++e) fe[e] = pow2_normalizer(t.edge_cross[e][0], t.edge_cross[e][1], t.edge_cross[e][2]);
-    for (int i = span.i0; i <= span.i1; ++i) {
-      for (int j = span.j0; j <= span.j1; ++j) {
-        const Vec3 d = cubemap_direction(span.face, texel_center(i, m), texel_center(j, m));
-        // Edge tests: definite sides must agree; any uncertain one makes the pair uncertain.
-        int definite = 0;
-        bool unsure = false, miss = false;
-        for (int e = 0; e < 3 && !miss; ++e) {
-          const Vec3& E = t.edge_cross[e];
-          const double dot = d.dot(E) * fe[e];
-          const double err = 8 * u * (std::abs(E[a]) + std::abs(E[b])) * fe[e] +
-                             5 * u * d.cwiseAbs().dot(E.cwiseAbs()) * fe[e] + 3 * kFloatMin;
-          int side;
-          if (std::abs(dot) <= err) {
-            unsure = true;
-            continue;
-          }
-          side = dot > 0 ? 1 : -1;
-          if (definite == 0) definite = side;
-          else if (side != definite) miss = true;
-        }
-        if (miss) continue;
-        const size_t texel = (static_cast<size_t>(span.face) * m + i) * m + j;
-        if (unsure || plane_underflows) {
-          uncertain += 1;
-          hits[texel] = static_cast<uint16_t>(std::min(65535, hits[texel] + 1));
-          continue;
-        }
-        const double nd = t.normal.dot(d);
-        const double r = (8 * u * (std::abs(t.normal[a]) + std::abs(t.normal[b])) +
-                          5 * u * d.cwiseAbs().dot(t.normal.cwiseAbs())) / std::abs(nd);
-        if (!(r < 0.5)) {
-          uncertain += 1;
-          hits[texel] = static_cast<uint16_t>(std::min(65535, hits[texel] + 1));
-          continue;
-        }
-        const double zeta = t.plane / nd;
-        if (zeta <= 0) continue;  // r < 1/2 keeps nd's sign, rounding keeps the plane's: GL agrees
-        const double z = (1 + r) / (1 - r) * (1 + u) * (1 + 3 * u) - 1;
-        const bool near_one = std::abs(zeta - 1) <= zeta * z;
-        if (zeta >= 1 && !near_one) {  // beyond the box in both: nothing, or exactly -s (far)
-          if (plan.far_count) {
-            sum_abs += 1;
-            hits[texel] = static_cast<uint16_t>(std::min(65535, hits[texel] + 1));
-          }
-          continue;
-        }
-        const double z3 = std::pow(1 + z, 3) * (1 + u) * (1 + u) - 1;
-        const double c3 = zeta * zeta * zeta;
-        const double value_err = c3 * z3 + u * (1 + c3 * (1 + z3));
-        hits[texel] = static_cast<uint16_t>(std::min(65535, hits[texel] + 1));
-        sum_abs += std::min(1.0, (plan.far_count ? c3 : std::abs(1 - c3)) + value_err);
-        errors += value_err + (near_one ? std::abs(1 - c3) : 0);
-      }
-    }
-  }
-  const uint16_t most = *std::max_element(hits.begin(), hits.end());
-  const double lanes = std::ceil(6.0 * m * m / 256);
-  const double summation = gamma(most + lanes + 8) * (sum_abs + 2 * uncertain);
+  const PlanRounding r = analyse_plan_rounding(plan, m, RoundingModel{u, 3 * kFloatMin, 0, 3 * kFloatMin});
+  const double K = r.most_per_texel + std::ceil(6.0 * m * m / 256) + 8;
+  const double summation = K * u / (1 - K * u) * (r.sum_abs + 2 * r.uncertain);
   const double texel_weight = 4.0 / (3.0 * m * m);
-  return plan.frame.volume_scale * texel_weight * (errors + 2 * uncertain + summation);
+  return plan.frame.volume_scale * texel_weight * (r.value_errors + 2 * r.uncertain + summation) +
+         cpu_rounding_bound(plan, m);
 }
 
 }  // namespace vobb

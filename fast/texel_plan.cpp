@@ -116,6 +116,153 @@ double resolution_bound(const BoxPlan& plan, int m) {
   return plan.frame.volume_scale * 4.0 / (3.0 * m * m) * static_cast<double>(count);
 }
 
+// ---- round-off of evaluating a plan -------------------------------------------------------
+//
+// Against the exact evaluation of the same plan, an evaluation with unit round-off u computes,
+// per texel and span:
+//  - the direction d: components -1 + (2i+1)/m; a division may be off by 2.5u (GLSL's
+//    allowance; IEEE double is 0.5u) and the quotient is at most 2 in magnitude, so each of the
+//    two varying components is off by at most 2.5u*2 + u (the subtraction) < 8u, absolutely;
+//    the axis component +-1 is exact;
+//  - dot products d.E with E rounded (relative u; no rounding in double) and three roundings
+//    of a 3-term sum (gamma_3): |fl(d.E) - d.E| <= 8u (|E_a| + |E_b|) + 5u sum_i |d_i E_i|
+//    =: err(E), plus underflow (model.tiny_*). An edge test whose |d.E| <= err(E) may come
+//    out either way ("uncertain");
+//  - zeta = plane / nd: nd has relative error r = err(n) / |nd|; with the plane rounded (u) and
+//    the division (2.5u, taken as 3u), zeta's relative error is at most
+//    z = (1 + r) / (1 - r) (1 + u)(1 + 3u) - 1, and zeta^3's at most (1 + z)^3 (1 + u)^2 - 1 =: z3;
+//  - a hit's value s (1 - zeta^3) (or -s zeta^3) is then off by at most
+//    zeta^3 z3 + u (1 + zeta^3 (1 + z3)).
+//  - A hit whose zeta lies within its error of a threshold (0 or 1) may be counted or not: at
+//    1 the two sides differ by |1 - zeta^3| plus the error above. At 0 the computed zeta keeps
+//    the exact sign as long as r < 1/2 and zeta does not underflow; otherwise (a grazing ray,
+//    or a centre within underflow of the face's plane) the pair is uncertain.
+//  - An uncertain (texel, face) pair adds 2: each side's value lies in [-1, 1]. For the CPU
+//    twin an edge test within err(E) is settled exactly instead (resolve_edges_exactly).
+//  - A face whose plane is exactly 0 (through the centre) gives zeta = +-0 or, with nd = 0, no
+//    test at all, in every arithmetic: it never hits, and is skipped.
+// This bookkeeping itself runs in double on the plan's doubles. Against the float model its
+// own error is some 2^-29 of the terms; against the double model the terms over-count (8u for
+// the direction where IEEE double needs 2.5u, no rounding of E or of the plane, 3u for a
+// division that IEEE rounds to 0.5u), which absorbs it.
+namespace {
+
+// edge_side for the exact texel direction (-1 + (2i+1)/m, -1 + (2j+1)/m on face `face`), in
+// rational arithmetic, with the same simulation-of-simplicity rule for an exact zero.
+int exact_edge_side(const Vec3& E, int face, int i, int j, int m) {
+  const int k = face / 2, a = (k + 1) % 3, b = (k + 2) % 3;
+  const Rational dot = Rational(face % 2 == 0 ? E[k] : -E[k]) +
+                       Rational(E[a]) * (Rational(2 * i + 1, m) - 1) +
+                       Rational(E[b]) * (Rational(2 * j + 1, m) - 1);
+  if (sgn(dot) != 0) return sgn(dot);
+  for (int c : {a, b, k})
+    if (E[c] != 0) return E[c] > 0 ? 1 : -1;
+  return 0;
+}
+
+}  // namespace
+
+PlanRounding analyse_plan_rounding(const BoxPlan& plan, int m, const RoundingModel& model) {
+  PlanRounding out;
+  if (plan.flat || plan.spans.empty()) return out;
+  const double u = model.u;
+  std::vector<uint16_t> terms(6 * static_cast<size_t>(m) * m, 0);
+  auto add_term = [&](size_t texel) {
+    out.pairs += 1;
+    terms[texel] = static_cast<uint16_t>(std::min(65535, terms[texel] + 1));
+  };
+  for (const TexelSpan& span : plan.spans) {
+    const LocalTriangle& t = plan.tris[span.tri];
+    if (t.plane == 0) continue;
+    const int k = span.face / 2, a = (k + 1) % 3, b = (k + 2) % 3;
+    const double fn = pow2_normalizer(t.normal[0], t.normal[1], t.normal[2]);
+    // zeta = plane / nd with |nd| up to 3 (|d_i| <= 1, |n_i| < 1 after scaling): a plane below
+    // this may give a zeta that underflows (GLSL may flush it to 0).
+    const double plane_scaled = model.tiny_scaled > 0 ? std::abs(t.plane * fn) : std::abs(t.plane);
+    const bool plane_underflows = plane_scaled < model.plane_tiny;
+    double fe[3];  // the power-of-two scale of each edge cross (the shader's)
+    for (int e = 0; e < 3; ++e) fe[e] = pow2_normalizer(t.edge_cross[e][0], t.edge_cross[e][1], t.edge_cross[e][2]);
+    for (int i = span.i0; i <= span.i1; ++i) {
+      for (int j = span.j0; j <= span.j1; ++j) {
+        const Vec3 d = cubemap_direction(span.face, texel_center(i, m), texel_center(j, m));
+        // Edge tests: definite sides must agree; any uncertain one makes the pair uncertain.
+        int definite = 0;
+        bool unsure = false, miss = false;
+        for (int e = 0; e < 3 && !miss; ++e) {
+          const Vec3& E = t.edge_cross[e];
+          const double dot = d.dot(E) * fe[e];
+          const double err = 8 * u * (std::abs(E[a]) + std::abs(E[b])) * fe[e] +
+                             5 * u * d.cwiseAbs().dot(E.cwiseAbs()) * fe[e] + model.tiny_scaled +
+                             model.tiny_unscaled * fe[e];
+          int side = dot > 0 ? 1 : -1;
+          if (std::abs(dot) <= err) {
+            if (!model.resolve_edges_exactly) {
+              unsure = true;
+              continue;
+            }
+            side = exact_edge_side(E, span.face, i, j, m);
+            if (side != edge_side(E, d, span.face)) {
+              unsure = true;
+              continue;
+            }
+          }
+          if (definite == 0) definite = side;
+          else if (side != definite) miss = true;
+        }
+        if (miss) continue;
+        const size_t texel = (static_cast<size_t>(span.face) * m + i) * m + j;
+        if (unsure || plane_underflows) {
+          out.uncertain += 1;
+          add_term(texel);
+          continue;
+        }
+        const double nd = t.normal.dot(d);
+        const double r = (8 * u * (std::abs(t.normal[a]) + std::abs(t.normal[b])) +
+                          5 * u * d.cwiseAbs().dot(t.normal.cwiseAbs())) / std::abs(nd);
+        if (!(r < 0.5)) {
+          out.uncertain += 1;
+          add_term(texel);
+          continue;
+        }
+        const double zeta = t.plane / nd;
+        if (zeta <= 0) continue;  // r < 1/2 keeps nd's sign, rounding keeps the plane's: all agree
+        const double z = (1 + r) / (1 - r) * (1 + u) * (1 + 3 * u) - 1;
+        const bool near_one = std::abs(zeta - 1) <= zeta * z;
+        if (zeta >= 1 && !near_one) {  // beyond the box in both: nothing, or exactly -s (far)
+          if (plan.far_count) {
+            out.sum_abs += 1;
+            add_term(texel);
+          }
+          continue;
+        }
+        const double z3 = std::pow(1 + z, 3) * (1 + u) * (1 + u) - 1;
+        const double c3 = zeta * zeta * zeta;
+        const double value_err = c3 * z3 + u * (1 + c3 * (1 + z3));
+        add_term(texel);
+        out.sum_abs += std::min(1.0, (plan.far_count ? c3 : std::abs(1 - c3)) + value_err);
+        out.value_errors += value_err + (near_one ? std::abs(1 - c3) : 0);
+      }
+    }
+  }
+  out.most_per_texel = *std::max_element(terms.begin(), terms.end());
+  return out;
+}
+
+// The CPU twin adds its terms one by one into one double (sum_texel_hits), then forms
+// scale * (constant + (4 / (3 m^2)) * sum): the recursive-summation bound gives
+// gamma_{N-1} sum |terms| for N terms, and the weight (3 roundings), its product, the sum with
+// the constant and the product with the scale (1 each) add gamma_6 of the magnitudes involved.
+double cpu_rounding_bound(const BoxPlan& plan, int m) {
+  if (plan.flat) return 0.0;
+  constexpr double u = 0x1p-53;
+  const PlanRounding r = analyse_plan_rounding(plan, m, RoundingModel{u, 0, 3 * 0x1p-1074, 6 * 0x1p-1074, true});
+  const double n = r.pairs + 6;
+  const double gamma = n * u / (1 - n * u);
+  const double texel_weight = 4.0 / (3.0 * m * m);
+  const double magnitude = std::abs(plan.constant) + texel_weight * (r.sum_abs + 2 * r.uncertain);
+  return plan.frame.volume_scale * (texel_weight * (r.value_errors + 2 * r.uncertain) + gamma * magnitude);
+}
+
 BoxPlanner::BoxPlanner(const Mesh& mesh) : mesh_(mesh), faces_(AabbTree::over_faces(mesh)) {}
 
 BoxPlan BoxPlanner::plan(const Obb& box, int m) const {

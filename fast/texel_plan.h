@@ -105,6 +105,45 @@ inline bool texel_hit(const LocalTriangle& t, const Vec3& d, int face, bool far_
 // the per-texel errors cancel (DESIGN §4).
 double resolution_bound(const BoxPlan& plan, int m);
 
+// Scale factor 2^-e bringing the largest |x_i| into [0.5, 1): exact in binary, so it keeps
+// zeros, signs, exact negations between the faces of a shared edge, and the ratio plane/nd.
+inline double pow2_normalizer(double a, double b, double c, double d = 0) {
+  const double big = std::max({std::abs(a), std::abs(b), std::abs(c), std::abs(d)});
+  if (big == 0 || !std::isfinite(big)) return 1;
+  int e;
+  std::frexp(big, &e);
+  return std::ldexp(1.0, -e);
+}
+
+// Round-off of evaluating a plan in a floating-point format, against evaluating the same plan
+// (the same doubles) in exact arithmetic. texel_plan.cpp derives the per-pair terms; both
+// estimators' bounds are built from it (cpu_rounding_bound below, gl_deviation_bound).
+struct RoundingModel {
+  double u;              // unit round-off: 2^-53 for double, 2^-24 for float
+  double tiny_scaled;    // absolute error of a dot product from underflow, on inputs scaled to [0.5, 1)
+  double tiny_unscaled;  // the same on unscaled inputs (gradual underflow)
+  double plane_tiny;     // |plane| (scaled by tiny_scaled's rule when that is nonzero) below
+                         // which zeta may underflow to 0
+  // For the CPU twin, whose edge test is known (edge_side in double): an edge test within its
+  // error bound is decided in rational arithmetic and compared with the double one, so exact
+  // ties (rays through edges and vertices) count as uncertain only when double gets them wrong.
+  bool resolve_edges_exactly = false;
+};
+struct PlanRounding {
+  double value_errors = 0;  // sum over hits of the value's error, plus threshold ambiguities
+  double uncertain = 0;     // (texel, face) pairs whose hit or miss may differ from exact
+  double sum_abs = 0;       // upper bound on the sum over hits of |value|
+  double pairs = 0;         // hits plus uncertain pairs: the terms a texel sum may add
+  int most_per_texel = 0;   // the most such terms in one texel
+};
+PlanRounding analyse_plan_rounding(const BoxPlan& plan, int m, const RoundingModel& model);
+
+// A rigorous bound on |CPU twin estimate - exact-arithmetic evaluation of the same plan| at
+// resolution m, in world volume units: the per-pair terms above in double, plus the recursive
+// summation over all terms and the final assembly (Higham's gamma_n). It says nothing about
+// the plan's own rounding (the box frame and local coordinates), which callers bound.
+double cpu_rounding_bound(const BoxPlan& plan, int m);
+
 class BoxPlanner {
  public:
   explicit BoxPlanner(const Mesh& mesh);  // keeps a reference
