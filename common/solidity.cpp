@@ -14,6 +14,7 @@ const char* defect_name(Defect d) {
     case Defect::kEmpty: return "empty";
     case Defect::kNonFinite: return "non-finite";
     case Defect::kHugeCoordinate: return "huge-coordinate";
+    case Defect::kTinyExtent: return "tiny-extent";
     case Defect::kDegenerateFace: return "degenerate";
     case Defect::kNotClosed: return "not-closed";
     case Defect::kNonManifoldEdge: return "non-manifold";
@@ -30,7 +31,8 @@ std::string DefectCount::describe() const {
   switch (defect) {
     case Defect::kEmpty: return "empty: no faces";
     case Defect::kNonFinite: return "non-finite coordinates (NaN or Inf): " + n + " vertices";
-    case Defect::kHugeCoordinate: return "coordinates beyond +-2^299 (about 1e90): " + n + " vertices";
+    case Defect::kHugeCoordinate: return "coordinates beyond +-2^240 (about 1.8e72): " + n + " vertices";
+    case Defect::kTinyExtent: return "too small: the mesh spans less than 2^-240 (about 5.7e-73) on every axis";
     case Defect::kDegenerateFace: return "degenerate faces (zero area): " + n + " faces";
     case Defect::kNotClosed: return "not closed: " + n + " border edges";
     case Defect::kNonManifoldEdge: return "non-manifold: " + n + " edges shared by more than two faces";
@@ -358,6 +360,14 @@ SolidityReport check_solidity(const Mesh& mesh) {
 
   if (nonfinite) r.defects.push_back({Defect::kNonFinite, nonfinite});
   if (huge) r.defects.push_back({Defect::kHugeCoordinate, huge});
+  if (nonfinite == 0 && huge == 0 && !mesh.vertices.empty()) {
+    Vec3 lo = mesh.vertices[0], hi = lo;
+    for (const Vec3& v : mesh.vertices) {
+      lo = lo.cwiseMin(v);
+      hi = hi.cwiseMax(v);
+    }
+    if ((hi - lo).maxCoeff() < kMinExtent) r.defects.push_back({Defect::kTinyExtent, 1});
+  }
   if (n_degenerate) r.defects.push_back({Defect::kDegenerateFace, n_degenerate});
   if (border) r.defects.push_back({Defect::kNotClosed, border});
   if (nonmanifold) r.defects.push_back({Defect::kNonManifoldEdge, nonmanifold});

@@ -20,6 +20,7 @@ enum class Defect {
   kEmpty,              // no faces
   kNonFinite,          // NaN or Inf coordinates (count: vertices)
   kHugeCoordinate,     // |coordinate| > kMaxCoordinate (count: vertices)
+  kTinyExtent,         // the vertices span less than kMinExtent on every axis (count: 1)
   kDegenerateFace,     // repeated vertex or zero area (count: faces)
   kNotClosed,          // border edges (count: edges)
   kNonManifoldEdge,    // edges with more than two faces (count: edges)
@@ -31,10 +32,14 @@ enum class Defect {
 
 const char* defect_name(Defect d);
 
-// Largest accepted |coordinate|, 2^299 (about 1e90): the double computations downstream
-// (triple products in predicate filters, second moments, cross products of box axes scaled
-// by extents) must stay finite, and (2 * 2^299)^3 * 6 < 2^1024.
-constexpr double kMaxCoordinate = 0x1p299;
+// Largest accepted |coordinate|, 2^240 (about 1.8e72), and least accepted extent (the
+// largest side of the bounding box), 2^-240 (about 5.7e-73). Between them every double
+// computed downstream stays finite and normal: differences of coordinates are at most 2^241,
+// box volumes and triple products at most 6 (2^241)^3, and the baseline's second moments,
+// a sum over at most 2^31 faces of area times squared distance, at most 2^31 (2^242)^2 (2^241)^2
+// = 2^997 < 2^1024; at the small end extent^4 = 2^-960 is still above the least normal, 2^-1022.
+constexpr double kMaxCoordinate = 0x1p240;
+constexpr double kMinExtent = 0x1p-240;
 
 struct DefectCount {
   Defect defect;

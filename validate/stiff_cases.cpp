@@ -252,7 +252,7 @@ std::vector<StiffCaseResult> run_stiff_cases(const StiffConfig& config, const St
   {
     const analytic::AnalyticMesh huge = analytic::cube(0x1p300);
     const SolidityReport rep = check_solidity(huge.mesh);
-    out.push_back(run.refusal("coordinates beyond 2^299", rep.solid() ? Status::ok() : Status::error(rep.verdict())));
+    out.push_back(run.refusal("coordinates beyond 2^240", rep.solid() ? Status::ok() : Status::error(rep.verdict())));
   }
   return out;
 }

@@ -10,7 +10,7 @@
 // and scaled by 1e-6 and 1e6; the centre on a face, an edge and a vertex; faces parallel to
 // the view rays; nested shells (a cavity); m = 1 and m = 1024; a box holding the whole mesh; a
 // box disjoint from the mesh; and refusals (m = 0, a NaN box, m beyond the GL limit, a
-// self-intersecting mesh, coordinates beyond 2^299).
+// self-intersecting mesh, coordinates beyond 2^240).
 #pragma once
 
 #include <functional>

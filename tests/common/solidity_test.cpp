@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <set>
 #include <sstream>
 
 #include "common/io/mesh_io.h"
@@ -136,7 +137,13 @@ TEST(Solidity, HugeCoordinatesAreRefusedBeforeTheyOverflow) {
   const DefectCount d = only_defect(m);
   EXPECT_EQ(d.defect, Defect::kHugeCoordinate);
   EXPECT_EQ(d.count, 3u);
-  EXPECT_TRUE(check_solidity(analytic::tetrahedron(1e89).mesh).solid());
+  EXPECT_TRUE(check_solidity(analytic::tetrahedron(1e72).mesh).solid());
+}
+
+TEST(Solidity, TinyMeshesAreRefusedBeforeTheyUnderflow) {
+  const DefectCount d = only_defect(analytic::tetrahedron(1e-73).mesh);
+  EXPECT_EQ(d.defect, Defect::kTinyExtent);
+  EXPECT_TRUE(check_solidity(analytic::tetrahedron(1e-72).mesh).solid());
 }
 
 // Pairs of faces: touching along a shared edge or vertex is fine; folding over, piercing or
@@ -172,6 +179,18 @@ TEST(FacesIntersect, DisjointAndTouchingWithoutSharedVertices) {
 
 // The committed verdict list (data/real_meshes.tsv) against what the checker says now, and
 // the DESIGN's classification of the same meshes: clean ones solid, the rest not.
+// "not closed: 6 border edges; self-intersecting: 38 pairs" -> {"not closed", "self-intersecting"}.
+std::set<std::string> defect_kinds(const std::string& verdict) {
+  std::set<std::string> out;
+  std::istringstream in(verdict);
+  std::string part;
+  while (std::getline(in, part, ';')) {
+    const size_t start = part.find_first_not_of(' ');
+    out.insert(part.substr(start, part.find(':') - start));
+  }
+  return out;
+}
+
 TEST(Solidity, RealMeshVerdictsMatchTheCommittedList) {
   std::ifstream list(std::string(VOBB_REAL_MESH_DIR) + "/../real_meshes.tsv");
   ASSERT_TRUE(list) << "data/real_meshes.tsv missing";
@@ -189,7 +208,10 @@ TEST(Solidity, RealMeshVerdictsMatchTheCommittedList) {
     ASSERT_TRUE(load_mesh(test::real_mesh(name), &lm));
     const SolidityReport r = check_solidity(lm.mesh);
     EXPECT_EQ(std::to_string(r.faces), faces) << name;
-    EXPECT_EQ(r.verdict(), verdict) << name;
+    // The kinds of defect, not their counts: the counts in the list are what `vobb info`
+    // printed, so comparing them would test the code against itself. The counts are checked
+    // against CGAL instead (tests/exact/solidity_referee_test.cpp).
+    EXPECT_EQ(defect_kinds(r.verdict()), defect_kinds(verdict)) << name;
     const auto& clean = test::clean_real_meshes();
     EXPECT_EQ(r.solid(), std::find(clean.begin(), clean.end(), name) != clean.end()) << name;
     ++checked;
