@@ -4,6 +4,7 @@
 
 #include <cstdio>
 
+#include "app/cli_checks.h"
 #include "common/atomic_file.h"
 #include "common/io/mesh_report.h"
 #include "common/sha256.h"
@@ -138,8 +139,8 @@ CLI::App* add_collide_command(CLI::App& app, CollideFlags* f) {
   c->add_option("--colliders", f->colliders, "Falling colliders (or static poses)")
       ->capture_default_str()->check(CLI::Range(1, 10000000));
   c->add_option("--seconds", f->seconds, "Simulated seconds (dynamic mode)")
-      ->capture_default_str()->check(CLI::Range(0.0, 1e6));
-  c->add_option("--seed", f->seed, "Seed of the collider stream")->capture_default_str();
+      ->capture_default_str()->check(vobb::app::kFinite)->check(CLI::Range(0.0, 1e6));
+  c->add_option("--seed", f->seed, "Seed of the collider stream")->capture_default_str()->check(vobb::app::kSeed);
   c->add_flag("--static", f->static_mode, "No dynamics: poses sampled on and near the surface");
   c->add_flag("--no-fcl", f->no_fcl, "Skip the FCL replay");
   c->add_flag("--json", f->json, "Print JSON (DESIGN §7)");

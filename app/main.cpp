@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <string>
 
+#include "app/cli_checks.h"
 #include "common/box_export.h"
 #include "common/io/mesh_report.h"
 #include "common/png_io.h"
@@ -517,7 +518,8 @@ int main(int argc, char** argv) {
       ->capture_default_str()->check(CLI::IsMember({"auto", "gl", "cpu"}));
   build->add_option("--lloyd", bf.lloyd, "Most Lloyd iterations per node (variational)")
       ->capture_default_str()->check(CLI::Range(0, 1000));
-  build->add_option("--seed", bf.seed, "Seed of the orientation search's random starts")->capture_default_str();
+  build->add_option("--seed", bf.seed, "Seed of the orientation search's random starts")
+      ->capture_default_str()->check(vobb::app::kSeed);
   build->add_flag("--no-axis-search", bf.no_axis_search, "Ablation: keep covariance axes (no orientation search)");
   build->add_flag("--adjust", bf.adjust, "Also run the adjustment step (Lloyd from other planar splits at levels 1-4; measured to raise e, so off)");
   build->add_flag("--no-merge", bf.no_merge, "Ablation: no bottom-up merging sweeps");
@@ -526,11 +528,11 @@ int main(int argc, char** argv) {
                     "Variational: minimise the OBV of each box grown by this length on every side (world units), "
                     "for colliders of about this radius; 0 is the paper's objective, and at most the mesh's "
                     "bounding-box diagonal. The stored boxes stay tight")
-      ->capture_default_str();
+      ->capture_default_str()->check(vobb::app::kFinite);
   build->add_option("--checkpoint", bf.checkpoint, "Folder for the build state after each level and sweep; "
                     "a build started again with it resumes and gives the same tree");
   build->add_option("--time-budget", bf.time_budget, "Seconds; then the search stops and the rest gets the baseline split")
-      ->check(CLI::PositiveNumber);
+      ->check(vobb::app::kFinite)->check(CLI::Range(1e-3, 1e9));
   build->add_flag("--quiet", bf.quiet, "No progress line");
 
   std::string omv_path = "auto";
@@ -566,7 +568,8 @@ int main(int argc, char** argv) {
       ->capture_default_str()->check(CLI::Range(1, 4096));
   cmp->add_option("--backend", cf.backend, "auto, gl or cpu")->capture_default_str()->check(CLI::IsMember({"auto", "gl", "cpu"}));
   cmp->add_option("--lloyd", cf.lloyd, "Most Lloyd iterations per node")->capture_default_str()->check(CLI::Range(0, 1000));
-  cmp->add_option("--seed", cf.seed, "Seed of the orientation search's random starts")->capture_default_str();
+  cmp->add_option("--seed", cf.seed, "Seed of the orientation search's random starts")
+      ->capture_default_str()->check(vobb::app::kSeed);
   cmp->add_flag("--no-axis-search", cf.no_axis_search, "Ablation: keep covariance axes");
   cmp->add_flag("--adjust", cf.adjust, "Also run the adjustment step (see build --help)");
   cmp->add_flag("--no-merge", cf.no_merge, "Ablation: no bottom-up merging sweeps");

@@ -1,6 +1,7 @@
 #include "common/solidity.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numeric>
 
@@ -16,6 +17,7 @@ const char* defect_name(Defect d) {
     case Defect::kHugeCoordinate: return "huge-coordinate";
     case Defect::kTinyExtent: return "tiny-extent";
     case Defect::kDegenerateFace: return "degenerate";
+    case Defect::kDuplicateFace: return "duplicate";
     case Defect::kNotClosed: return "not-closed";
     case Defect::kNonManifoldEdge: return "non-manifold";
     case Defect::kNonManifoldVertex: return "non-manifold-vertex";
@@ -34,6 +36,7 @@ std::string DefectCount::describe() const {
     case Defect::kHugeCoordinate: return "coordinates beyond +-2^240 (about 1.8e72): " + n + " vertices";
     case Defect::kTinyExtent: return "too small: the mesh spans less than 2^-240 (about 5.7e-73) on every axis";
     case Defect::kDegenerateFace: return "degenerate faces (zero area): " + n + " faces";
+    case Defect::kDuplicateFace: return "duplicate faces (the same three vertices as another): " + n + " faces";
     case Defect::kNotClosed: return "not closed: " + n + " border edges";
     case Defect::kNonManifoldEdge: return "non-manifold: " + n + " edges shared by more than two faces";
     case Defect::kNonManifoldVertex:
@@ -299,6 +302,27 @@ SolidityReport check_solidity(const Mesh& mesh) {
     }
   }
 
+  // Duplicate faces: the same vertex set as an earlier face. They are reported, and left out
+  // of the self-intersection search below, where k copies of a face would cost k^2 / 2 pairs.
+  std::vector<char> duplicate(nf, 0);
+  size_t n_duplicate = 0;
+  {
+    std::vector<std::pair<std::array<int32_t, 3>, int32_t>> keys;
+    keys.reserve(nf);
+    for (size_t f = 0; f < nf; ++f) {
+      if (degenerate[f]) continue;
+      std::array<int32_t, 3> k = {mesh.faces[f][0], mesh.faces[f][1], mesh.faces[f][2]};
+      std::sort(k.begin(), k.end());
+      keys.push_back({k, static_cast<int32_t>(f)});
+    }
+    std::sort(keys.begin(), keys.end());
+    for (size_t i = 1; i < keys.size(); ++i)
+      if (keys[i].first == keys[i - 1].first) {
+        duplicate[keys[i].second] = 1;
+        ++n_duplicate;
+      }
+  }
+
   // Edges: sorted (lo, hi, face, forward) records give border, non-manifold and flipped edges.
   struct EdgeRec {
     int32_t lo, hi, face;
@@ -369,6 +393,7 @@ SolidityReport check_solidity(const Mesh& mesh) {
     if ((hi - lo).maxCoeff() < kMinExtent) r.defects.push_back({Defect::kTinyExtent, 1});
   }
   if (n_degenerate) r.defects.push_back({Defect::kDegenerateFace, n_degenerate});
+  if (n_duplicate) r.defects.push_back({Defect::kDuplicateFace, n_duplicate});
   if (border) r.defects.push_back({Defect::kNotClosed, border});
   if (nonmanifold) r.defects.push_back({Defect::kNonManifoldEdge, nonmanifold});
   if (border == 0 && nonmanifold == 0) {
@@ -394,9 +419,9 @@ SolidityReport check_solidity(const Mesh& mesh) {
     AabbTree tree = AabbTree::over_faces(mesh);
     size_t pairs = 0;
     for (size_t f = 0; f < nf; ++f) {
-      if (degenerate[f]) continue;
+      if (degenerate[f] || duplicate[f]) continue;
       tree.for_each_overlap(tree.primitive_bounds(static_cast<int32_t>(f)), [&](int32_t g) {
-        if (static_cast<size_t>(g) <= f || degenerate[g]) return;
+        if (static_cast<size_t>(g) <= f || degenerate[g] || duplicate[g]) return;
         if (faces_intersect(mesh, f, g)) ++pairs;
       });
     }

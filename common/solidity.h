@@ -22,6 +22,7 @@ enum class Defect {
   kHugeCoordinate,     // |coordinate| > kMaxCoordinate (count: vertices)
   kTinyExtent,         // the vertices span less than kMinExtent on every axis (count: 1)
   kDegenerateFace,     // repeated vertex or zero area (count: faces)
+  kDuplicateFace,      // the same three vertices as an earlier face, either way round (count: faces)
   kNotClosed,          // border edges (count: edges)
   kNonManifoldEdge,    // edges with more than two faces (count: edges)
   kNonManifoldVertex,  // vertices whose faces form several fans, e.g. two cones tip to tip

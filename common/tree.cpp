@@ -43,7 +43,14 @@ Status validate_tree(const Tree& tree, const std::string& display) {
     max_level = std::max(max_level, node.level);
   }
   if (max_level != tree.depth) return fail("depth " + std::to_string(tree.depth) + " but the deepest leaf is at level " + std::to_string(max_level));
-  // Leaves partition the faces; inner faces are the union of the children's.
+  // Leaves partition the faces; inner faces are the union of the children's. Counted first,
+  // so a claimed triangle count far beyond the faces listed costs no memory.
+  size_t listed = 0;
+  for (const TreeNode& node : tree.nodes)
+    if (node.is_leaf()) listed += node.faces.size();
+  if (listed != tree.mesh_triangles)
+    return fail("the leaves list " + std::to_string(listed) + " faces but the mesh has " +
+                std::to_string(tree.mesh_triangles) + " triangles");
   std::vector<int32_t> owner(tree.mesh_triangles, -1);
   for (const TreeNode& node : tree.nodes) {
     if (!node.is_leaf()) continue;

@@ -45,10 +45,12 @@ bool parse_double(std::string_view tok, double* out) {
   const char* end = tok.data() + tok.size();
   auto res = std::from_chars(tok.data(), end, *out);
   if (res.ec == std::errc::result_out_of_range) {
-    // Overflowing literals are infinite; the solidity check reports them.
-    *out = (!tok.empty() && tok[0] == '-') ? -std::numeric_limits<double>::infinity()
-                                          : std::numeric_limits<double>::infinity();
-    return res.ptr == end;
+    // from_chars says this for overflow and for underflow alike; strtod tells them apart and
+    // rounds an underflowing literal correctly (to a subnormal or to zero), as a reader of
+    // "1e-400" expects. Overflowing literals are infinite; the solidity check reports them.
+    if (res.ptr != end) return false;
+    *out = std::strtod(std::string(tok).c_str(), nullptr);
+    return true;
   }
   return res.ec == std::errc() && res.ptr == end;
 }
@@ -610,6 +612,7 @@ Status load_mesh(const std::string& path, LoadedMesh* out) {
     struct stat st;
     if (::stat(path.c_str(), &st) != 0) return Status::error(display + ": cannot open: " + std::strerror(errno));
     if (S_ISDIR(st.st_mode)) return Status::error(display + ": is a directory, not a mesh file");
+    if (!S_ISREG(st.st_mode)) return Status::error(display + ": not a regular file");
 #if VOBB_HAVE_ASSIMP
     Status s = load_with_assimp(path, display, out);
     if (!s) return s;
