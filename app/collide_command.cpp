@@ -3,11 +3,13 @@
 #include <nlohmann/json.hpp>
 
 #include <cstdio>
+#include <cstdlib>
 
 #include "app/cli_checks.h"
 #include "common/atomic_file.h"
 #include "common/io/mesh_report.h"
 #include "common/sha256.h"
+#include "common/text_util.h"
 #include "common/tree_io.h"
 #include "validate/collision/collision_experiment.h"
 
@@ -168,6 +170,14 @@ int run_collide_command(const CollideFlags& f) {
   opt.seconds = f.seconds;
   opt.seed = f.seed;
   opt.fcl = !f.no_fcl;
+  // Nothing has been written yet (outputs are written whole at the end), so ending here
+  // leaves no partial file.
+  opt.on_physics_failure = [&](const std::string& why) {
+    std::fprintf(stderr, "vobb: %s: the physics engine stopped: %s (its tolerances are absolute, so extreme model scales trip it); use --static\n",
+                 basename_of(f.mesh).c_str(), why.c_str());
+    std::fflush(stderr);
+    std::_Exit(2);
+  };
   collision::ExperimentReport report;
   s = collision::run_collision_experiment(mesh.mesh, named, opt, &report);
   if (!s) return refuse(s);

@@ -5,6 +5,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdarg>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <memory>
 #include <random>
@@ -303,8 +306,46 @@ void near_callback(void* data, dGeomID o1, dGeomID o2) {
   }
 }
 
+// ODE reports through three global handlers: messages (warnings it goes on after), and errors
+// and debug failures (after which it cannot go on). The last message is kept, so that the one
+// line a failure ends with can say what led to it.
+struct PhysicsFailure {
+  static inline const ExperimentOptions* options = nullptr;
+  static inline std::string last_message;
+  static std::string format(int num, const char* msg, va_list ap) {
+    char text[512];
+    std::vsnprintf(text, sizeof text, msg, ap);
+    std::string s = "ODE " + std::to_string(num) + ": " + text;
+    for (char& c : s)
+      if (c == '\n' || c == '\r') c = ' ';
+    return s;
+  }
+  static void message(int num, const char* msg, va_list ap) { last_message = format(num, msg, ap); }
+  [[noreturn]] static void fatal(int num, const char* msg, va_list ap) {
+    std::string line = format(num, msg, ap);
+    if (!last_message.empty()) line += " (after " + last_message + ")";
+    if (options != nullptr && options->on_physics_failure) options->on_physics_failure(line);
+    std::fprintf(stderr, "%s\n", line.c_str());
+    std::abort();
+  }
+  explicit PhysicsFailure(const ExperimentOptions& opt) {
+    options = &opt;
+    last_message.clear();
+    dSetMessageHandler(&message);
+    dSetErrorHandler(&fatal);
+    dSetDebugHandler(&fatal);
+  }
+  ~PhysicsFailure() {
+    dSetMessageHandler(nullptr);
+    dSetErrorHandler(nullptr);
+    dSetDebugHandler(nullptr);
+    options = nullptr;
+  }
+};
+
 void run_dynamic(QueryEngine& engine, const Tree& first, const ExperimentOptions& opt, ExperimentReport* report) {
   const int cls = model_class();
+  const PhysicsFailure failure_handlers(opt);
   // ODE's quick step reorders constraints with its own global generator: reseed it per run.
   dRandSetSeed(static_cast<unsigned long>(opt.seed));
   Scene scene;

@@ -17,6 +17,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -34,6 +35,10 @@ struct ExperimentOptions {
   double step = 0.01;      // ODE time step, s
   uint64_t seed = 1;
   bool fcl = true;         // replay through FCL
+  // Called, and must not return, when ODE stops on an internal error (its assertions fire at
+  // some scales of the model: its tolerances are absolute). The message is one line. Unset:
+  // the message goes to stderr and the process aborts, as ODE itself would.
+  std::function<void(const std::string&)> on_physics_failure;
 };
 
 struct FclCounts {
