@@ -5,7 +5,7 @@
 #include <cstdio>
 #include <cstdlib>
 
-#include "app/cli_checks.h"
+#include "app/cli_support.h"
 #include "common/atomic_file.h"
 #include "common/io/mesh_report.h"
 #include "common/sha256.h"
@@ -15,13 +15,6 @@
 
 namespace vobb::app {
 namespace {
-
-constexpr int kExitOk = 0, kExitCheckFailed = 1, kExitBadInput = 2;
-
-int refuse(const Status& s) {
-  std::fprintf(stderr, "vobb: %s\n", s.message().c_str());
-  return kExitBadInput;
-}
 
 std::string format_json(const CollideFlags& f, const collision::ExperimentReport& r) {
   using collision::reduction_pct;
@@ -174,7 +167,7 @@ int run_collide_command(const CollideFlags& f) {
   // leaves no partial file.
   opt.on_physics_failure = [&](const std::string& why) {
     std::fprintf(stderr, "vobb: %s: the physics engine stopped: %s (its tolerances are absolute, so extreme model scales trip it); use --static\n",
-                 basename_of(f.mesh).c_str(), why.c_str());
+                 one_line(basename_of(f.mesh)).c_str(), one_line(why).c_str());
     std::fflush(stderr);
     std::_Exit(2);
   };
@@ -189,7 +182,7 @@ int run_collide_command(const CollideFlags& f) {
     if (!s) return refuse(s);
   }
   if (!report.brute_force_agrees) {
-    std::fprintf(stderr, "vobb: collide: a tree disagrees with brute force: %s\n", report.first_disagreement.c_str());
+    std::fprintf(stderr, "vobb: collide: a tree disagrees with brute force: %s\n", one_line(report.first_disagreement).c_str());
     return kExitCheckFailed;
   }
   return kExitOk;

@@ -10,7 +10,7 @@
 #include <filesystem>
 #include <string>
 
-#include "app/cli_checks.h"
+#include "app/cli_support.h"
 #include "common/box_export.h"
 #include "common/io/mesh_report.h"
 #include "common/png_io.h"
@@ -33,14 +33,11 @@ namespace {
 
 using vobb::seconds_since;
 
-constexpr int kExitOk = 0;
-constexpr int kExitCheckFailed = 1;
-constexpr int kExitBadInput = 2;
-
-int refuse(const vobb::Status& s) {
-  std::fprintf(stderr, "vobb: %s\n", s.message().c_str());
-  return kExitBadInput;
-}
+using vobb::app::kExitBadInput;
+using vobb::app::kExitCheckFailed;
+using vobb::app::kExitOk;
+using vobb::app::one_line;
+using vobb::app::refuse;
 
 int run_info(const std::string& mesh, bool json, bool rational) {
   vobb::MeshReport report;
@@ -220,6 +217,9 @@ int run_export(const std::string& tree_path, int level, const std::string& out) 
   vobb::Tree tree;
   vobb::Status s = vobb::read_tree(tree_path, &tree);
   if (!s) return refuse(s);
+  if (level < 0 || level > tree.depth)
+    return refuse(vobb::Status::error("--level " + std::to_string(level) + ": " + vobb::basename_of(tree_path) +
+                                      " has levels 0 to " + std::to_string(tree.depth)));
   s = vobb::export_layer(tree, level, out);
   if (!s) return refuse(s);
   std::fprintf(stderr, "vobb: layer %d (%zu boxes) -> %s\n", level, vobb::layer(tree, level).size(),
@@ -299,7 +299,7 @@ int run_certify(const std::string& mesh_path, const std::string& tree_path, bool
     std::printf("\nseconds: %.3f\n", c.seconds);
   }
   if (!c.ok()) {
-    std::fprintf(stderr, "vobb: %s: certification failed\n", tree_path.c_str());
+    std::fprintf(stderr, "vobb: %s: certification failed\n", one_line(tree_path).c_str());
     return kExitCheckFailed;
   }
   return kExitOk;
@@ -604,7 +604,7 @@ int main(int argc, char** argv) {
     std::string what = e.what();
     for (char& c : what)
       if (c == '\n') c = ' ';
-    std::fprintf(stderr, "vobb: usage: %s (see vobb --help)\n", what.c_str());
+    std::fprintf(stderr, "vobb: usage: %s (see vobb --help)\n", one_line(what).c_str());
     return kExitBadInput;
   }
   if (info->parsed()) return run_info(mesh, json, rational);

@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <filesystem>
 
+#include "app/cli_support.h"
 #include "validate/validation_suite.h"
 
 namespace vobb::app {
@@ -32,16 +33,13 @@ int run_validate_command(const ValidateFlags& f) {
   if (!f.quiet) o.progress = [](const std::string& line) { std::fprintf(stderr, "validate: %s\n", line.c_str()); };
   validate::SuiteReport report;
   const Status s = validate::run_validation_suite(o, &report);
-  if (!s) {
-    std::fprintf(stderr, "vobb: %s\n", s.message().c_str());
-    return 2;
-  }
+  if (!s) return refuse(s);
   for (const validate::SuiteCheck& c : report.checks)
     std::printf("%-4s %-50s %s\n", c.passed ? "ok" : "FAIL", c.name.c_str(), c.detail.c_str());
   for (const std::string& n : report.notes) std::printf("note: %s\n", n.c_str());
   std::printf("%s suite: %s in %.1f s; summary: %s\n", f.suite.c_str(), report.ok() ? "all checks passed" : "CHECKS FAILED",
               report.seconds, report.summary_path.c_str());
-  return report.ok() ? 0 : 1;
+  return report.ok() ? kExitOk : kExitCheckFailed;
 }
 
 }  // namespace vobb::app

@@ -1,14 +1,44 @@
-// CLI11 validators the subcommands share: CLI::Range lets NaN through (every comparison with
-// it is false), and an unsigned option takes "-1" as 2^64 - 1, so numbers are checked here.
+// What the subcommands share: exit codes, the one-line error, and CLI11 validators.
 #pragma once
 
 #include <CLI/CLI.hpp>
 
 #include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <string>
 
+#include "common/status.h"
+
 namespace vobb::app {
+
+constexpr int kExitOk = 0, kExitCheckFailed = 1, kExitBadInput = 2;
+
+// A message as one printable line: control characters (a newline in a file name, bytes of a
+// binary file quoted in a parse error) become \xNN.
+inline std::string one_line(const std::string& s) {
+  std::string out;
+  out.reserve(s.size());
+  for (unsigned char c : s) {
+    if (c < 0x20 || c == 0x7f) {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\x%02x", c);
+      out += buf;
+    } else {
+      out += static_cast<char>(c);
+    }
+  }
+  return out;
+}
+
+// Bad input: one line on stderr, exit code 2.
+inline int refuse(const Status& s) {
+  std::fprintf(stderr, "vobb: %s\n", one_line(s.message()).c_str());
+  return kExitBadInput;
+}
+
+// CLI::Range lets NaN through (every comparison with it is false), and an unsigned option
+// takes "-1" as 2^64 - 1, so numbers are checked here.
 
 // A finite number (no nan, inf, or text).
 inline const CLI::Validator kFinite(
