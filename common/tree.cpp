@@ -43,24 +43,21 @@ Status validate_tree(const Tree& tree, const std::string& display) {
     max_level = std::max(max_level, node.level);
   }
   if (max_level != tree.depth) return fail("depth " + std::to_string(tree.depth) + " but the deepest leaf is at level " + std::to_string(max_level));
-  // Leaves partition the faces; inner faces are the union of the children's. Counted first,
-  // so a claimed triangle count far beyond the faces listed costs no memory.
-  size_t listed = 0;
-  for (const TreeNode& node : tree.nodes)
-    if (node.is_leaf()) listed += node.faces.size();
-  if (listed != tree.mesh_triangles)
-    return fail("the leaves list " + std::to_string(listed) + " faces but the mesh has " +
-                std::to_string(tree.mesh_triangles) + " triangles");
-  std::vector<int32_t> owner(tree.mesh_triangles, -1);
+  // Leaves partition the faces; inner faces are the union of the children's. The owners are
+  // kept in a list of the faces listed, not an array of mesh_triangles entries, so a claimed
+  // triangle count far beyond the faces listed costs no memory.
+  std::vector<std::pair<int32_t, int32_t>> owner;  // (face, leaf)
   for (const TreeNode& node : tree.nodes) {
     if (!node.is_leaf()) continue;
     for (int32_t f : node.faces) {
       if (f < 0 || static_cast<size_t>(f) >= tree.mesh_triangles)
         return fail("node " + std::to_string(node.id) + ": face " + std::to_string(f) + " out of range");
-      if (owner[f] >= 0) return fail("face " + std::to_string(f) + " is in two leaves");
-      owner[f] = node.id;
+      owner.push_back({f, node.id});
     }
   }
+  std::sort(owner.begin(), owner.end());
+  for (size_t i = 1; i < owner.size(); ++i)
+    if (owner[i].first == owner[i - 1].first) return fail("face " + std::to_string(owner[i].first) + " is in two leaves");
   for (const TreeNode& node : tree.nodes) {
     if (node.is_leaf()) continue;
     std::vector<int32_t> u;
@@ -68,8 +65,13 @@ Status validate_tree(const Tree& tree, const std::string& display) {
     std::sort(u.begin(), u.end());
     if (u != node.faces) return fail("node " + std::to_string(node.id) + ": faces are not the union of its children's");
   }
-  for (size_t f = 0; f < owner.size(); ++f)
-    if (owner[f] < 0) return fail("face " + std::to_string(f) + " is in no leaf");
+  // Distinct and in range: they cover [0, mesh_triangles) exactly when there are that many.
+  for (size_t f = 0; f < tree.mesh_triangles; ++f) {
+    if (f == owner.size())
+      return fail("the leaves hold " + (f == 0 ? std::string("no faces") : "faces 0 to " + std::to_string(f - 1)) +
+                  ", but the tree says the mesh has " + std::to_string(tree.mesh_triangles) + " triangles");
+    if (owner[f].first != static_cast<int32_t>(f)) return fail("face " + std::to_string(f) + " is in no leaf");
+  }
   return Status::ok();
 }
 

@@ -81,6 +81,61 @@ TEST(CliBadInput, MissingFileDirectoryAndUsage) {
   }
 }
 
+// The unit cube as OFF, scaled.
+std::string write_cube(const std::string& name, double scale) {
+  const std::string mesh = test::temp_path(name);
+  std::ofstream f(mesh);
+  f.precision(17);
+  f << "OFF\n8 12 0\n";
+  for (int i = 0; i < 8; ++i) f << scale * (i & 1) << " " << scale * ((i >> 1) & 1) << " " << scale * ((i >> 2) & 1) << "\n";
+  f << "3 0 4 6\n3 0 6 2\n3 1 3 7\n3 1 7 5\n3 0 1 5\n3 0 5 4\n3 2 6 7\n3 2 7 3\n3 0 2 3\n3 0 3 1\n"
+       "3 4 5 7\n3 4 7 6\n";
+  return mesh;
+}
+
+// Numbers CLI11 would let through (NaN passes a range check; "-1" becomes 2^64 - 1 in an
+// unsigned seed), an out-of-range --level, and a file name with a newline: one line, exit 2.
+TEST(CliBadInput, NonFiniteAndNegativeNumbersAndOddNames) {
+  const std::string mesh = write_cube("flags_cube.off", 1);
+  const std::string tree = test::temp_path("flags_tree.json");
+  ASSERT_EQ(vobb_cli("build " + mesh + " -o " + tree + " --method obbtree --depth 2").code, 0);
+  const std::string out = test::temp_path("flags_out.json");
+  for (const std::string& args :
+       {"collide " + mesh + " " + tree + " --seconds nan --colliders 5 -o " + out,
+        "collide " + mesh + " " + tree + " --seed -1 --static --colliders 5 -o " + out,
+        "build " + mesh + " -o " + out + " --time-budget nan", "build " + mesh + " -o " + out + " --seed -1",
+        "build " + mesh + " -o " + out + " --seed 18446744073709551616",
+        "compare " + mesh + " --seed 1e23 --depth 1", "export " + tree + " --level 3 -o " + out + ".obj"}) {
+    const CliRun r = vobb_cli(args);
+    EXPECT_EQ(r.code, 2) << args;
+    EXPECT_EQ(line_count(r.err), 1u) << args << ": " << r.err;
+    EXPECT_FALSE(test::exists(out)) << args;
+  }
+  const CliRun level = vobb_cli("export " + tree + " --level 3 -o " + out + ".obj");
+  EXPECT_NE(level.err.find("--level 3"), std::string::npos) << level.err;
+  // A newline in a file name is printed escaped, so the error stays one line.
+  const CliRun odd = vobb_cli("info '" + test::temp_path("no\nsuch.off") + "'");
+  EXPECT_EQ(odd.code, 2);
+  EXPECT_EQ(line_count(odd.err), 1u) << odd.err;
+  EXPECT_NE(odd.err.find("no\\x0asuch.off"), std::string::npos) << odd.err;
+}
+
+// ODE's tolerances are absolute; at 1e22 its quaternion normalisation fails an assertion.
+// The run ends with one line naming ODE's message, exit 2, and no report file.
+TEST(CliBadInput, PhysicsFailureIsOneLineNotAnAbort) {
+  const std::string mesh = write_cube("huge_cube.off", 1e22);
+  const std::string tree = test::temp_path("huge_tree.json");
+  ASSERT_EQ(vobb_cli("build " + mesh + " -o " + tree + " --method obbtree --depth 2").code, 0);
+  const std::string out = test::temp_path("huge_report.json");
+  const CliRun r = vobb_cli("collide " + mesh + " " + tree + " --colliders 30 --seconds 1 --no-fcl -o " + out);
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_EQ(line_count(r.err), 1u) << r.err;
+  EXPECT_NE(r.err.find("physics engine stopped: ODE"), std::string::npos) << r.err;
+  EXPECT_FALSE(test::exists(out));
+  // The static scene has no physics and works at this scale.
+  EXPECT_EQ(vobb_cli("collide " + mesh + " " + tree + " --static --colliders 30 --no-fcl").code, 0);
+}
+
 TEST(Cli, BuildExportAndInfoOnAnAnalyticMesh) {
   const std::string mesh = test::temp_path("torus.off");
   {

@@ -113,6 +113,30 @@ TEST(TreeIo, RefusesBrokenTreesWithOneLine) {
   refused(edit("\"center\":[", "\"centre\":["), "center");
   refused(edit("\"depth\":1", "\"depth\":3"), "deepest leaf");
   refused(edit("\"parent\":0", "\"parent\":2"), "bad child 1");
+  // A claimed triangle count far beyond the faces listed is refused without sizing memory by it.
+  refused(edit("\"triangles\":8", "\"triangles\":2147483647"), "the mesh has 2147483647 triangles");
+  // DESIGN §7: axes only nearly orthonormal; a scaled or sheared frame is not a box.
+  refused(edit("\"axes\":[[", "\"axes\":[[10,0,0],[0,1,0],[0,0,1]],\"was\":[["), "axes are not orthonormal");
+  // Boxes as far out as coordinates may be (solidity.h), and no further.
+  refused(edit("\"half_extents\":[", "\"half_extents\":[1e200,1,1],\"was\":["), "extends beyond");
+}
+
+TEST(BoxFile, RefusesBoxesThatAreNotBoxes) {
+  const std::string path = test::temp_path("bad_boxes.json");
+  for (const char* box : {R"({"center":[0,0,0],"axes":[[1,0,0],[0,1,0],[0,1,0]],"half_extents":[1,1,1]})",
+                          R"({"center":[0,0,0],"axes":[[2,0,0],[0,1,0],[0,0,1]],"half_extents":[1,1,1]})",
+                          R"({"center":[0,0,0],"axes":[[1,0,0],[0,1,0],[0,0,1]],"half_extents":[1e103,1,1]})"}) {
+    std::ofstream(path) << "{\"boxes\":[" << box << "]}";
+    std::vector<Obb> boxes;
+    const Status s = read_boxes(path, &boxes);
+    EXPECT_FALSE(s) << box;
+    EXPECT_NE(s.message().find("box 0"), std::string::npos) << s.message();
+  }
+  // Axes as a 6-digit writer leaves them are still accepted.
+  std::ofstream(path) << R"({"boxes":[{"center":[0,0,0],"axes":[[0.6,0.8,0],[-0.8,0.6,0],[0,0,1]],"half_extents":[1,1,1]}]})";
+  std::vector<Obb> boxes;
+  EXPECT_TRUE(read_boxes(path, &boxes));
+  std::remove(path.c_str());
 }
 
 TEST(BoxFile, RoundTrip) {

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
+
 #include <cmath>
 #include <fstream>
 #include <random>
@@ -178,6 +180,33 @@ TEST(MeshIo, MissingFileAndDirectory) {
   EXPECT_NE(s.message().find("is a directory"), std::string::npos) << s.message();
 }
 
+// A FIFO (or any other non-regular file) would block the reader forever; every path refuses
+// it, the native readers and the one through assimp.
+TEST(MeshIo, FifoIsRefusedWithoutBlocking) {
+  for (const char* ext : {"off", "dae"}) {
+    const std::string path = test::temp_path(std::string("fifo.") + ext);
+    std::remove(path.c_str());
+    ASSERT_EQ(::mkfifo(path.c_str(), 0600), 0);
+    LoadedMesh lm;
+    const Status s = load_mesh(path, &lm);
+    EXPECT_FALSE(s);
+    EXPECT_NE(s.message().find("not a regular file"), std::string::npos) << s.message();
+    std::remove(path.c_str());
+  }
+}
+
+// A literal below the least subnormal rounds to zero (strtod's rule), not to infinity.
+TEST(MeshIo, UnderflowingLiteralRoundsToZero) {
+  const std::string path = test::temp_path("underflow.off");
+  write_text(path, "OFF\n4 4 0\n1e-400 0 0\n1 0 0\n0 1 -1e-330\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n");
+  LoadedMesh lm;
+  ASSERT_TRUE(load_mesh(path, &lm));
+  EXPECT_EQ(lm.mesh.vertices[0][0], 0.0);
+  EXPECT_EQ(lm.mesh.vertices[2][2], 0.0);
+  EXPECT_TRUE(check_solidity(lm.mesh).solid()) << check_solidity(lm.mesh).verdict();
+  std::remove(path.c_str());
+}
+
 TEST(MeshIo, RealMeshesWithAwkwardHeadersLoad) {
   VOBB_REQUIRE_REAL_MESH("dino");
   VOBB_REQUIRE_REAL_MESH("bunny00");
@@ -208,6 +237,19 @@ TEST(MeshIo, OtherFormatsGoThroughAssimpInSinglePrecision) {
   const SolidityReport r = check_solidity(lm.mesh);
   EXPECT_TRUE(r.solid()) << r.verdict();
   EXPECT_EQ(r.volume, Rational(8));
+  std::remove(path.c_str());
+}
+
+// NFF's "pp" primitive asks for a grid of (n+1) x (m+1) vertices: 21 bytes can ask for 10^16.
+// The read is capped in memory and refused quickly, with one line.
+TEST(MeshIo, ProceduralFormatCannotExhaustMemory) {
+  const std::string path = test::temp_path("bomb.nff");
+  write_text(path, "pp 99999999 99999999\n");
+  LoadedMesh lm;
+  const Status s = load_mesh(path, &lm);
+  EXPECT_FALSE(s);
+  EXPECT_NE(s.message().find("bomb.nff: cannot read"), std::string::npos) << s.message();
+  EXPECT_EQ(s.message().find('\n'), std::string::npos);
   std::remove(path.c_str());
 }
 #endif

@@ -58,6 +58,8 @@ cav_f = F + [tuple(i + 8 for i in f) for f in F]  # cavity facing out: wrong
 files["cavity_facing_out.off"] = off(cav_v, cav_f)
 files["huge_coordinates.off"] = off([(0, 0, 0), (1e308, 0, 0), (0, 1e308, 0), (0, 0, 1e308)],
                                     [(0, 2, 1), (0, 1, 3), (0, 3, 2), (1, 2, 3)])
+files["duplicate_faces.off"] = off(V, F + [F[0], F[0][::-1], F[7]])
+files["tiny_extent.off"] = off([tuple(1e-80 * x for x in v) for v in V], F)
 files["lines_only.obj"] = "v 0 0 0\nv 1 0 0\nl 1 2\n"
 files["no_faces.stl"] = "solid empty\nendsolid empty\n"
 files["bad_ply_header.ply"] = "ply\nformat ascii 1.0\nelement vertex 8\nproperty float x\nend_header\n"
