@@ -7,6 +7,8 @@
 #include <cmath>
 #include <memory>
 #include <cstdio>
+#include <cstdlib>
+#include <csignal>
 #include <filesystem>
 #include <string>
 
@@ -156,12 +158,18 @@ vobb::Status build_tree(const vobb::Mesh& mesh, const BuildFlags& f, const vobb:
     if (resuming && !f.quiet)
       std::fprintf(stderr, "vobb: resuming from %s (%d levels split, %d sweeps done)\n", state_path.c_str(),
                    resume.split_levels, resume.sweeps);
-    opt.checkpoint = [&, fingerprint](const vobb::VariationalState& st) {
+    // Test hook: VOBB_TEST_KILL_AT_SPLIT_LEVELS=N kills the process (SIGKILL, as an outside
+    // kill would) right after the state with N levels split is saved, so the resume test
+    // interrupts the build at a known point instead of racing it.
+    const char* kill_env = std::getenv("VOBB_TEST_KILL_AT_SPLIT_LEVELS");
+    const int kill_at = kill_env != nullptr ? std::atoi(kill_env) : -1;
+    opt.checkpoint = [&, fingerprint, kill_at](const vobb::VariationalState& st) {
       vobb::Status w = vobb::write_variational_state(st, fingerprint, state_path);
       if (!w && save_error) {
         save_error = w;
         std::fprintf(stderr, "\nvobb: warning: checkpoint not saved: %s\n", w.message().c_str());
       }
+      if (w && st.split_levels == kill_at) ::raise(SIGKILL);
     };
   }
   vobb::VariationalReport report;

@@ -29,7 +29,9 @@ void expect_bound_on_every_layer(const Mesh& m, int depth, OmvPath path) {
   size_t overlapping = 0;
   for (const LayerCertificate& l : c.layers) {
     EXPECT_TRUE(l.upper_bound_holds()) << "layer " << l.level;
-    if (path == OmvPath::kBoth) EXPECT_TRUE(l.paths_agree) << "layer " << l.level;
+    if (path == OmvPath::kBoth) {
+      EXPECT_TRUE(l.paths_agree) << "layer " << l.level;
+    }
     EXPECT_GE(l.omv, 0);
     overlapping += l.overlapping_boxes;
   }

@@ -86,7 +86,9 @@ TEST_P(SolidityReferee, SelfIntersectionsAndBordersMatchCgal) {
   EXPECT_EQ(count_of(ours, Defect::kNotClosed), cgal.border_edges);
   // Faces touching at a welded vertex are exactly the case of a non-manifold vertex: vobb
   // reports that vertex instead.
-  if (cgal.touching_at_welded_vertex > 0) EXPECT_GT(count_of(ours, Defect::kNonManifoldVertex), 0u);
+  if (cgal.touching_at_welded_vertex > 0) {
+    EXPECT_GT(count_of(ours, Defect::kNonManifoldVertex), 0u);
+  }
   const auto& clean = test::clean_real_meshes();
   EXPECT_EQ(ours.solid(), std::find(clean.begin(), clean.end(), GetParam()) != clean.end());
 }

@@ -96,12 +96,15 @@ TEST_P(ObbTreeReal, Depth8IsConservativeWith511Nodes) {
   ObbTreeOptions o;
   o.depth = 8;
   const Tree t = build_obbtree(lm.mesh, o);
-  size_t single_face_leaves_above = 0;
+  // A full binary tree of depth 8 has 511 nodes; a leaf at level l < 8 (a single face, which
+  // cannot be split) stands where a full subtree of 2^(9 - l) - 1 nodes would be.
+  size_t missing = 0;
   for (const TreeNode& n : t.nodes)
-    if (n.is_leaf() && n.level < 8) ++single_face_leaves_above;
-  if (single_face_leaves_above == 0) {
-    EXPECT_EQ(t.nodes.size(), 511u);
-  }
+    if (n.is_leaf() && n.level < 8) {
+      EXPECT_EQ(n.faces.size(), 1u) << "leaf " << n.id << " above level 8";
+      missing += (size_t{1} << (9 - n.level)) - 2;
+    }
+  EXPECT_EQ(t.nodes.size(), 511u - missing);
   EXPECT_EQ(t.depth, 8);
   expect_valid_conservative(lm.mesh, t, 8);
 }

@@ -125,18 +125,13 @@ TEST(TreeFigure, GridOfPanelsShowsMeshAndBoxes) {
       const std::vector<int32_t> ids = layer(*trees[r], c + 1);
       std::set<std::array<uint8_t, 4>> colours;
       for (size_t i = 0; i < ids.size(); ++i) colours.insert(figure_box_color(i));
-      size_t hits = 0;
       std::set<std::array<uint8_t, 4>> found;
       for (int y = p.y0; y < p.y0 + p.side; ++y)
         for (int x = p.x0; x < p.x0 + p.side; ++x) {
           std::array<uint8_t, 4> px;
           std::memcpy(px.data(), img.pixel(x, y), 4);
-          if (colours.count(px)) {
-            ++hits;
-            found.insert(px);
-          }
+          if (colours.count(px)) found.insert(px);
         }
-      EXPECT_GT(hits, 20u);
       EXPECT_GE(found.size(), 2u) << "at least two boxes' edges visible";
       // Border pixels between panels keep the border colour.
       EXPECT_TRUE(same_rgba(img.pixel(p.x0 - 1, p.y0 + p.side / 2), o.gap_color));
@@ -155,20 +150,22 @@ TEST(TreeFigure, LevelsAndPanelSizeFollowOptions) {
   ASSERT_TRUE(s) << s.message();
   EXPECT_EQ(img.width, 4 * 40);
   EXPECT_EQ(img.height, 40);
-  // Level 5 shows the leaves, as level 2 does. The same scene at another window offset may
-  // rasterize a few edge pixels differently (float rounding of the viewport transform moves a
-  // vertex by a sub-pixel step, flipping a sample's coverage), so count differing pixels: a
-  // sliver along the edges, against a different layer (level 1) that differs far more.
-  auto differing = [&](int col_a, int col_b) {
-    int n = 0;
-    for (int y = 0; y < 40; ++y)
-      for (int x = 0; x < 40; ++x) n += std::memcmp(img.pixel(col_a * 40 + x, y), img.pixel(col_b * 40 + x, y), 4) != 0;
-    return n;
+  // Level 5 is past the depth, so it shows the leaves, as level 2 does. Side by side the two
+  // panels sit at different window offsets, where float rounding of the viewport transform
+  // may flip a few edge samples; so each level is rendered alone, at the same offset, where
+  // the same scene must give the same bytes, and another layer (level 1) must not.
+  auto alone = [&](int level) {
+    FigureOptions one = o;
+    one.levels = {level};
+    RgbaImage single;
+    const Status st = render_tree_figure(*ctx, f.mesh, {{"one", &f.binary}}, one, &single);
+    EXPECT_TRUE(st) << st.message();
+    return single.rgba;
   };
-  const int same_layer = differing(2, 3), other_layer = differing(1, 3);
-  std::printf("differing pixels: level 2 vs 5: %d, level 1 vs 5: %d\n", same_layer, other_layer);
-  EXPECT_LE(same_layer, 16) << "of 1600";
-  EXPECT_GE(other_layer, 4 * same_layer + 40);
+  const std::vector<uint8_t> level2 = alone(2), level5 = alone(5), level1 = alone(1);
+  ASSERT_EQ(level2.size(), 40u * 40 * 4);
+  EXPECT_TRUE(level2 == level5) << "level 5 (past the depth) must draw the leaves, as level 2 does";
+  EXPECT_FALSE(level1 == level5) << "level 1 must differ from the leaves";
 }
 
 TEST(TreeFigure, BadInputIsAStatusNotACrash) {

@@ -41,7 +41,10 @@ TEST(EstimatorAccuracy, RealMeshesMatchThePrototypeAndConvergeWithM) {
   std::map<BoxSize, std::map<int, std::vector<double>>> rel;  // size -> m -> relative errors
   int meshes = 0;
   for (const char* name : {"dino", "knot1", "elephant"}) {
-    if (!test::exists(test::real_mesh(name))) continue;
+    if (!test::exists(test::real_mesh(name))) {
+      if (test::real_meshes_required()) ADD_FAILURE() << name << " is absent (VOBB_REQUIRE_REAL_MESHES=1)";
+      continue;
+    }
     ++meshes;
     LoadedMesh lm;
     ASSERT_TRUE(load_solid(test::real_mesh(name), &lm));
@@ -66,7 +69,7 @@ TEST(EstimatorAccuracy, RealMeshesMatchThePrototypeAndConvergeWithM) {
       }
     }
   }
-  if (meshes == 0) GTEST_SKIP() << "no real meshes: run data/fetch_meshes.sh";
+  if (meshes == 0) VOBB_SKIP_WITHOUT_REAL_MESHES("no real meshes");
   for (const auto& [size, by_m] : rel) {
     const double m16 = median(by_m.at(16)), m32 = median(by_m.at(32)), m64 = median(by_m.at(64));
     std::printf("%-5s boxes %3zu  median relative error  m=16 %.2e  m=32 %.2e  m=64 %.2e  (prototype m=32 %.1e)\n",

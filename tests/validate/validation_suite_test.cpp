@@ -38,7 +38,7 @@ const validate::SuiteCheck* find_check(const validate::SuiteReport& r, const std
 }
 
 TEST(ValidationSuite, QuickSuitePassesAndWritesItsFiles) {
-  if (!have_quick_meshes()) GTEST_SKIP() << "real meshes absent: run data/fetch_meshes.sh";
+  if (!have_quick_meshes()) VOBB_SKIP_WITHOUT_REAL_MESHES("real meshes absent");
   const std::string out = test::temp_path("validate_quick");
   validate::SuiteReport report;
   const Status s = validate::run_validation_suite(quick_options(out), &report);
@@ -62,7 +62,7 @@ TEST(ValidationSuite, QuickSuitePassesAndWritesItsFiles) {
 // above -1.5) and at m = 32 it is about 1e-3 vol(O) / OBV, above twice the prototype's
 // medians (at most 9e-4). The suite must fail, and name those checks.
 TEST(ValidationSuite, QuickSuiteFailsWhenTheEstimatorIsBroken) {
-  if (!have_quick_meshes()) GTEST_SKIP() << "real meshes absent: run data/fetch_meshes.sh";
+  if (!have_quick_meshes()) VOBB_SKIP_WITHOUT_REAL_MESHES("real meshes absent");
   const std::string out = test::temp_path("validate_broken");
   validate::SuiteOptions o = quick_options(out);
   o.perturb = [](double estimate, const Obb& box, int) { return estimate + 1e-3 * volume(box); };
