@@ -420,6 +420,12 @@ int run_obv(const std::string& mesh_path, const std::string& boxes_path, const s
 // With `figure_path`, also draws both trees' layers over the mesh (fast/tree_figure.h) to a PNG.
 int run_compare(const std::string& mesh_path, const BuildFlags& flags, bool json, const std::string& figure_path,
                 const std::string& figure_up) {
+  if (!figure_path.empty()) {
+    // Checked before the long run, not after it: the figure's folder must exist.
+    const std::filesystem::path dir = std::filesystem::path(figure_path).parent_path();
+    if (!dir.empty() && !std::filesystem::is_directory(dir))
+      return refuse(vobb::Status::error("--figure " + figure_path + ": no such folder " + dir.string()));
+  }
   vobb::LoadedMesh loaded;
   vobb::Status s = vobb::load_solid(mesh_path, &loaded);
   if (!s) return refuse(s);

@@ -105,7 +105,8 @@ TEST(CliBadInput, NonFiniteAndNegativeNumbersAndOddNames) {
         "collide " + mesh + " " + tree + " --seed -1 --static --colliders 5 -o " + out,
         "build " + mesh + " -o " + out + " --time-budget nan", "build " + mesh + " -o " + out + " --seed -1",
         "build " + mesh + " -o " + out + " --seed 18446744073709551616",
-        "compare " + mesh + " --seed 1e23 --depth 1", "export " + tree + " --level 3 -o " + out + ".obj"}) {
+        "compare " + mesh + " --seed 1e23 --depth 1", "export " + tree + " --level 3 -o " + out + ".obj",
+        "compare " + mesh + " --depth 1 --backend cpu --figure /nonexistent/folder/f.png"}) {
     const CliRun r = vobb_cli(args);
     EXPECT_EQ(r.code, 2) << args;
     EXPECT_EQ(line_count(r.err), 1u) << args << ": " << r.err;
