@@ -384,13 +384,10 @@ SolidityReport check_solidity(const Mesh& mesh) {
 
   if (nonfinite) r.defects.push_back({Defect::kNonFinite, nonfinite});
   if (huge) r.defects.push_back({Defect::kHugeCoordinate, huge});
-  if (nonfinite == 0 && huge == 0 && !mesh.vertices.empty()) {
-    Vec3 lo = mesh.vertices[0], hi = lo;
-    for (const Vec3& v : mesh.vertices) {
-      lo = lo.cwiseMin(v);
-      hi = hi.cwiseMax(v);
-    }
-    if ((hi - lo).maxCoeff() < kMinExtent) r.defects.push_back({Defect::kTinyExtent, 1});
+  if (nonfinite == 0 && huge == 0) {
+    Aabb bounds;
+    for (const Vec3& v : mesh.vertices) bounds.extend(v);
+    if ((bounds.hi - bounds.lo).maxCoeff() < kMinExtent) r.defects.push_back({Defect::kTinyExtent, 1});
   }
   if (n_degenerate) r.defects.push_back({Defect::kDegenerateFace, n_degenerate});
   if (n_duplicate) r.defects.push_back({Defect::kDuplicateFace, n_duplicate});

@@ -235,7 +235,7 @@ double gl_deviation_bound(const BoxPlan& plan, int m) {
   if (plan.flat || plan.spans.empty()) return cpu_rounding_bound(plan, m);
   constexpr double u = 1.0 / (1 << 24);
   constexpr double kFloatMin = 1.1754943508222875e-38;
-  const PlanRounding r = analyse_plan_rounding(plan, m, RoundingModel{u, 3 * kFloatMin, 0, 3 * kFloatMin});
+  const PlanRounding r = analyse_plan_rounding(plan, m, RoundingModel{u, 3 * kFloatMin, true});
   const double K = r.most_per_texel + std::ceil(6.0 * m * m / 256) + 8;
   const double summation = K * u / (1 - K * u) * (r.sum_abs + 2 * r.uncertain);
   const double texel_weight = 4.0 / (3.0 * m * m);

@@ -126,7 +126,7 @@ double resolution_bound(const BoxPlan& plan, int m) {
 //    the axis component +-1 is exact;
 //  - dot products d.E with E rounded (relative u; no rounding in double) and three roundings
 //    of a 3-term sum (gamma_3): |fl(d.E) - d.E| <= 8u (|E_a| + |E_b|) + 5u sum_i |d_i E_i|
-//    =: err(E), plus underflow (model.tiny_*). An edge test whose |d.E| <= err(E) may come
+//    =: err(E), plus underflow (model.tiny). An edge test whose |d.E| <= err(E) may come
 //    out either way ("uncertain");
 //  - zeta = plane / nd: nd has relative error r = err(n) / |nd|; with the plane rounded (u) and
 //    the division (2.5u, taken as 3u), zeta's relative error is at most
@@ -176,10 +176,9 @@ PlanRounding analyse_plan_rounding(const BoxPlan& plan, int m, const RoundingMod
     if (t.plane == 0) continue;
     const int k = span.face / 2, a = (k + 1) % 3, b = (k + 2) % 3;
     const double fn = pow2_normalizer(t.normal[0], t.normal[1], t.normal[2]);
-    // zeta = plane / nd with |nd| up to 3 (|d_i| <= 1, |n_i| < 1 after scaling): a plane below
-    // this may give a zeta that underflows (GLSL may flush it to 0).
-    const double plane_scaled = model.tiny_scaled > 0 ? std::abs(t.plane * fn) : std::abs(t.plane);
-    const bool plane_underflows = plane_scaled < model.plane_tiny;
+    // zeta = plane / nd = (plane fn) / (nd fn) with |nd fn| up to 3 (|d_i| <= 1, |n_i fn| < 1):
+    // a scaled plane below `tiny` may give a zeta that underflows to 0.
+    const bool plane_underflows = std::abs(t.plane * fn) < model.tiny;
     double fe[3];  // the power-of-two scale of each edge cross (the shader's)
     for (int e = 0; e < 3; ++e) fe[e] = pow2_normalizer(t.edge_cross[e][0], t.edge_cross[e][1], t.edge_cross[e][2]);
     for (int i = span.i0; i <= span.i1; ++i) {
@@ -192,8 +191,8 @@ PlanRounding analyse_plan_rounding(const BoxPlan& plan, int m, const RoundingMod
           const Vec3& E = t.edge_cross[e];
           const double dot = d.dot(E) * fe[e];
           const double err = 8 * u * (std::abs(E[a]) + std::abs(E[b])) * fe[e] +
-                             5 * u * d.cwiseAbs().dot(E.cwiseAbs()) * fe[e] + model.tiny_scaled +
-                             model.tiny_unscaled * fe[e];
+                             5 * u * d.cwiseAbs().dot(E.cwiseAbs()) * fe[e] +
+                             (model.scaled_inputs ? model.tiny : model.tiny * fe[e]);
           int side = dot > 0 ? 1 : -1;
           if (std::abs(dot) <= err) {
             if (!model.resolve_edges_exactly) {
@@ -255,7 +254,7 @@ PlanRounding analyse_plan_rounding(const BoxPlan& plan, int m, const RoundingMod
 double cpu_rounding_bound(const BoxPlan& plan, int m) {
   if (plan.flat) return 0.0;
   constexpr double u = 0x1p-53;
-  const PlanRounding r = analyse_plan_rounding(plan, m, RoundingModel{u, 0, 3 * 0x1p-1074, 6 * 0x1p-1074, true});
+  const PlanRounding r = analyse_plan_rounding(plan, m, RoundingModel{u, 3 * 0x1p-1074, false, true});
   const double n = r.pairs + 6;
   const double gamma = n * u / (1 - n * u);
   const double texel_weight = 4.0 / (3.0 * m * m);

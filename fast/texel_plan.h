@@ -119,11 +119,15 @@ inline double pow2_normalizer(double a, double b, double c, double d = 0) {
 // (the same doubles) in exact arithmetic. texel_plan.cpp derives the per-pair terms; both
 // estimators' bounds are built from it (cpu_rounding_bound below, gl_deviation_bound).
 struct RoundingModel {
-  double u;              // unit round-off: 2^-53 for double, 2^-24 for float
-  double tiny_scaled;    // absolute error of a dot product from underflow, on inputs scaled to [0.5, 1)
-  double tiny_unscaled;  // the same on unscaled inputs (gradual underflow)
-  double plane_tiny;     // |plane| (scaled by tiny_scaled's rule when that is nonzero) below
-                         // which zeta may underflow to 0
+  double u;  // unit round-off: 2^-53 for double, 2^-24 for float
+  // Three times the least magnitude the format keeps (FLT_MIN where GLSL may flush
+  // subnormals, 2^-1074 with gradual underflow): what underflow may cost a 3-term dot
+  // product, and the |plane| (normal scaled to [0.5, 1)) below which zeta may become 0.
+  double tiny;
+  // Whether the evaluation scales each edge cross to [0.5, 1) before rounding (the shader
+  // does, so its underflow cost is `tiny` in scaled units; the CPU twin does not, so its cost
+  // is `tiny` in unscaled units).
+  bool scaled_inputs;
   // For the CPU twin, whose edge test is known (edge_side in double): an edge test within its
   // error bound is decided in rational arithmetic and compared with the double one, so exact
   // ties (rays through edges and vertices) count as uncertain only when double gets them wrong.
