@@ -5,7 +5,7 @@
 #include <cmath>
 #include <numeric>
 
-#include "common/bvh.h"
+#include "common/self_intersections.h"
 #include "common/status.h"
 
 namespace vobb {
@@ -62,133 +62,6 @@ std::string SolidityReport::verdict() const {
 
 namespace {
 
-// ---- exact triangle intersection helpers ------------------------------------------------
-
-// A coordinate plane (i, j) onto which triangle abc projects without degenerating.
-// Precondition: abc is not collinear, so one of the three exists.
-void projection_for(const Vec3& a, const Vec3& b, const Vec3& c, int* i, int* j) {
-  static const int kPlanes[3][2] = {{0, 1}, {1, 2}, {2, 0}};
-  for (const auto& p : kPlanes) {
-    if (orient2d(a, b, c, p[0], p[1]) != 0) {
-      *i = p[0];
-      *j = p[1];
-      return;
-    }
-  }
-  VOBB_ASSERT(false, "projection_for on a collinear triangle");
-}
-
-bool on_segment_2d(const Vec3& p, const Vec3& q, const Vec3& r, int i, int j) {
-  // r is known collinear with pq; test that it lies within pq's extent.
-  return std::min(p[i], q[i]) <= r[i] && r[i] <= std::max(p[i], q[i]) &&
-         std::min(p[j], q[j]) <= r[j] && r[j] <= std::max(p[j], q[j]);
-}
-
-bool segments_intersect_2d(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s, int i,
-                           int j) {
-  const int d1 = orient2d(p, q, r, i, j), d2 = orient2d(p, q, s, i, j);
-  const int d3 = orient2d(r, s, p, i, j), d4 = orient2d(r, s, q, i, j);
-  if (d1 * d2 < 0 && d3 * d4 < 0) return true;
-  if (d1 == 0 && on_segment_2d(p, q, r, i, j)) return true;
-  if (d2 == 0 && on_segment_2d(p, q, s, i, j)) return true;
-  if (d3 == 0 && on_segment_2d(r, s, p, i, j)) return true;
-  if (d4 == 0 && on_segment_2d(r, s, q, i, j)) return true;
-  return false;
-}
-
-bool point_in_triangle_2d(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c, int i,
-                          int j) {
-  const int s = orient2d(a, b, c, i, j);
-  return orient2d(a, b, p, i, j) * s >= 0 && orient2d(b, c, p, i, j) * s >= 0 &&
-         orient2d(c, a, p, i, j) * s >= 0;
-}
-
-bool segment_triangle_coplanar(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b,
-                               const Vec3& c) {
-  int i, j;
-  projection_for(a, b, c, &i, &j);
-  if (point_in_triangle_2d(p, a, b, c, i, j) || point_in_triangle_2d(q, a, b, c, i, j)) return true;
-  return segments_intersect_2d(p, q, a, b, i, j) || segments_intersect_2d(p, q, b, c, i, j) ||
-         segments_intersect_2d(p, q, c, a, i, j);
-}
-
-// Closed segment pq against closed non-degenerate triangle abc.
-bool segment_hits_triangle(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b,
-                           const Vec3& c) {
-  const int op = orient3d(a, b, c, p), oq = orient3d(a, b, c, q);
-  if (op * oq > 0) return false;
-  if (op == 0 && oq == 0) return segment_triangle_coplanar(p, q, a, b, c);
-  // The segment meets the plane in one point; it lies in the triangle iff the line pq passes
-  // on no strictly opposite sides of the triangle's edges.
-  const int s1 = orient3d(p, q, a, b), s2 = orient3d(p, q, b, c), s3 = orient3d(p, q, c, a);
-  const bool pos = s1 > 0 || s2 > 0 || s3 > 0;
-  const bool neg = s1 < 0 || s2 < 0 || s3 < 0;
-  return !(pos && neg);
-}
-
-bool triangles_intersect_coplanar(const Vec3* t, const Vec3* s) {
-  int i, j;
-  projection_for(t[0], t[1], t[2], &i, &j);
-  for (int k = 0; k < 3; ++k) {
-    if (point_in_triangle_2d(s[k], t[0], t[1], t[2], i, j)) return true;
-    if (point_in_triangle_2d(t[k], s[0], s[1], s[2], i, j)) return true;
-  }
-  for (int k = 0; k < 3; ++k)
-    for (int l = 0; l < 3; ++l)
-      if (segments_intersect_2d(t[k], t[(k + 1) % 3], s[l], s[(l + 1) % 3], i, j)) return true;
-  return false;
-}
-
-// Two triangles with no shared vertex.
-bool triangles_intersect(const Vec3* t, const Vec3* s) {
-  int ds[3], dt[3];
-  for (int k = 0; k < 3; ++k) ds[k] = orient3d(t[0], t[1], t[2], s[k]);
-  if ((ds[0] > 0 && ds[1] > 0 && ds[2] > 0) || (ds[0] < 0 && ds[1] < 0 && ds[2] < 0)) return false;
-  if (ds[0] == 0 && ds[1] == 0 && ds[2] == 0) return triangles_intersect_coplanar(t, s);
-  for (int k = 0; k < 3; ++k) dt[k] = orient3d(s[0], s[1], s[2], t[k]);
-  if ((dt[0] > 0 && dt[1] > 0 && dt[2] > 0) || (dt[0] < 0 && dt[1] < 0 && dt[2] < 0)) return false;
-  // Not coplanar: the intersection, if any, is a segment or point whose ends lie on an edge
-  // of one triangle inside the other.
-  for (int k = 0; k < 3; ++k) {
-    if (segment_hits_triangle(t[k], t[(k + 1) % 3], s[0], s[1], s[2])) return true;
-    if (segment_hits_triangle(s[k], s[(k + 1) % 3], t[0], t[1], t[2])) return true;
-  }
-  return false;
-}
-
-// Is direction d - u inside the closed wedge at u spanned by p - u and q - u (angle < 180)?
-bool in_wedge_2d(const Vec3& u, const Vec3& p, const Vec3& q, const Vec3& d, int i, int j) {
-  const int s = orient2d(u, p, q, i, j);
-  return orient2d(u, p, d, i, j) * s >= 0 && orient2d(u, d, q, i, j) * s >= 0;
-}
-
-// Triangles (u, a1, b1) and (u, a2, b2) sharing exactly vertex u.
-bool triangles_meet_beyond_vertex(const Vec3& u, const Vec3& a1, const Vec3& b1, const Vec3& a2,
-                                  const Vec3& b2) {
-  const bool a2_on = orient3d(u, a1, b1, a2) == 0, b2_on = orient3d(u, a1, b1, b2) == 0;
-  int i, j;
-  if (a2_on && b2_on) {  // coplanar: the wedges at u overlap beyond u
-    projection_for(u, a1, b1, &i, &j);
-    return in_wedge_2d(u, a1, b1, a2, i, j) || in_wedge_2d(u, a1, b1, b2, i, j) ||
-           in_wedge_2d(u, a2, b2, a1, i, j) || in_wedge_2d(u, a2, b2, b1, i, j);
-  }
-  if (segment_hits_triangle(a1, b1, u, a2, b2) || segment_hits_triangle(a2, b2, u, a1, b1))
-    return true;
-  // An edge from u that runs inside the other triangle's plane and wedge.
-  if (a2_on || b2_on) {
-    projection_for(u, a1, b1, &i, &j);
-    if (a2_on && in_wedge_2d(u, a1, b1, a2, i, j)) return true;
-    if (b2_on && in_wedge_2d(u, a1, b1, b2, i, j)) return true;
-  }
-  const bool a1_on = orient3d(u, a2, b2, a1) == 0, b1_on = orient3d(u, a2, b2, b1) == 0;
-  if (a1_on || b1_on) {
-    projection_for(u, a2, b2, &i, &j);
-    if (a1_on && in_wedge_2d(u, a2, b2, a1, i, j)) return true;
-    if (b1_on && in_wedge_2d(u, a2, b2, b1, i, j)) return true;
-  }
-  return false;
-}
-
 // ---- union-find over faces --------------------------------------------------------------
 
 struct DisjointSets {
@@ -240,37 +113,6 @@ std::vector<std::vector<int32_t>> face_components(const Mesh& mesh) {
     out[index[root]].push_back(static_cast<int32_t>(f));
   }
   return out;
-}
-
-bool faces_intersect(const Mesh& mesh, size_t f, size_t g) {
-  const Face& F = mesh.faces[f];
-  const Face& G = mesh.faces[g];
-  int shared = 0, fi[3], gi[3];
-  for (int a = 0; a < 3; ++a)
-    for (int b = 0; b < 3; ++b)
-      if (F[a] == G[b]) {
-        fi[shared] = a;
-        gi[shared] = b;
-        ++shared;
-      }
-  const Vec3 t[3] = {mesh.vertices[F[0]], mesh.vertices[F[1]], mesh.vertices[F[2]]};
-  const Vec3 s[3] = {mesh.vertices[G[0]], mesh.vertices[G[1]], mesh.vertices[G[2]]};
-  if (shared == 0) return triangles_intersect(t, s);
-  if (shared == 3) return true;  // the same triangle twice
-  if (shared == 2) {
-    // Sharing edge uv: they overlap only if coplanar with the third vertices on one side.
-    const Vec3& u = t[fi[0]];
-    const Vec3& v = t[fi[1]];
-    const Vec3& a = t[3 - fi[0] - fi[1]];
-    const Vec3& b = s[3 - gi[0] - gi[1]];
-    if (orient3d(u, v, a, b) != 0) return false;
-    int i, j;
-    projection_for(u, v, a, &i, &j);
-    return orient2d(u, v, a, i, j) * orient2d(u, v, b, i, j) > 0;
-  }
-  const Vec3& u = t[fi[0]];
-  return triangles_meet_beyond_vertex(u, t[(fi[0] + 1) % 3], t[(fi[0] + 2) % 3],
-                                      s[(gi[0] + 1) % 3], s[(gi[0] + 2) % 3]);
 }
 
 SolidityReport check_solidity(const Mesh& mesh) {
@@ -411,17 +253,11 @@ SolidityReport check_solidity(const Mesh& mesh) {
   if (inconsistent) r.defects.push_back({Defect::kInconsistentOrientation, inconsistent});
   if (nonfinite || huge) return r;  // nothing geometric can be decided on NaN or near overflow
 
-  // Self-intersections among the non-degenerate faces, candidates from a box tree.
+  // Self-intersections among the non-degenerate faces (duplicates are reported above).
   {
-    AabbTree tree = AabbTree::over_faces(mesh);
-    size_t pairs = 0;
-    for (size_t f = 0; f < nf; ++f) {
-      if (degenerate[f] || duplicate[f]) continue;
-      tree.for_each_overlap(tree.primitive_bounds(static_cast<int32_t>(f)), [&](int32_t g) {
-        if (static_cast<size_t>(g) <= f || degenerate[g] || duplicate[g]) return;
-        if (faces_intersect(mesh, f, g)) ++pairs;
-      });
-    }
+    std::vector<char> skip(nf, 0);
+    for (size_t f = 0; f < nf; ++f) skip[f] = degenerate[f] || duplicate[f];
+    const size_t pairs = find_self_intersections(mesh, skip).pairs;
     if (pairs) r.defects.push_back({Defect::kSelfIntersection, pairs});
   }
   if (!r.defects.empty()) return r;  // volume and nesting mean nothing on a broken surface

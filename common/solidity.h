@@ -13,6 +13,7 @@
 
 #include "common/exact_predicates.h"
 #include "common/mesh.h"
+#include "common/self_intersections.h"  // faces_intersect, the pair search check_solidity uses
 
 namespace vobb {
 
@@ -70,9 +71,5 @@ SolidityReport check_solidity(const Mesh& mesh);
 // Edge-connected components of the faces (the shells of a solid), each a sorted face list,
 // in order of their smallest face id.
 std::vector<std::vector<int32_t>> face_components(const Mesh& mesh);
-
-// Exact test of whether two non-degenerate faces of `mesh` meet anywhere other than at the
-// vertices they share (by index). Exposed for tests.
-bool faces_intersect(const Mesh& mesh, size_t f, size_t g);
 
 }  // namespace vobb

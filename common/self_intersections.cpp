@@ -1,0 +1,482 @@
+#include "common/self_intersections.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include "common/bvh.h"
+#include "common/exact_predicates.h"
+#include "common/status.h"
+
+namespace vobb {
+namespace {
+
+// ---- exact triangle intersection helpers ------------------------------------------------
+
+// A coordinate plane (i, j) onto which triangle abc projects without degenerating.
+// Precondition: abc is not collinear, so one of the three exists.
+void projection_for(const Vec3& a, const Vec3& b, const Vec3& c, int* i, int* j) {
+  static const int kPlanes[3][2] = {{0, 1}, {1, 2}, {2, 0}};
+  for (const auto& p : kPlanes) {
+    if (orient2d(a, b, c, p[0], p[1]) != 0) {
+      *i = p[0];
+      *j = p[1];
+      return;
+    }
+  }
+  VOBB_ASSERT(false, "projection_for on a collinear triangle");
+}
+
+bool on_segment_2d(const Vec3& p, const Vec3& q, const Vec3& r, int i, int j) {
+  // r is known collinear with pq; test that it lies within pq's extent.
+  return std::min(p[i], q[i]) <= r[i] && r[i] <= std::max(p[i], q[i]) &&
+         std::min(p[j], q[j]) <= r[j] && r[j] <= std::max(p[j], q[j]);
+}
+
+bool segments_intersect_2d(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s, int i,
+                           int j) {
+  const int d1 = orient2d(p, q, r, i, j), d2 = orient2d(p, q, s, i, j);
+  const int d3 = orient2d(r, s, p, i, j), d4 = orient2d(r, s, q, i, j);
+  if (d1 * d2 < 0 && d3 * d4 < 0) return true;
+  if (d1 == 0 && on_segment_2d(p, q, r, i, j)) return true;
+  if (d2 == 0 && on_segment_2d(p, q, s, i, j)) return true;
+  if (d3 == 0 && on_segment_2d(r, s, p, i, j)) return true;
+  if (d4 == 0 && on_segment_2d(r, s, q, i, j)) return true;
+  return false;
+}
+
+bool point_in_triangle_2d(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c, int i,
+                          int j) {
+  const int s = orient2d(a, b, c, i, j);
+  return orient2d(a, b, p, i, j) * s >= 0 && orient2d(b, c, p, i, j) * s >= 0 &&
+         orient2d(c, a, p, i, j) * s >= 0;
+}
+
+bool segment_triangle_coplanar(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b,
+                               const Vec3& c) {
+  int i, j;
+  projection_for(a, b, c, &i, &j);
+  if (point_in_triangle_2d(p, a, b, c, i, j) || point_in_triangle_2d(q, a, b, c, i, j)) return true;
+  return segments_intersect_2d(p, q, a, b, i, j) || segments_intersect_2d(p, q, b, c, i, j) ||
+         segments_intersect_2d(p, q, c, a, i, j);
+}
+
+// Closed segment pq against closed non-degenerate triangle abc.
+bool segment_hits_triangle(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b,
+                           const Vec3& c) {
+  const int op = orient3d(a, b, c, p), oq = orient3d(a, b, c, q);
+  if (op * oq > 0) return false;
+  if (op == 0 && oq == 0) return segment_triangle_coplanar(p, q, a, b, c);
+  // The segment meets the plane in one point; it lies in the triangle iff the line pq passes
+  // on no strictly opposite sides of the triangle's edges.
+  const int s1 = orient3d(p, q, a, b), s2 = orient3d(p, q, b, c), s3 = orient3d(p, q, c, a);
+  const bool pos = s1 > 0 || s2 > 0 || s3 > 0;
+  const bool neg = s1 < 0 || s2 < 0 || s3 < 0;
+  return !(pos && neg);
+}
+
+bool triangles_intersect_coplanar(const Vec3* t, const Vec3* s) {
+  int i, j;
+  projection_for(t[0], t[1], t[2], &i, &j);
+  for (int k = 0; k < 3; ++k) {
+    if (point_in_triangle_2d(s[k], t[0], t[1], t[2], i, j)) return true;
+    if (point_in_triangle_2d(t[k], s[0], s[1], s[2], i, j)) return true;
+  }
+  for (int k = 0; k < 3; ++k)
+    for (int l = 0; l < 3; ++l)
+      if (segments_intersect_2d(t[k], t[(k + 1) % 3], s[l], s[(l + 1) % 3], i, j)) return true;
+  return false;
+}
+
+// Two triangles with no shared vertex.
+bool triangles_intersect(const Vec3* t, const Vec3* s) {
+  int ds[3], dt[3];
+  for (int k = 0; k < 3; ++k) ds[k] = orient3d(t[0], t[1], t[2], s[k]);
+  if ((ds[0] > 0 && ds[1] > 0 && ds[2] > 0) || (ds[0] < 0 && ds[1] < 0 && ds[2] < 0)) return false;
+  if (ds[0] == 0 && ds[1] == 0 && ds[2] == 0) return triangles_intersect_coplanar(t, s);
+  for (int k = 0; k < 3; ++k) dt[k] = orient3d(s[0], s[1], s[2], t[k]);
+  if ((dt[0] > 0 && dt[1] > 0 && dt[2] > 0) || (dt[0] < 0 && dt[1] < 0 && dt[2] < 0)) return false;
+  // Not coplanar: the intersection, if any, is a segment or point whose ends lie on an edge
+  // of one triangle inside the other.
+  for (int k = 0; k < 3; ++k) {
+    if (segment_hits_triangle(t[k], t[(k + 1) % 3], s[0], s[1], s[2])) return true;
+    if (segment_hits_triangle(s[k], s[(k + 1) % 3], t[0], t[1], t[2])) return true;
+  }
+  return false;
+}
+
+// Is direction d - u inside the closed wedge at u spanned by p - u and q - u (angle < 180)?
+bool in_wedge_2d(const Vec3& u, const Vec3& p, const Vec3& q, const Vec3& d, int i, int j) {
+  const int s = orient2d(u, p, q, i, j);
+  return orient2d(u, p, d, i, j) * s >= 0 && orient2d(u, d, q, i, j) * s >= 0;
+}
+
+// Triangles (u, a1, b1) and (u, a2, b2) sharing exactly vertex u.
+bool triangles_meet_beyond_vertex(const Vec3& u, const Vec3& a1, const Vec3& b1, const Vec3& a2,
+                                  const Vec3& b2) {
+  const bool a2_on = orient3d(u, a1, b1, a2) == 0, b2_on = orient3d(u, a1, b1, b2) == 0;
+  int i, j;
+  if (a2_on && b2_on) {  // coplanar: the wedges at u overlap beyond u
+    projection_for(u, a1, b1, &i, &j);
+    return in_wedge_2d(u, a1, b1, a2, i, j) || in_wedge_2d(u, a1, b1, b2, i, j) ||
+           in_wedge_2d(u, a2, b2, a1, i, j) || in_wedge_2d(u, a2, b2, b1, i, j);
+  }
+  if (segment_hits_triangle(a1, b1, u, a2, b2) || segment_hits_triangle(a2, b2, u, a1, b1))
+    return true;
+  // An edge from u that runs inside the other triangle's plane and wedge.
+  if (a2_on || b2_on) {
+    projection_for(u, a1, b1, &i, &j);
+    if (a2_on && in_wedge_2d(u, a1, b1, a2, i, j)) return true;
+    if (b2_on && in_wedge_2d(u, a1, b1, b2, i, j)) return true;
+  }
+  const bool a1_on = orient3d(u, a2, b2, a1) == 0, b1_on = orient3d(u, a2, b2, b1) == 0;
+  if (a1_on || b1_on) {
+    projection_for(u, a2, b2, &i, &j);
+    if (a1_on && in_wedge_2d(u, a2, b2, a1, i, j)) return true;
+    if (b1_on && in_wedge_2d(u, a2, b2, b1, i, j)) return true;
+  }
+  return false;
+}
+
+// ---- conservative filters ---------------------------------------------------------------
+//
+// Rounding. With u = 2^-53, a difference of two doubles is within u of its value (relative),
+// a dot product of three terms within 3u |a|_1 |v|_inf plus the error of its inputs. The
+// filters below compare floating-point gaps against a tolerance of kFilterSlack times the
+// size of the quantities involved, 1e-12 = 4,500 u, which exceeds the few tens of u that
+// every computation here can lose; kFilterFloor = 1e-300 covers the absolute error of
+// results that underflow (at most a few times 2^-1074). A filter that is too loose only costs
+// exact tests; one that is too tight would drop an intersection, so the slack errs wide.
+constexpr double kFilterSlack = 1e-12;
+constexpr double kFilterFloor = 1e-300;
+// Fans of at most this many faces are searched pair by pair.
+constexpr int32_t kSmallFan = 24;
+
+int shared_vertices(const Face& F, const Face& G) {
+  int n = 0;
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b) n += F[a] == G[b];
+  return n;
+}
+
+double max_abs(const Vec3& v) { return v.cwiseAbs().maxCoeff(); }
+
+// Rejects boxes that a triangle certainly misses. Boxes whose intervals do not overlap the
+// triangle's bounding box are rejected first, exactly (bounds are minima and maxima of
+// coordinates, so no rounding is involved). The remaining separating axes of a triangle and a
+// box are the triangle's normal and the box axes crossed with its edges; the triangle's
+// projections onto them are computed once per triangle. Any vector is a valid separating
+// axis, so the rounding of the axes themselves does not matter, only that of the projections:
+// with every coordinate within S in magnitude (the mesh's largest), the triangle's projections,
+// the box's centre projection a.c and its radius |a|.h together lose at most about 12 u |a|_1 S,
+// so a gap over kFilterSlack |a|_1 S (plus the floor) is a true gap.
+class TriangleSeparator {
+ public:
+  TriangleSeparator(const Vec3* t, const Aabb& bounds, double S) : bounds_(bounds) {
+    const Vec3 e[3] = {t[1] - t[0], t[2] - t[1], t[0] - t[2]};
+    axis_[0] = e[0].cross(e[1]);
+    for (int k = 0; k < 3; ++k)
+      for (int j = 0; j < 3; ++j) axis_[1 + 3 * k + j] = Vec3::Unit(k).cross(e[j]);
+    for (int i = 0; i < kAxes; ++i) {
+      abs_[i] = axis_[i].cwiseAbs();
+      const double p0 = axis_[i].dot(t[0]), p1 = axis_[i].dot(t[1]), p2 = axis_[i].dot(t[2]);
+      const double tol = kFilterSlack * abs_[i].sum() * S + kFilterFloor;
+      lo_[i] = std::min({p0, p1, p2}) - tol;
+      hi_[i] = std::max({p0, p1, p2}) + tol;
+    }
+  }
+  const Aabb& bounds() const { return bounds_; }
+  bool may_meet(const Aabb& b) const {
+    if (!b.overlaps(bounds_)) return false;
+    const Vec3 c = 0.5 * (b.lo + b.hi), h = 0.5 * (b.hi - b.lo);
+    for (int i = 0; i < kAxes; ++i) {
+      const double pc = axis_[i].dot(c), r = abs_[i].dot(h);
+      if (pc - r > hi_[i] || pc + r < lo_[i]) return false;
+    }
+    return true;
+  }
+
+ private:
+  static constexpr int kAxes = 10;
+  Aabb bounds_;
+  Vec3 axis_[kAxes], abs_[kAxes];
+  double lo_[kAxes], hi_[kAxes];
+};
+
+// A box holding the directions from u into triangle (u, a, b): the great-circle arc from
+// the unit vector p towards a to q towards b. An arc of less than 120 degrees (1 + p.q >= 1/2)
+// lies in the triangle p, q, w, where w = (p + q) / (1 + p.q) is where its tangents at p and q
+// meet; a wider one is split at its midpoint m = (p + q) / |p + q| into two such arcs. Two
+// faces around u can meet beyond u only along a direction in both cones, so only if their
+// boxes overlap.
+// Rounding: p and q are within about 4u of the true unit vectors (the difference a - u is
+// correctly rounded; scaling by the largest component first keeps the norm from underflow or
+// overflow), w within about 60u, and m, for |p + q| >= 1/8, within about 100u; the box is
+// padded by the slack, 1e-12. An arc so close to 180 degrees that |p + q| < 1/8 (wider than
+// about 173 degrees) gets the whole cube.
+Aabb cone_box(const Vec3& u, const Vec3& a, const Vec3& b) {
+  auto direction = [&](const Vec3& x) {
+    const Vec3 d = x - u;
+    const Vec3 s = d / max_abs(d);
+    return Vec3(s / s.norm());
+  };
+  Aabb box;
+  auto add_arc = [&](const Vec3& p, const Vec3& q) {  // precondition: 1 + p.q >= 1/2
+    box.extend(p);
+    box.extend(q);
+    box.extend(Vec3((p + q) / (1.0 + p.dot(q))));
+  };
+  const Vec3 p = direction(a), q = direction(b);
+  if (1.0 + p.dot(q) >= 0.5) {
+    add_arc(p, q);
+  } else if ((p + q).norm() >= 0.125) {
+    const Vec3 m = (p + q).normalized();
+    add_arc(p, m);
+    add_arc(m, q);
+  } else {
+    box.extend(Vec3::Constant(-1.0));
+    box.extend(Vec3::Constant(1.0));
+  }
+  box.lo.array() -= kFilterSlack;
+  box.hi.array() += kFilterSlack;
+  return box;
+}
+
+// A box tree over faces whose nodes also know the vertices that every face below them lists,
+// so that a query face can skip subtrees of faces that share a vertex with it.
+class FaceTree {
+ public:
+  FaceTree(const Mesh& mesh, const std::vector<int32_t>& faces)
+      : mesh_(mesh), order_(faces), bounds_(mesh.faces.size()) {
+    for (int32_t f : faces) {
+      bounds_[f] = mesh.face_bounds(f);
+      largest_ = std::max({largest_, max_abs(bounds_[f].lo), max_abs(bounds_[f].hi)});
+    }
+    if (order_.empty()) return;
+    nodes_.reserve(2 * (order_.size() / kLeafSize + 1));
+    nodes_.push_back({});
+    build(0, 0, static_cast<int32_t>(order_.size()));
+  }
+
+  // Calls visit(g) for every face g > f that shares no vertex with face f and whose triangle
+  // may meet f's (conservatively); counts the nodes and faces it looks at in *steps.
+  template <typename Visit>
+  void for_each_candidate(int32_t f, size_t* steps, Visit visit) const {
+    if (nodes_.empty()) return;
+    const Face& F = mesh_.faces[f];
+    const Vec3 t[3] = {mesh_.vertices[F[0]], mesh_.vertices[F[1]], mesh_.vertices[F[2]]};
+    const TriangleSeparator sep(t, bounds_[f], largest_);
+    int32_t stack[64];  // median splits: depth <= 31, and one waiting sibling per level
+    int top = 0;
+    stack[top++] = 0;
+    while (top > 0) {
+      const Node& n = nodes_[stack[--top]];
+      ++*steps;
+      bool shares = false;
+      for (int32_t v : n.common) shares |= v >= 0 && (v == F[0] || v == F[1] || v == F[2]);
+      if (shares || n.last_face <= f || !sep.may_meet(n.bounds)) continue;
+      if (n.count > 0) {
+        for (int32_t i = n.first; i < n.first + n.count; ++i) {
+          const int32_t g = order_[i];
+          ++*steps;
+          if (g > f && shared_vertices(F, mesh_.faces[g]) == 0 && sep.may_meet(bounds_[g])) visit(g);
+        }
+      } else {
+        stack[top++] = n.first + 1;
+        stack[top++] = n.first;
+      }
+    }
+  }
+
+ private:
+  static constexpr int32_t kLeafSize = 4;
+  struct Node {
+    Aabb bounds;
+    int32_t first = 0;  // leaf: offset into order_; inner: index of left child (right = left+1)
+    int32_t count = 0;  // > 0 for a leaf
+    std::array<int32_t, 3> common = {-1, -1, -1};  // vertices every face below lists; -1 unused
+    int32_t last_face = -1;  // the largest face index below
+  };
+
+  static std::array<int32_t, 3> intersect(const std::array<int32_t, 3>& x,
+                                          const std::array<int32_t, 3>& y) {
+    std::array<int32_t, 3> out = {-1, -1, -1};
+    int n = 0;
+    for (int32_t v : x)
+      if (v >= 0 && std::find(y.begin(), y.end(), v) != y.end()) out[n++] = v;
+    return out;
+  }
+
+  void build(int32_t node, int32_t begin, int32_t end) {
+    Aabb bounds, cbounds;
+    std::array<int32_t, 3> common = mesh_.faces[order_[begin]];
+    for (int32_t i = begin; i < end; ++i) {
+      const Aabb& fb = bounds_[order_[i]];
+      bounds.extend(fb);
+      cbounds.extend(Vec3(0.5 * (fb.lo + fb.hi)));
+      common = intersect(common, mesh_.faces[order_[i]]);
+      nodes_[node].last_face = std::max(nodes_[node].last_face, order_[i]);
+    }
+    nodes_[node].bounds = bounds;
+    nodes_[node].common = common;
+    if (end - begin <= kLeafSize) {
+      nodes_[node].first = begin;
+      nodes_[node].count = end - begin;
+      return;
+    }
+    int axis;
+    (cbounds.hi - cbounds.lo).maxCoeff(&axis);
+    const int32_t mid = begin + (end - begin) / 2;
+    auto centre = [&](int32_t f) { return bounds_[f].lo[axis] + bounds_[f].hi[axis]; };
+    std::nth_element(order_.begin() + begin, order_.begin() + mid, order_.begin() + end,
+                     [&](int32_t a, int32_t b) {
+                       const double ca = centre(a), cb = centre(b);
+                       return ca != cb ? ca < cb : a < b;  // ties by index: deterministic
+                     });
+    const int32_t left = static_cast<int32_t>(nodes_.size());
+    nodes_[node].first = left;
+    nodes_[node].count = 0;
+    nodes_.push_back({});
+    nodes_.push_back({});
+    build(left, begin, mid);
+    build(left + 1, mid, end);
+  }
+
+  const Mesh& mesh_;
+  std::vector<int32_t> order_;
+  std::vector<Aabb> bounds_;  // per face of the mesh (only the searched ones are set)
+  double largest_ = 0.0;      // largest |coordinate| of the searched faces
+  std::vector<Node> nodes_;
+};
+
+}  // namespace
+
+bool faces_intersect(const Mesh& mesh, size_t f, size_t g) {
+  const Face& F = mesh.faces[f];
+  const Face& G = mesh.faces[g];
+  int shared = 0, fi[3], gi[3];
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b)
+      if (F[a] == G[b]) {
+        fi[shared] = a;
+        gi[shared] = b;
+        ++shared;
+      }
+  const Vec3 t[3] = {mesh.vertices[F[0]], mesh.vertices[F[1]], mesh.vertices[F[2]]};
+  const Vec3 s[3] = {mesh.vertices[G[0]], mesh.vertices[G[1]], mesh.vertices[G[2]]};
+  if (shared == 0) return triangles_intersect(t, s);
+  if (shared == 3) return true;  // the same triangle twice
+  if (shared == 2) {
+    // Sharing edge uv: they overlap only if coplanar with the third vertices on one side.
+    const Vec3& u = t[fi[0]];
+    const Vec3& v = t[fi[1]];
+    const Vec3& a = t[3 - fi[0] - fi[1]];
+    const Vec3& b = s[3 - gi[0] - gi[1]];
+    if (orient3d(u, v, a, b) != 0) return false;
+    int i, j;
+    projection_for(u, v, a, &i, &j);
+    return orient2d(u, v, a, i, j) * orient2d(u, v, b, i, j) > 0;
+  }
+  const Vec3& u = t[fi[0]];
+  return triangles_meet_beyond_vertex(u, t[(fi[0] + 1) % 3], t[(fi[0] + 2) % 3],
+                                      s[(gi[0] + 1) % 3], s[(gi[0] + 2) % 3]);
+}
+
+SelfIntersectionSearch find_self_intersections(const Mesh& mesh, const std::vector<char>& skip) {
+  VOBB_ASSERT(skip.size() == mesh.faces.size(), "find_self_intersections: one skip flag per face");
+  SelfIntersectionSearch out;
+  auto decide = [&](int32_t f, int32_t g) {
+    ++out.exact_tests;
+    if (faces_intersect(mesh, f, g)) ++out.pairs;
+  };
+  std::vector<int32_t> faces;
+  for (size_t f = 0; f < mesh.faces.size(); ++f)
+    if (!skip[f]) faces.push_back(static_cast<int32_t>(f));
+
+  // Sharing two vertices: the faces on each edge. A pair listing the same three vertices
+  // shares three edges and is decided on the least of them only.
+  {
+    std::vector<std::array<int32_t, 3>> recs;  // (lo, hi, face)
+    recs.reserve(3 * faces.size());
+    for (int32_t f : faces)
+      for (int k = 0; k < 3; ++k) {
+        const int32_t a = mesh.faces[f][k], b = mesh.faces[f][(k + 1) % 3];
+        recs.push_back({std::min(a, b), std::max(a, b), f});
+      }
+    std::sort(recs.begin(), recs.end());
+    for (size_t i = 0; i < recs.size();) {
+      size_t j = i + 1;
+      while (j < recs.size() && recs[j][0] == recs[i][0] && recs[j][1] == recs[i][1]) ++j;
+      for (size_t x = i; x < j; ++x)
+        for (size_t y = x + 1; y < j; ++y) {
+          const Face& F = mesh.faces[recs[x][2]];
+          ++out.filter_steps;
+          if (shared_vertices(F, mesh.faces[recs[y][2]]) == 3) {
+            std::array<int32_t, 3> s = F;
+            std::sort(s.begin(), s.end());
+            if (recs[i][0] != s[0] || recs[i][1] != s[1]) continue;  // not the least edge
+          }
+          decide(recs[x][2], recs[y][2]);
+        }
+      i = j;
+    }
+  }
+
+  // Sharing one vertex v: faces around v whose cones from v may share a direction.
+  {
+    std::vector<int32_t> start(mesh.vertices.size() + 1, 0);
+    for (int32_t f : faces)
+      for (int32_t v : mesh.faces[f]) ++start[v + 1];
+    for (size_t v = 0; v < mesh.vertices.size(); ++v) start[v + 1] += start[v];
+    std::vector<int32_t> around(start.back()), fill(start.begin(), start.end() - 1);
+    for (int32_t f : faces)
+      for (int32_t v : mesh.faces[f]) around[fill[v]++] = f;
+    std::vector<Aabb> cones;
+    for (size_t v = 0; v < mesh.vertices.size(); ++v) {
+      const int32_t* fan = around.data() + start[v];
+      const int32_t k = start[v + 1] - start[v];
+      if (k < 2) continue;
+      cones.resize(k);
+      for (int32_t i = 0; i < k; ++i) {
+        const Face& F = mesh.faces[fan[i]];
+        const int c = F[0] == static_cast<int32_t>(v) ? 0 : F[1] == static_cast<int32_t>(v) ? 1 : 2;
+        cones[i] = cone_box(mesh.vertices[v], mesh.vertices[F[(c + 1) % 3]],
+                            mesh.vertices[F[(c + 2) % 3]]);
+      }
+      if (k <= kSmallFan) {  // the usual vertex: a tree would cost more than it saves
+        for (int32_t i = 0; i < k; ++i)
+          for (int32_t j = i + 1; j < k; ++j) {
+            ++out.filter_steps;
+            if (cones[i].overlaps(cones[j]) &&
+                shared_vertices(mesh.faces[fan[i]], mesh.faces[fan[j]]) == 1)
+              decide(fan[i], fan[j]);
+          }
+        continue;
+      }
+      const AabbTree tree(cones);
+      for (int32_t i = 0; i < k; ++i) {
+        const Face& F = mesh.faces[fan[i]];
+        tree.for_each_accepted(
+            [&](const Aabb& b) {
+              ++out.filter_steps;
+              return b.overlaps(cones[i]);
+            },
+            [&](int32_t j) {
+              if (j > i && shared_vertices(F, mesh.faces[fan[j]]) == 1) decide(fan[i], fan[j]);
+            });
+      }
+    }
+  }
+
+  // Sharing no vertex: the face tree.
+  {
+    const FaceTree tree(mesh, faces);
+    for (int32_t f : faces)
+      tree.for_each_candidate(f, &out.filter_steps, [&](int32_t g) {
+        decide(f, g);
+      });
+  }
+  return out;
+}
+
+}  // namespace vobb

@@ -1,0 +1,46 @@
+// Self-intersections of a triangle mesh: which pairs of faces meet beyond the vertices they
+// share.
+//
+// Two faces intersect when their closed triangles have a point in common that is not a vertex
+// both of them list (by index). Exact predicates (exact_predicates.h) decide every pair that is
+// tested. Floating-point filters only choose which pairs to test. Each filter is conservative:
+// it may pass a pair that does not meet, never drop one that does, with its rounding bounded in
+// self_intersections.cpp. So the count equals that of testing every pair.
+//
+// Cost. Pairs are found in three disjoint groups, by how many vertices they share, so that a
+// vertex shared by k faces (the apex of a finely divided cone, the centre of a fan-triangulated
+// disc) costs about k log k tests, not the k^2 / 2 a box-overlap search gives, where every box
+// holds that vertex:
+//   - two (an edge): all pairs of faces listed on that edge (c^2 / 2 for c faces, and c > 2
+//     only on a non-manifold edge);
+//   - one (a vertex v): faces around v whose cones of directions from v share a direction,
+//     found through boxes around each cone's arc on the unit sphere;
+//   - none: a tree over the faces, descended only into boxes that the query triangle may meet
+//     (a separating-axis test) and pruned at subtrees whose faces all list one of the query's
+//     vertices.
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+#include "common/mesh.h"
+
+namespace vobb {
+
+struct SelfIntersectionSearch {
+  size_t pairs = 0;         // pairs of faces that intersect
+  size_t exact_tests = 0;   // pairs decided by exact predicates
+  size_t filter_steps = 0;  // boxes, tree nodes and cones looked at by the filters
+};
+
+// Counts the intersecting pairs among the faces f with skip[f] == 0 (skip has one entry per
+// face). Preconditions: every coordinate is finite, and every face not skipped has three
+// distinct, non-collinear vertices (check_solidity skips degenerate faces). Faces listing the
+// same three vertices count once as a pair. Deterministic.
+SelfIntersectionSearch find_self_intersections(const Mesh& mesh, const std::vector<char>& skip);
+
+// Exact test of whether two non-degenerate faces of `mesh` meet anywhere other than at the
+// vertices they share (by index). Faces listing the same three vertices meet.
+bool faces_intersect(const Mesh& mesh, size_t f, size_t g);
+
+}  // namespace vobb
