@@ -606,6 +606,21 @@ int main(int argc, char** argv) {
   exp->add_option("--level", level, "Layer to export")->required();
   exp->add_option("-o,--output", out, "boxes.obj or boxes.ply")->required();
 
+  // The command named on the line: an unknown one is named back with the list, and a usage
+  // error of a known one points to that command's help.
+  std::string command;
+  if (argc >= 2 && argv[1][0] != '-') {
+    std::string names;
+    for (const CLI::App* sc : app.get_subcommands([](CLI::App*) { return true; })) {
+      names += (names.empty() ? "" : ", ") + sc->get_name();
+      if (sc->get_name() == argv[1]) command = argv[1];
+    }
+    if (command.empty()) {
+      std::fprintf(stderr, "vobb: usage: unknown command '%s'; the commands are %s (see vobb --help)\n",
+                   one_line(argv[1]).c_str(), names.c_str());
+      return kExitBadInput;
+    }
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -618,7 +633,9 @@ int main(int argc, char** argv) {
     std::string what = e.what();
     for (char& c : what)
       if (c == '\n') c = ' ';
-    std::fprintf(stderr, "vobb: usage: %s (see vobb --help)\n", one_line(what).c_str());
+    const std::string help = command.empty() ? "vobb --help" : "vobb " + command + " --help";
+    std::fprintf(stderr, "vobb%s: usage: %s (see %s)\n", command.empty() ? "" : (" " + command).c_str(),
+                 one_line(what).c_str(), help.c_str());
     return kExitBadInput;
   }
   if (info->parsed()) return run_info(mesh, json, rational);

@@ -767,8 +767,15 @@ Status read_variational_state(const std::string& path, const std::string& finger
       return Status::error(path + ": checkpoint of another build (mesh, options or estimator differ); "
                            "use another --checkpoint folder or remove it");
     VariationalState st;
-    st.split_levels = j.at("split_levels").get<int>();
-    st.sweeps = j.at("sweeps").get<int>();
+    // Counts are whole numbers as saved: nlohmann's get<int> would truncate 1.5 to 1.
+    auto count = [&](const char* key) {
+      const nlohmann::json& v = j.at(key);
+      if (!v.is_number_integer() || v.get<int64_t>() < 0 || v.get<int64_t>() > (int64_t{1} << 31) - 1)
+        throw nlohmann::json::type_error::create(302, std::string(key) + " is not a count", nullptr);
+      return static_cast<int>(v.get<int64_t>());
+    };
+    st.split_levels = count("split_levels");
+    st.sweeps = count("sweeps");
     st.sweeping_done = j.at("sweeping_done").get<bool>();
     st.budget_spent = j.at("budget_spent").get<bool>();
     const auto& nodes = j.at("nodes");

@@ -199,6 +199,12 @@ Status read_off(const Reader& r, LoadedMesh* out) {
     Status s = r.add_polygon(idx, lines.number(), static_cast<size_t>(i), out);
     if (!s) return s;
   }
+  // More lines than the header declares would otherwise be dropped without a word, and a
+  // header that undercounts its faces would show up as a hole in the mesh.
+  if (lines.next_tokens(&t, true))
+    return r.fail_at(lines.number(), "more data after the " + std::to_string(nf) +
+                                         " faces the header declares: '" +
+                                         std::string(t[0].substr(0, 32)) + "'");
   return Status::ok();
 }
 

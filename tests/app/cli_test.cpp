@@ -71,6 +71,13 @@ TEST(CliBadInput, MissingFileDirectoryAndUsage) {
     EXPECT_EQ(r.code, 2) << args;
     EXPECT_EQ(line_count(r.err), 1u) << args << ": " << r.err;
   }
+  // An unknown command is named back with the list of commands; a known command's usage
+  // error names the command.
+  r = vobb_cli("frobnicate");
+  EXPECT_NE(r.err.find("unknown command 'frobnicate'; the commands are info, build"), std::string::npos) << r.err;
+  r = vobb_cli("build x.off");
+  EXPECT_EQ(r.err.rfind("vobb build: usage: ", 0), 0u) << r.err;
+  EXPECT_NE(r.err.find("see vobb build --help"), std::string::npos) << r.err;
   // A bad margin is refused before the mesh is read, so the line names the flag, not x.off.
   for (const char* args : {"build x.off -o t.json --collider-margin -1", "build x.off -o t.json --collider-margin nan",
                            "build x.off -o t.json --collider-margin 0.1 --method obbtree"}) {

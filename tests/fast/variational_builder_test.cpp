@@ -226,6 +226,26 @@ TEST(VariationalBuilder, CheckpointOfAnotherBuildOrDamagedIsRefused) {
   const Status levels = read_variational_state(path, "build A", mesh.faces.size(), &back, &found);
   EXPECT_FALSE(levels);
   EXPECT_NE(levels.message().find("split_levels"), std::string::npos) << levels.message();
+  // A fractional or negative count, which get<int> would truncate: refused.
+  ASSERT_TRUE(write_variational_state(last, "build A", path));
+  std::string text;
+  {
+    std::ifstream in(path);
+    text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  for (const std::string key : {"\"sweeps\":", "\"split_levels\":"}) {
+    for (const std::string value : {"1.5", "-1"}) {
+      const size_t at = text.find(key);
+      ASSERT_NE(at, std::string::npos) << key;
+      const size_t end = text.find_first_of(",}", at);
+      std::string edited = text;
+      edited.replace(at + key.size(), end - at - key.size(), value);
+      std::ofstream(path) << edited;
+      const Status s = read_variational_state(path, "build A", mesh.faces.size(), &back, &found);
+      EXPECT_FALSE(s) << key << value;
+      EXPECT_NE(s.message().find("mistyped"), std::string::npos) << s.message();
+    }
+  }
   {
     std::ofstream(path) << "{\"format\":\"vobb-variational-state\",\"version\":1,\"fingerprint\":\"build A\"";
   }

@@ -30,6 +30,7 @@ files["empty.off"] = ""
 files["truncated_vertices.off"] = off(V, F).split("\n", 7)
 files["truncated_vertices.off"] = "\n".join(off(V, F).split("\n")[:7]) + "\n"
 files["truncated_faces.off"] = "\n".join(off(V, F).split("\n")[:15]) + "\n"
+files["faces_beyond_count.off"] = off(V, F).replace("8 12 0", "8 10 0", 1)
 nanv = list(V); nanv[3] = (1, "nan", 0)
 files["nan_coordinate.off"] = off(nanv, F)
 files["inf_coordinate.obj"] = "".join(f"v {x} {y} {z}\n" for x, y, z in V[:5]) + "v 1 inf 1\n" + \
