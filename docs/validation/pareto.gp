@@ -9,11 +9,11 @@ set xlabel 'seconds per evaluation (2 cores, llvmpipe)'
 set ylabel 'median |E - V| / V'
 set format y '10^{%L}'
 set format x '10^{%L}'
-set arrow from 0.25103190432708339, graph 0 to 0.25103190432708339, graph 1 nohead lw 2 lc rgb '#9467bd'
-set label 'exact clipping' at 0.25103190432708339, graph 0.95 rotate by 90 right offset -1,0 tc rgb '#9467bd'
-set arrow from 0.69004623111111107, graph 0 to 0.69004623111111107, graph 1 nohead lw 2 lc rgb '#8c564b'
-set label 'exact Nef' at 0.69004623111111107, graph 0.95 rotate by 90 right offset -1,0 tc rgb '#8c564b'
-set xrange [3.3333333333333335e-05:2.0711386933333329]
+set arrow from 0.10662595789375005, graph 0 to 0.10662595789375005, graph 1 nohead lw 2 lc rgb '#9467bd'
+set label 'exact clipping' at 0.10662595789375005, graph 0.95 rotate by 90 right offset -1,0 tc rgb '#9467bd'
+set arrow from 0.20292272866666666, graph 0 to 0.20292272866666666, graph 1 nohead lw 2 lc rgb '#8c564b'
+set label 'exact Nef' at 0.20292272866666666, graph 0.95 rotate by 90 right offset -1,0 tc rgb '#8c564b'
+set xrange [3.3333333333333335e-05:0.60976818600000005]
 plot 'pareto.csv' using (strcol(1) eq 'cpu_cubemap' ? $3 : NaN):4 with linespoints lw 2 pt 7 lc rgb '#1f77b4' title 'CPU cubemap', \
  '' using (strcol(1) eq 'cpu_cubemap' ? $3 : NaN):4:(sprintf('%d', $2)) with labels offset 0,1 notitle, \
  '' using (strcol(1) eq 'gl_cubemap' ? $3 : NaN):4 with linespoints lw 2 pt 5 lc rgb '#ff7f0e' title 'GL cubemap (llvmpipe)', \
