@@ -33,12 +33,18 @@ class AabbTree {
   // Bounds of all primitives (empty for an empty tree).
   Aabb bounds() const { return nodes_.empty() ? Aabb() : nodes_[0].bounds; }
 
- private:
+  // The nodes, for callers that keep data of their own per node or walk the tree themselves.
+  // Node 0 is the root (when there are primitives); a child's index is larger than its
+  // parent's, so a pass from the last node to the first sees children before parents.
   struct Node {
     Aabb bounds;
-    int32_t first;  // leaf: offset into order_; inner: index of left child (right = left+1)
-    int32_t count;  // > 0 for a leaf
+    int32_t first;  // leaf: offset into order(); inner: index of left child (right = left+1)
+    int32_t count;  // > 0 for a leaf, whose primitives are order()[first .. first + count)
   };
+  const std::vector<Node>& nodes() const { return nodes_; }
+  const std::vector<int32_t>& order() const { return order_; }
+
+ private:
   void build(int32_t node, int32_t begin, int32_t end, const std::vector<Vec3>& centroids);
 
   std::vector<Aabb> boxes_;

@@ -242,27 +242,45 @@ Aabb cone_box(const Vec3& u, const Vec3& a, const Vec3& b) {
   return box;
 }
 
-// A box tree over faces whose nodes also know the vertices that every face below them lists,
-// so that a query face can skip subtrees of faces that share a vertex with it.
+// A box tree over faces (an AabbTree) whose nodes also know the vertices that every face
+// below them lists, so that a query face can skip subtrees of faces that share a vertex with
+// it, and the largest face index below them, so that a query for the pairs (f, g > f) can skip
+// subtrees of smaller faces.
 class FaceTree {
  public:
   FaceTree(const Mesh& mesh, const std::vector<int32_t>& faces)
-      : mesh_(mesh), order_(faces), bounds_(mesh.faces.size()) {
-    for (int32_t f : faces) {
-      bounds_[f] = mesh.face_bounds(f);
-      largest_ = std::max({largest_, max_abs(bounds_[f].lo), max_abs(bounds_[f].hi)});
+      : mesh_(mesh), faces_(faces), bounds_(mesh.faces.size()) {
+    std::vector<Aabb> boxes(faces.size());
+    for (size_t i = 0; i < faces.size(); ++i) {
+      boxes[i] = bounds_[faces[i]] = mesh.face_bounds(faces[i]);
+      largest_ = std::max({largest_, max_abs(boxes[i].lo), max_abs(boxes[i].hi)});
     }
-    if (order_.empty()) return;
-    nodes_.reserve(2 * (order_.size() / kLeafSize + 1));
-    nodes_.push_back({});
-    build(0, 0, static_cast<int32_t>(order_.size()));
+    tree_ = AabbTree(std::move(boxes));
+    const std::vector<AabbTree::Node>& nodes = tree_.nodes();
+    extra_.resize(nodes.size());
+    for (size_t k = nodes.size(); k-- > 0;) {  // children before parents
+      const AabbTree::Node& n = nodes[k];
+      Extra& e = extra_[k];
+      if (n.count > 0) {
+        e.common = mesh.faces[face_at(n.first)];
+        for (int32_t i = n.first; i < n.first + n.count; ++i) {
+          e.common = intersect(e.common, mesh.faces[face_at(i)]);
+          e.last_face = std::max(e.last_face, face_at(i));
+        }
+      } else {
+        const Extra &l = extra_[n.first], &r = extra_[n.first + 1];
+        e.common = intersect(l.common, r.common);
+        e.last_face = std::max(l.last_face, r.last_face);
+      }
+    }
   }
 
   // Calls visit(g) for every face g > f that shares no vertex with face f and whose triangle
   // may meet f's (conservatively); counts the nodes and faces it looks at in *steps.
   template <typename Visit>
   void for_each_candidate(int32_t f, size_t* steps, Visit visit) const {
-    if (nodes_.empty()) return;
+    const std::vector<AabbTree::Node>& nodes = tree_.nodes();
+    if (nodes.empty()) return;
     const Face& F = mesh_.faces[f];
     const Vec3 t[3] = {mesh_.vertices[F[0]], mesh_.vertices[F[1]], mesh_.vertices[F[2]]};
     const TriangleSeparator sep(t, bounds_[f], largest_);
@@ -270,14 +288,16 @@ class FaceTree {
     int top = 0;
     stack[top++] = 0;
     while (top > 0) {
-      const Node& n = nodes_[stack[--top]];
+      const int32_t k = stack[--top];
+      const AabbTree::Node& n = nodes[k];
+      const Extra& e = extra_[k];
       ++*steps;
       bool shares = false;
-      for (int32_t v : n.common) shares |= v >= 0 && (v == F[0] || v == F[1] || v == F[2]);
-      if (shares || n.last_face <= f || !sep.may_meet(n.bounds)) continue;
+      for (int32_t v : e.common) shares |= v >= 0 && (v == F[0] || v == F[1] || v == F[2]);
+      if (shares || e.last_face <= f || !sep.may_meet(n.bounds)) continue;
       if (n.count > 0) {
         for (int32_t i = n.first; i < n.first + n.count; ++i) {
-          const int32_t g = order_[i];
+          const int32_t g = face_at(i);
           ++*steps;
           if (g > f && shared_vertices(F, mesh_.faces[g]) == 0 && sep.may_meet(bounds_[g])) visit(g);
         }
@@ -289,13 +309,9 @@ class FaceTree {
   }
 
  private:
-  static constexpr int32_t kLeafSize = 4;
-  struct Node {
-    Aabb bounds;
-    int32_t first = 0;  // leaf: offset into order_; inner: index of left child (right = left+1)
-    int32_t count = 0;  // > 0 for a leaf
+  struct Extra {
     std::array<int32_t, 3> common = {-1, -1, -1};  // vertices every face below lists; -1 unused
-    int32_t last_face = -1;  // the largest face index below
+    int32_t last_face = -1;                         // the largest face index below
   };
 
   static std::array<int32_t, 3> intersect(const std::array<int32_t, 3>& x,
@@ -306,47 +322,14 @@ class FaceTree {
       if (v >= 0 && std::find(y.begin(), y.end(), v) != y.end()) out[n++] = v;
     return out;
   }
-
-  void build(int32_t node, int32_t begin, int32_t end) {
-    Aabb bounds, cbounds;
-    std::array<int32_t, 3> common = mesh_.faces[order_[begin]];
-    for (int32_t i = begin; i < end; ++i) {
-      const Aabb& fb = bounds_[order_[i]];
-      bounds.extend(fb);
-      cbounds.extend(Vec3(0.5 * (fb.lo + fb.hi)));
-      common = intersect(common, mesh_.faces[order_[i]]);
-      nodes_[node].last_face = std::max(nodes_[node].last_face, order_[i]);
-    }
-    nodes_[node].bounds = bounds;
-    nodes_[node].common = common;
-    if (end - begin <= kLeafSize) {
-      nodes_[node].first = begin;
-      nodes_[node].count = end - begin;
-      return;
-    }
-    int axis;
-    (cbounds.hi - cbounds.lo).maxCoeff(&axis);
-    const int32_t mid = begin + (end - begin) / 2;
-    auto centre = [&](int32_t f) { return bounds_[f].lo[axis] + bounds_[f].hi[axis]; };
-    std::nth_element(order_.begin() + begin, order_.begin() + mid, order_.begin() + end,
-                     [&](int32_t a, int32_t b) {
-                       const double ca = centre(a), cb = centre(b);
-                       return ca != cb ? ca < cb : a < b;  // ties by index: deterministic
-                     });
-    const int32_t left = static_cast<int32_t>(nodes_.size());
-    nodes_[node].first = left;
-    nodes_[node].count = 0;
-    nodes_.push_back({});
-    nodes_.push_back({});
-    build(left, begin, mid);
-    build(left + 1, mid, end);
-  }
+  int32_t face_at(int32_t i) const { return faces_[tree_.order()[i]]; }
 
   const Mesh& mesh_;
-  std::vector<int32_t> order_;
-  std::vector<Aabb> bounds_;  // per face of the mesh (only the searched ones are set)
-  double largest_ = 0.0;      // largest |coordinate| of the searched faces
-  std::vector<Node> nodes_;
+  const std::vector<int32_t>& faces_;  // the searched faces; tree primitive i is faces_[i]
+  std::vector<Aabb> bounds_;           // per face of the mesh (only the searched ones are set)
+  double largest_ = 0.0;               // largest |coordinate| of the searched faces
+  AabbTree tree_;
+  std::vector<Extra> extra_;           // per node of tree_
 };
 
 }  // namespace
