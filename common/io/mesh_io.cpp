@@ -3,6 +3,7 @@
 #include <sys/stat.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
@@ -609,6 +610,31 @@ void weld_vertices(Mesh* mesh, size_t* welded, size_t* unreferenced) {
   mesh->vertices = std::move(kept);
 }
 
+namespace {
+
+// The native format a file's first bytes announce: "off" ([ST][C][N]OFF), "ply" (its magic
+// line), "stl" (ASCII "solid"), "obj" (a first line starting with "v", "vn", "f", "o", "g" or
+// "mtllib"), or "" when none does. Binary STL has no magic, so it is never named.
+std::string looks_like(std::string_view text) {
+  Lines lines(text);
+  std::vector<std::string_view> t;
+  if (!lines.next_tokens(&t, true)) return "";
+  const std::string_view head = t[0];
+  if (head.size() >= 3 && head.size() <= 6 && head.substr(head.size() - 3) == "OFF") return "off";
+  if (head == "ply") return "ply";
+  if (head == "solid") return "stl";
+  for (const char* k : {"v", "vn", "vt", "f", "o", "g", "mtllib", "usemtl"})
+    if (head == k) return "obj";
+  return "";
+}
+
+std::string upper(std::string s) {
+  for (char& c : s) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  return s;
+}
+
+}  // namespace
+
 Status load_mesh(const std::string& path, LoadedMesh* out) {
   *out = LoadedMesh();
   const std::string display = basename_of(path);
@@ -630,15 +656,23 @@ Status load_mesh(const std::string& path, LoadedMesh* out) {
     Status s = read_file(path, display, &content);
     if (!s) return s;
     if (content.empty()) return Status::error(display + ": empty file");
+    // A file saved under another format's extension fails in that format's terms ("binary
+    // STL promises 808263735 triangles"); the message also says what it looks like.
+    auto hinted = [&](const Status& failed) {
+      const std::string looks = looks_like(content);
+      if (looks.empty() || looks == ext) return failed;
+      return Status::error(failed.message() + " (the file looks like " + upper(looks) + ", not " +
+                           upper(ext) + "; is the extension right?)");
+    };
     if (content.find('\0') != std::string::npos && ext != "ply" && ext != "stl")
-      return Status::error(display + ": binary data in a text format");
+      return hinted(Status::error(display + ": binary data in a text format"));
     Reader r(display, content);
     out->format = ext;
     if (ext == "off") s = read_off(r, out);
     else if (ext == "obj") s = read_obj(r, out);
     else if (ext == "ply") s = read_ply(r, out);
     else s = read_stl(r, out);
-    if (!s) return s;
+    if (!s) return hinted(s);
   }
   if (out->mesh.vertices.size() > static_cast<size_t>(kMaxIndex))
     return Status::error(display + ": too many vertices");

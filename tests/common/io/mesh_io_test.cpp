@@ -83,6 +83,39 @@ TEST(MeshIo, OffVariantsCommentsColoursAndPolygons) {
   std::remove(path.c_str());
 }
 
+// A file saved under another format's extension: refused in one line that says what the file
+// looks like. Every native format written by save_mesh, read under every other extension
+// whose parser refuses it (binary STL has no magic, so it is never named).
+TEST(MeshIo, WrongExtensionIsNamed) {
+  const Mesh m = analytic::tetrahedron().mesh;
+  const struct {
+    MeshFormat format;
+    const char* looks;  // what the message must say, or nullptr
+  } cases[] = {{MeshFormat::kOff, "OFF"}, {MeshFormat::kObj, "OBJ"}, {MeshFormat::kPlyAscii, "PLY"},
+               {MeshFormat::kPlyBinary, "PLY"}, {MeshFormat::kStlAscii, "STL"}, {MeshFormat::kStlBinary, nullptr}};
+  size_t named = 0;
+  for (const auto& c : cases) {
+    for (const char* ext : {"off", "obj", "ply", "stl"}) {
+      const std::string path = test::temp_path(std::string("wrong.") + ext);
+      ASSERT_TRUE(save_mesh(m, path, c.format));
+      LoadedMesh lm;
+      const Status s = load_mesh(path, &lm);
+      std::remove(path.c_str());
+      if (s) continue;  // e.g. its own extension
+      EXPECT_EQ(s.message().find('\n'), std::string::npos) << s.message();
+      if (c.looks && std::string(c.looks) != [&] {
+            std::string e = ext;
+            for (char& ch : e) ch = static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
+            return e;
+          }()) {
+        EXPECT_NE(s.message().find(std::string("looks like ") + c.looks), std::string::npos) << ext << ": " << s.message();
+        ++named;
+      }
+    }
+  }
+  EXPECT_GE(named, 12u);  // OFF, OBJ, ASCII PLY, binary PLY, ASCII STL: 3 wrong extensions each, less any read fine
+}
+
 TEST(MeshIo, ObjRelativeIndicesSlashesAndUnusedVertices) {
   const std::string path = test::temp_path("rel.obj");
   write_text(path, "# t\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 9 9 9\nvn 0 0 1\nf 1//1 2//1 3//1\nf -4/1 -2 -3\n");
