@@ -149,8 +149,9 @@ bool triangles_meet_beyond_vertex(const Vec3& u, const Vec3& a1, const Vec3& b1,
 // exact tests; one that is too tight would drop an intersection, so the slack errs wide.
 constexpr double kFilterSlack = 1e-12;
 constexpr double kFilterFloor = 1e-300;
-// Fans of at most this many faces are searched pair by pair.
+// Fans of at most this many faces, and edges of at most this many, are searched pair by pair.
 constexpr int32_t kSmallFan = 24;
+constexpr size_t kSmallEdge = 8;
 
 int shared_vertices(const Face& F, const Face& G) {
   int n = 0;
@@ -242,20 +243,70 @@ Aabb cone_box(const Vec3& u, const Vec3& a, const Vec3& b) {
   return box;
 }
 
-// A box tree over faces (an AabbTree) whose nodes also know the vertices that every face
-// below them lists, so that a query face can skip subtrees of faces that share a vertex with
-// it, and the largest face index below them, so that a query for the pairs (f, g > f) can skip
-// subtrees of smaller faces.
+// Faces (u, v, w) on edge uv meet beyond it exactly when their third vertices lie in the
+// same half-plane bounded by the line uv (faces_intersect: coplanar, same side). Sorting the
+// third vertices by their half-plane's angle around uv, exactly, puts each class of equal
+// half-planes in one run, and a run of r faces holds r (r - 1) / 2 meeting pairs, less the
+// pairs of faces with the same third vertex where uv is not their least edge (those pairs are
+// counted on that edge). The order: against the half-plane of a reference vertex r, a vertex
+// is in r's half-plane (key 0), strictly on one side of r's plane (1), in the opposite
+// half-plane (2) or strictly on the other side (3); within sides 1 and 3 all half-planes lie
+// within an open half-turn, where the sign of orient3d(u, v, a, b) orders them. Costs c log c
+// for c faces where deciding every pair costs c^2 / 2 (only a non-manifold edge has c > 2).
+size_t pairs_in_same_half_plane(const Mesh& mesh, int32_t lo, int32_t hi,
+                                const std::vector<int32_t>& third, size_t* steps) {
+  const Vec3& u = mesh.vertices[lo];
+  const Vec3& v = mesh.vertices[hi];
+  const Vec3& r = mesh.vertices[third[0]];
+  int i, j;
+  projection_for(u, v, r, &i, &j);
+  const int r_side = orient2d(u, v, r, i, j);
+  auto key = [&](int32_t x) {
+    const Vec3& p = mesh.vertices[x];
+    const int s = orient3d(u, v, r, p);
+    if (s > 0) return 1;
+    if (s < 0) return 3;
+    return orient2d(u, v, p, i, j) == r_side ? 0 : 2;
+  };
+  std::vector<std::pair<int, int32_t>> keyed;  // (key, third vertex)
+  keyed.reserve(third.size());
+  for (int32_t x : third) keyed.push_back({key(x), x});
+  auto before = [&](const std::pair<int, int32_t>& a, const std::pair<int, int32_t>& b) {
+    ++*steps;
+    if (a.first != b.first) return a.first < b.first;
+    if (a.first == 0 || a.first == 2) return false;
+    return orient3d(u, v, mesh.vertices[a.second], mesh.vertices[b.second]) > 0;
+  };
+  std::sort(keyed.begin(), keyed.end(), before);
+  size_t pairs = 0;
+  std::vector<int32_t> same;
+  for (size_t a = 0; a < keyed.size();) {
+    size_t b = a + 1;
+    while (b < keyed.size() && !before(keyed[a], keyed[b])) ++b;
+    pairs += (b - a) * (b - a - 1) / 2;
+    same.clear();
+    for (size_t x = a; x < b; ++x) same.push_back(keyed[x].second);
+    std::sort(same.begin(), same.end());
+    for (size_t x = 0; x < same.size();) {
+      size_t y = x + 1;
+      while (y < same.size() && same[y] == same[x]) ++y;
+      if (same[x] < hi) pairs -= (y - x) * (y - x - 1) / 2;  // uv is not their least edge
+      x = y;
+    }
+    a = b;
+  }
+  return pairs;
+}
+
+// A box tree (an AabbTree) over some faces, one box each, whose nodes also know the vertices
+// that every face below them lists, so that a query can skip subtrees of faces that all list
+// one of the vertices it names, and the largest face index below them, so that a query for
+// the pairs (f, g > f) can skip subtrees of smaller faces.
 class FaceTree {
  public:
-  FaceTree(const Mesh& mesh, const std::vector<int32_t>& faces)
-      : mesh_(mesh), faces_(faces), bounds_(mesh.faces.size()) {
-    std::vector<Aabb> boxes(faces.size());
-    for (size_t i = 0; i < faces.size(); ++i) {
-      boxes[i] = bounds_[faces[i]] = mesh.face_bounds(faces[i]);
-      largest_ = std::max({largest_, max_abs(boxes[i].lo), max_abs(boxes[i].hi)});
-    }
-    tree_ = AabbTree(std::move(boxes));
+  // boxes[i] is the box of face faces[i]; `faces` must outlive the tree.
+  FaceTree(const Mesh& mesh, const std::vector<int32_t>& faces, std::vector<Aabb> boxes)
+      : mesh_(mesh), faces_(faces), tree_(std::move(boxes)) {
     const std::vector<AabbTree::Node>& nodes = tree_.nodes();
     extra_.resize(nodes.size());
     for (size_t k = nodes.size(); k-- > 0;) {  // children before parents
@@ -275,15 +326,15 @@ class FaceTree {
     }
   }
 
-  // Calls visit(g) for every face g > f that shares no vertex with face f and whose triangle
-  // may meet f's (conservatively); counts the nodes and faces it looks at in *steps.
-  template <typename Visit>
-  void for_each_candidate(int32_t f, size_t* steps, Visit visit) const {
+  // Calls visit(g, box of g) for every face g > f below nodes that `accept` passes (called on
+  // node boxes; the caller tests the faces' own boxes in visit), skipping every subtree whose
+  // faces all list one of `skip` (entries < 0 are unused); counts the nodes it looks at in
+  // *steps.
+  template <typename Accept, typename Visit>
+  void query(int32_t f, const std::array<int32_t, 3>& skip, size_t* steps, Accept accept,
+             Visit visit) const {
     const std::vector<AabbTree::Node>& nodes = tree_.nodes();
     if (nodes.empty()) return;
-    const Face& F = mesh_.faces[f];
-    const Vec3 t[3] = {mesh_.vertices[F[0]], mesh_.vertices[F[1]], mesh_.vertices[F[2]]};
-    const TriangleSeparator sep(t, bounds_[f], largest_);
     int32_t stack[64];  // median splits: depth <= 31, and one waiting sibling per level
     int top = 0;
     stack[top++] = 0;
@@ -293,13 +344,13 @@ class FaceTree {
       const Extra& e = extra_[k];
       ++*steps;
       bool shares = false;
-      for (int32_t v : e.common) shares |= v >= 0 && (v == F[0] || v == F[1] || v == F[2]);
-      if (shares || e.last_face <= f || !sep.may_meet(n.bounds)) continue;
+      for (int32_t v : e.common)
+        shares |= v >= 0 && (v == skip[0] || v == skip[1] || v == skip[2]);
+      if (shares || e.last_face <= f || !accept(n.bounds)) continue;
       if (n.count > 0) {
         for (int32_t i = n.first; i < n.first + n.count; ++i) {
-          const int32_t g = face_at(i);
           ++*steps;
-          if (g > f && shared_vertices(F, mesh_.faces[g]) == 0 && sep.may_meet(bounds_[g])) visit(g);
+          if (face_at(i) > f) visit(face_at(i), tree_.primitive_bounds(tree_.order()[i]));
         }
       } else {
         stack[top++] = n.first + 1;
@@ -325,9 +376,7 @@ class FaceTree {
   int32_t face_at(int32_t i) const { return faces_[tree_.order()[i]]; }
 
   const Mesh& mesh_;
-  const std::vector<int32_t>& faces_;  // the searched faces; tree primitive i is faces_[i]
-  std::vector<Aabb> bounds_;           // per face of the mesh (only the searched ones are set)
-  double largest_ = 0.0;               // largest |coordinate| of the searched faces
+  const std::vector<int32_t>& faces_;  // tree primitive i is faces_[i]
   AabbTree tree_;
   std::vector<Extra> extra_;           // per node of tree_
 };
@@ -377,7 +426,7 @@ SelfIntersectionSearch find_self_intersections(const Mesh& mesh, const std::vect
     if (!skip[f]) faces.push_back(static_cast<int32_t>(f));
 
   // Sharing two vertices: the faces on each edge. A pair listing the same three vertices
-  // shares three edges and is decided on the least of them only.
+  // shares three edges and is counted on the least of them only.
   {
     std::vector<std::array<int32_t, 3>> recs;  // (lo, hi, face)
     recs.reserve(3 * faces.size());
@@ -387,20 +436,28 @@ SelfIntersectionSearch find_self_intersections(const Mesh& mesh, const std::vect
         recs.push_back({std::min(a, b), std::max(a, b), f});
       }
     std::sort(recs.begin(), recs.end());
+    std::vector<int32_t> third;
     for (size_t i = 0; i < recs.size();) {
       size_t j = i + 1;
       while (j < recs.size() && recs[j][0] == recs[i][0] && recs[j][1] == recs[i][1]) ++j;
-      for (size_t x = i; x < j; ++x)
-        for (size_t y = x + 1; y < j; ++y) {
-          const Face& F = mesh.faces[recs[x][2]];
-          ++out.filter_steps;
-          if (shared_vertices(F, mesh.faces[recs[y][2]]) == 3) {
-            std::array<int32_t, 3> s = F;
-            std::sort(s.begin(), s.end());
-            if (recs[i][0] != s[0] || recs[i][1] != s[1]) continue;  // not the least edge
+      const int32_t lo = recs[i][0], hi = recs[i][1];
+      if (j - i <= kSmallEdge) {
+        for (size_t x = i; x < j; ++x)
+          for (size_t y = x + 1; y < j; ++y) {
+            const Face& F = mesh.faces[recs[x][2]];
+            ++out.filter_steps;
+            if (shared_vertices(F, mesh.faces[recs[y][2]]) == 3 && F[0] + F[1] + F[2] - lo - hi < hi)
+              continue;  // the same face twice, and (lo, hi) is not its least edge
+            decide(recs[x][2], recs[y][2]);
           }
-          decide(recs[x][2], recs[y][2]);
+      } else {
+        third.clear();
+        for (size_t x = i; x < j; ++x) {
+          const Face& F = mesh.faces[recs[x][2]];
+          third.push_back(F[0] + F[1] + F[2] - lo - hi);
         }
+        out.pairs += pairs_in_same_half_plane(mesh, lo, hi, third, &out.filter_steps);
+      }
       i = j;
     }
   }
@@ -436,28 +493,48 @@ SelfIntersectionSearch find_self_intersections(const Mesh& mesh, const std::vect
           }
         continue;
       }
-      const AabbTree tree(cones);
+      // Faces that share an edge with fan[i] as well are left to the edge lists: subtrees
+      // whose faces all list another vertex of fan[i] are skipped (on a non-manifold edge of c
+      // faces, the c^2 / 2 such pairs would otherwise all pass the cone filter).
+      const std::vector<int32_t> fan_faces(fan, fan + k);
+      const FaceTree tree(mesh, fan_faces, cones);
       for (int32_t i = 0; i < k; ++i) {
         const Face& F = mesh.faces[fan[i]];
-        tree.for_each_accepted(
-            [&](const Aabb& b) {
-              ++out.filter_steps;
-              return b.overlaps(cones[i]);
-            },
-            [&](int32_t j) {
-              if (j > i && shared_vertices(F, mesh.faces[fan[j]]) == 1) decide(fan[i], fan[j]);
+        std::array<int32_t, 3> skip = F;
+        for (int32_t& x : skip)
+          if (x == static_cast<int32_t>(v)) x = -1;
+        const Aabb& cone = cones[i];
+        tree.query(
+            fan[i], skip, &out.filter_steps, [&](const Aabb& b) { return b.overlaps(cone); },
+            [&](int32_t g, const Aabb& box) {
+              if (box.overlaps(cone) && shared_vertices(F, mesh.faces[g]) == 1) decide(fan[i], g);
             });
       }
     }
   }
 
-  // Sharing no vertex: the face tree.
+  // Sharing no vertex: the face tree, descended only into boxes that f's triangle may meet
+  // and pruned at subtrees whose faces all list a vertex of f.
   {
-    const FaceTree tree(mesh, faces);
-    for (int32_t f : faces)
-      tree.for_each_candidate(f, &out.filter_steps, [&](int32_t g) {
-        decide(f, g);
-      });
+    std::vector<Aabb> boxes(faces.size());
+    double largest = 0.0;  // the largest |coordinate| of the searched faces
+    for (size_t i = 0; i < faces.size(); ++i) {
+      boxes[i] = mesh.face_bounds(faces[i]);
+      largest = std::max({largest, max_abs(boxes[i].lo), max_abs(boxes[i].hi)});
+    }
+    std::vector<Aabb> bounds(mesh.faces.size());
+    for (size_t i = 0; i < faces.size(); ++i) bounds[faces[i]] = boxes[i];
+    const FaceTree tree(mesh, faces, std::move(boxes));
+    for (int32_t f : faces) {
+      const Face& F = mesh.faces[f];
+      const Vec3 t[3] = {mesh.vertices[F[0]], mesh.vertices[F[1]], mesh.vertices[F[2]]};
+      const TriangleSeparator sep(t, bounds[f], largest);
+      tree.query(
+          f, F, &out.filter_steps, [&](const Aabb& b) { return sep.may_meet(b); },
+          [&](int32_t g, const Aabb& box) {
+            if (shared_vertices(F, mesh.faces[g]) == 0 && sep.may_meet(box)) decide(f, g);
+          });
+    }
   }
   return out;
 }

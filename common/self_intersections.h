@@ -10,14 +10,17 @@
 // Cost. Pairs are found in three disjoint groups, by how many vertices they share, so that a
 // vertex shared by k faces (the apex of a finely divided cone, the centre of a fan-triangulated
 // disc) costs about k log k tests, not the k^2 / 2 a box-overlap search gives, where every box
-// holds that vertex:
-//   - two (an edge): all pairs of faces listed on that edge (c^2 / 2 for c faces, and c > 2
-//     only on a non-manifold edge);
+// holds that vertex; and an edge shared by c faces (non-manifold when c > 2) costs c log c:
+//   - two (an edge): the faces listed on that edge, sorted exactly by the half-plane of their
+//     third vertex around it (two meet exactly when those half-planes are the same);
 //   - one (a vertex v): faces around v whose cones of directions from v share a direction,
-//     found through boxes around each cone's arc on the unit sphere;
+//     found through boxes around each cone's arc on the unit sphere, skipping subtrees of
+//     faces that share an edge with the query as well;
 //   - none: a tree over the faces, descended only into boxes that the query triangle may meet
 //     (a separating-axis test) and pruned at subtrees whose faces all list one of the query's
 //     vertices.
+// Meshes can still be made where the pairs that meet, or nearly meet, number n^2 (crossing
+// sheets); then the count costs that much.
 #pragma once
 
 #include <cstddef>
