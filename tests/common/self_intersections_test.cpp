@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <random>
+#include <string>
 
 #include "common/exact_predicates.h"
 
@@ -79,6 +80,25 @@ Mesh random_soup(std::mt19937& rng, bool on_grid) {
   return m;
 }
 
+// `count` triangles with random corners in [-1, 1]^2 x [-z, z], sharing no vertex.
+void add_random_triangles(Mesh* m, std::mt19937& rng, int count, double z) {
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  for (int i = 0; i < count; ++i) {
+    const int32_t base = static_cast<int32_t>(m->vertices.size());
+    for (int k = 0; k < 3; ++k) m->vertices.push_back(Vec3(unit(rng), unit(rng), z * unit(rng)));
+    m->faces.push_back({base, base + 1, base + 2});
+  }
+}
+
+// The search against every pair, on a mesh made to hold intersections (so that the
+// comparison is not 0 == 0).
+void expect_agrees_with_every_pair(const Mesh& m, const std::string& what, size_t at_least = 1) {
+  const std::vector<char> skip = degenerate_faces(m);
+  const size_t expected = every_pair(m, skip);
+  EXPECT_GE(expected, at_least) << what;
+  EXPECT_EQ(find_self_intersections(m, skip).pairs, expected) << what;
+}
+
 // On grid points, coplanar and touching pairs (the cases where a filter's rounding would
 // matter) are the rule; on random points, crossings in general position. The search must
 // agree with deciding every pair, count for count.
@@ -109,15 +129,8 @@ TEST(FindSelfIntersections, AgreesWithEveryPairAroundAHighValenceVertex) {
       m.vertices.push_back(Vec3(std::cos(a), std::sin(a), flat ? 0.0 : 0.3 * unit(rng)));
     }
     for (int32_t i = 1; i < 150; i += 2) m.faces.push_back({0, i, i + 1});
-    for (int i = 0; i < 10; ++i) {
-      const int32_t base = static_cast<int32_t>(m.vertices.size());
-      for (int k = 0; k < 3; ++k) m.vertices.push_back(Vec3(unit(rng), unit(rng), 0.2 * unit(rng)));
-      m.faces.push_back({base, base + 1, base + 2});
-    }
-    const std::vector<char> skip = degenerate_faces(m);
-    const size_t expected = every_pair(m, skip);
-    EXPECT_GT(expected, 0u);
-    EXPECT_EQ(find_self_intersections(m, skip).pairs, expected) << "trial " << trial;
+    add_random_triangles(&m, rng, 10, 0.2);
+    expect_agrees_with_every_pair(m, "trial " + std::to_string(trial));
   }
 }
 
@@ -141,15 +154,8 @@ TEST(FindSelfIntersections, AgreesWithEveryPairOnACrowdedEdge) {
       if (i % 10 == 0) m.faces.push_back({1, 0, w});  // the same face, turned round
     }
     for (int32_t i = 2; i < 40; i += 3) m.faces.push_back({0, i, i + 1});  // a fan at vertex 0
-    for (int i = 0; i < 8; ++i) {
-      const int32_t base = static_cast<int32_t>(m.vertices.size());
-      for (int k = 0; k < 3; ++k) m.vertices.push_back(Vec3(unit(rng), unit(rng), unit(rng)));
-      m.faces.push_back({base, base + 1, base + 2});
-    }
-    const std::vector<char> skip = degenerate_faces(m);
-    const size_t expected = every_pair(m, skip);
-    EXPECT_GT(expected, 0u);
-    EXPECT_EQ(find_self_intersections(m, skip).pairs, expected) << "trial " << trial;
+    add_random_triangles(&m, rng, 8, 1.0);
+    expect_agrees_with_every_pair(m, "trial " + std::to_string(trial));
   }
 }
 
@@ -167,10 +173,7 @@ TEST(FindSelfIntersections, AgreesWithEveryPairOnExactlyCoplanarFacesOfAnEdge) {
     m.faces.push_back({0, 1, static_cast<int32_t>(m.vertices.size()) - 1});
   }
   m.faces.push_back(m.faces[3]);  // a duplicate
-  const std::vector<char> skip = degenerate_faces(m);
-  const size_t expected = every_pair(m, skip);
-  EXPECT_GT(expected, 100u);  // four classes of about ten faces each
-  EXPECT_EQ(find_self_intersections(m, skip).pairs, expected);
+  expect_agrees_with_every_pair(m, "four classes of about ten faces each", 100);
 }
 
 // Closed solids whose every face lists one of two vertices: a double cone, k triangles to
