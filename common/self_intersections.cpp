@@ -186,7 +186,6 @@ class TriangleSeparator {
       hi_[i] = std::max({p0, p1, p2}) + tol;
     }
   }
-  const Aabb& bounds() const { return bounds_; }
   bool may_meet(const Aabb& b) const {
     if (!b.overlaps(bounds_)) return false;
     const Vec3 c = 0.5 * (b.lo + b.hi), h = 0.5 * (b.hi - b.lo);
@@ -306,7 +305,7 @@ class FaceTree {
  public:
   // boxes[i] is the box of face faces[i]; `faces` must outlive the tree.
   FaceTree(const Mesh& mesh, const std::vector<int32_t>& faces, std::vector<Aabb> boxes)
-      : mesh_(mesh), faces_(faces), tree_(std::move(boxes)) {
+      : faces_(faces), tree_(std::move(boxes)) {
     const std::vector<AabbTree::Node>& nodes = tree_.nodes();
     extra_.resize(nodes.size());
     for (size_t k = nodes.size(); k-- > 0;) {  // children before parents
@@ -375,7 +374,6 @@ class FaceTree {
   }
   int32_t face_at(int32_t i) const { return faces_[tree_.order()[i]]; }
 
-  const Mesh& mesh_;
   const std::vector<int32_t>& faces_;  // tree primitive i is faces_[i]
   AabbTree tree_;
   std::vector<Extra> extra_;           // per node of tree_
@@ -517,18 +515,14 @@ SelfIntersectionSearch find_self_intersections(const Mesh& mesh, const std::vect
   // and pruned at subtrees whose faces all list a vertex of f.
   {
     std::vector<Aabb> boxes(faces.size());
-    double largest = 0.0;  // the largest |coordinate| of the searched faces
-    for (size_t i = 0; i < faces.size(); ++i) {
-      boxes[i] = mesh.face_bounds(faces[i]);
-      largest = std::max({largest, max_abs(boxes[i].lo), max_abs(boxes[i].hi)});
-    }
-    std::vector<Aabb> bounds(mesh.faces.size());
-    for (size_t i = 0; i < faces.size(); ++i) bounds[faces[i]] = boxes[i];
+    for (size_t i = 0; i < faces.size(); ++i) boxes[i] = mesh.face_bounds(faces[i]);
     const FaceTree tree(mesh, faces, std::move(boxes));
+    const Aabb all = mesh.bounds();  // S for the separator: no coordinate exceeds it
+    const double largest = std::max(max_abs(all.lo), max_abs(all.hi));
     for (int32_t f : faces) {
       const Face& F = mesh.faces[f];
       const Vec3 t[3] = {mesh.vertices[F[0]], mesh.vertices[F[1]], mesh.vertices[F[2]]};
-      const TriangleSeparator sep(t, bounds[f], largest);
+      const TriangleSeparator sep(t, mesh.face_bounds(f), largest);
       tree.query(
           f, F, &out.filter_steps, [&](const Aabb& b) { return sep.may_meet(b); },
           [&](int32_t g, const Aabb& box) {
