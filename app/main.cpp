@@ -10,7 +10,10 @@
 #include <cstdlib>
 #include <csignal>
 #include <filesystem>
+#include <optional>
 #include <string>
+
+#include <tbb/global_control.h>
 
 #include "app/cli_support.h"
 #include "common/box_export.h"
@@ -59,6 +62,7 @@ struct BuildFlags {
   std::string backend = "auto";
   bool no_axis_search = false, adjust = false, no_merge = false, quiet = false;
   int sweeps = 3;
+  int threads = 0;             // CPU twin's threads; 0: all the cores this process may use
   double collider_margin = 0;  // world units; 0: the paper's objective
   std::string checkpoint;    // folder; empty: none
   double time_budget = 0;    // seconds; 0: none
@@ -502,6 +506,10 @@ int run_compare(const std::string& mesh_path, const BuildFlags& flags, bool json
 
 }  // namespace
 
+constexpr const char* kThreadsHelp =
+    "Threads for the CPU twin's batches of boxes (default: every core this process may use); "
+    "the tree is the same for any number";
+
 int main(int argc, char** argv) {
   CLI::App app{"vobb: tight oriented-bounding-box trees for solid meshes, with exact outer volumes"};
   app.require_subcommand(1);
@@ -548,6 +556,7 @@ int main(int argc, char** argv) {
   build->add_option("--time-budget", bf.time_budget, "Seconds; then the search stops and the rest gets the baseline split")
       ->check(vobb::app::kFinite)->check(CLI::Range(1e-3, 1e9));
   build->add_flag("--quiet", bf.quiet, "No progress line");
+  build->add_option("--threads", bf.threads, kThreadsHelp)->check(CLI::Range(1, 4096));
 
   std::string omv_path = "auto";
   bool quiet = false;
@@ -590,6 +599,7 @@ int main(int argc, char** argv) {
   cmp->add_option("--sweeps", cf.sweeps, "Most bottom-up merging sweeps")->capture_default_str()->check(CLI::Range(0, 100));
   cmp->add_flag("--json", compare_json, "Print JSON (DESIGN §7)");
   cmp->add_flag("--quiet", cf.quiet, "No progress on stderr");
+  cmp->add_option("--threads", cf.threads, kThreadsHelp)->check(CLI::Range(1, 4096));
   std::string compare_figure;
   cmp->add_option("--figure", compare_figure, "Also draw both trees' boxes at levels 1..8 over the mesh to this PNG");
   std::string compare_figure_up = "y";
@@ -638,6 +648,11 @@ int main(int argc, char** argv) {
                  one_line(what).c_str(), help.c_str());
     return kExitBadInput;
   }
+  // The CPU twin estimates each batch of boxes in parallel; the values, and so the trees, do
+  // not depend on how many threads (fast/cpu_estimator.h).
+  const int threads = build->parsed() ? bf.threads : cmp->parsed() ? cf.threads : 0;
+  std::optional<tbb::global_control> thread_limit;
+  if (threads > 0) thread_limit.emplace(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
   if (info->parsed()) return run_info(mesh, json, rational);
   if (build->parsed()) return run_build(mesh, out, bf);
   if (exp->parsed()) return run_export(tree_path, level, out);

@@ -5,6 +5,7 @@ find_package(nlohmann_json 3 REQUIRED)
 find_package(CLI11 REQUIRED)
 find_package(fmt REQUIRED)
 find_package(OpenSSL REQUIRED)  # SHA-256 of the mesh in tree files
+find_package(TBB REQUIRED)      # the CPU twin estimates a batch of boxes in parallel
 
 find_path(GMP_INCLUDE_DIR gmpxx.h REQUIRED)
 find_library(GMP_LIBRARY gmp REQUIRED)

@@ -7,6 +7,7 @@
 // classification; a centre exactly on the surface switches to the far-count mode.
 #pragma once
 
+#include <cstddef>
 #include <vector>
 
 #include "common/mesh.h"
@@ -18,7 +19,10 @@ namespace vobb {
 class CpuObvEstimator {
  public:
   explicit CpuObvEstimator(const Mesh& mesh);  // keeps a reference
-  // OBV estimate of each box at resolution m >= 1, in world volume units.
+  // OBV estimate of each box at resolution m >= 1, in world volume units. The boxes of a batch
+  // are estimated in parallel (TBB; as many threads as the caller's arena allows), each by one
+  // thread exactly as alone, so the values do not depend on the number of threads.
+  // Not to be called on one estimator from several threads at once (faces_used).
   std::vector<double> estimate(const std::vector<Obb>& boxes, int m) const;
   double estimate(const Obb& box, int m) const;
   // For the culling ablation benchmark: cast against every face.
@@ -27,6 +31,8 @@ class CpuObvEstimator {
   size_t faces_used() const { return faces_used_; }
 
  private:
+  double estimate_one(const Obb& box, int m, size_t* faces_used) const;
+
   BoxPlanner planner_;
   mutable size_t faces_used_ = 0;
 };

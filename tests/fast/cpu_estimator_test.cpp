@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include <tbb/task_arena.h>
+
 #include "data/analytic_meshes.h"
 #include "fast/cubemap.h"
 #include "fast/texel_plan.h"
@@ -131,6 +133,37 @@ TEST(CpuEstimator, CullingChangesNothingButTheWork) {
   EXPECT_LT(used, est.faces_used());
   // The bound is informative: far below one texel's pyramid.
   EXPECT_LT(round_culled + round_all, 1e-6 * volume(b) * 4.0 / (3.0 * 16 * 16));
+}
+
+// A batch is estimated in parallel, each box by one thread exactly as alone: its values must be
+// the single-box values bit for bit (==, no tolerance: the same operations in the same order),
+// under one thread and under several, and faces_used is the batch's total.
+TEST(CpuEstimator, BatchEqualsSingleBoxesForAnyThreadCount) {
+  const Mesh m = analytic::polygonal_torus().mesh;
+  const CpuObvEstimator est(m);
+  std::vector<Obb> boxes;
+  for (int i = 0; i < 24; ++i) {
+    Obb b;
+    b.center = Vec3(0.3 * i - 3, 0.2 * (i % 5) - 0.4, 0.1 * (i % 3));
+    b.axes = orthonormalize({Vec3(1, 0.1 * i, 0.3), Vec3(-0.2 * i, 1, 0.5), Vec3::Zero()});
+    b.half = Vec3(0.3 + 0.05 * (i % 4), 0.6, 0.4 + 0.1 * (i % 2));
+    boxes.push_back(b);
+  }
+  std::vector<double> single;
+  size_t used = 0;
+  for (const Obb& b : boxes) {
+    single.push_back(est.estimate(b, 16));
+    used += est.faces_used();
+  }
+  ASSERT_GT(used, 0u);  // the boxes meet the surface: not a batch of trivial boxes
+  for (int threads : {1, 2, 4}) {
+    tbb::task_arena arena(threads);
+    std::vector<double> batch;
+    arena.execute([&] { batch = est.estimate(boxes, 16); });
+    ASSERT_EQ(batch.size(), single.size());
+    for (size_t i = 0; i < boxes.size(); ++i) EXPECT_EQ(batch[i], single[i]) << threads << " threads, box " << i;
+    EXPECT_EQ(est.faces_used(), used) << threads;
+  }
 }
 
 }  // namespace

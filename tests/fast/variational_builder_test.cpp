@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <fstream>
 
+#include <tbb/task_arena.h>
+
 #include "common/tree_io.h"
 #include "data/analytic_meshes.h"
 #include "fast/cpu_estimator.h"
@@ -55,6 +57,19 @@ TEST(VariationalBuilder, SameInputSameBytes) {
   o.arity = 3;
   EXPECT_EQ(tree_to_json(build_variational(mesh, o, cpu_at(cpu, 8))),
             tree_to_json(build_variational(mesh, o, cpu_at(cpu, 8))));
+}
+
+// The CPU twin estimates batches in parallel; the builder must not depend on the thread count
+// (the same tree, byte for byte, under one thread and under four).
+TEST(VariationalBuilder, SameTreeForAnyThreadCount) {
+  const Mesh mesh = analytic::polygonal_torus().mesh;
+  const CpuObvEstimator cpu(mesh);
+  VariationalOptions o;
+  o.depth = 4;
+  std::string one, four;
+  tbb::task_arena(1).execute([&] { one = tree_to_json(build_variational(mesh, o, cpu_at(cpu, 8))); });
+  tbb::task_arena(4).execute([&] { four = tree_to_json(build_variational(mesh, o, cpu_at(cpu, 8))); });
+  EXPECT_EQ(one, four);
 }
 
 // The collider margin is defined as measuring each box grown by the margin: a build with
