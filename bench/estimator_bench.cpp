@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include <tbb/task_arena.h>
+
 #include "common/io/mesh_report.h"
 #include "fast/cpu_estimator.h"
 #include "fast/gl_estimator.h"
@@ -67,7 +69,10 @@ int main(int argc, char** argv) {
     gl->estimate(std::vector<vobb::Obb>(boxes.begin(), boxes.begin() + 1), m);  // warm-up: shader JIT, atlas
     std::vector<double> ref, v;
     double t = seconds([&] { ref = cpu.estimate(boxes, m); });
-    std::printf("%-6s %6d %-28s %12.4f %14s\n", name, count, "cpu twin", 1e3 * t / count, "(reference)");
+    std::printf("%-6s %6d %-28s %12.4f %14s\n", name, count, "cpu twin, all threads", 1e3 * t / count, "(reference)");
+    // The same batch on one thread: the values must not change (each box is one thread's).
+    t = seconds([&] { tbb::task_arena(1).execute([&] { v = cpu.estimate(boxes, m); }); });
+    std::printf("%-6s %6d %-28s %12.4f %14.2e\n", name, count, "cpu twin, one thread", 1e3 * t / count, max_abs_diff(v, ref));
     size_t trips = gl->round_trips();
     t = seconds([&] { v = gl->estimate(boxes, m); });
     std::printf("%-6s %6d %-28s %12.4f %14.2e   (%zu round trips)\n", name, count, "gl, batched, first call", 1e3 * t / count,
