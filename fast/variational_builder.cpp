@@ -16,6 +16,7 @@
 #include <tuple>
 
 #include "common/atomic_file.h"
+#include "common/sha256.h"
 #include "common/status.h"
 #include "fast/obbtree_builder.h"
 
@@ -726,6 +727,15 @@ Tree build_variational(const Mesh& mesh, const VariationalOptions& options, cons
 
 namespace {
 constexpr const char* kCheckpointFormat = "vobb-variational-state";
+
+// SHA-256 of the state's JSON without its "sha256" field, as nlohmann dumps it: keys sorted,
+// doubles in shortest round-trip form, so that parsing a saved state and dumping it again gives
+// the bytes that were hashed.
+std::string state_checksum(nlohmann::json j) {
+  j.erase("sha256");
+  const std::string body = j.dump();
+  return sha256_hex(body.data(), body.size());
+}
 }
 
 Status write_variational_state(const VariationalState& st, const std::string& fingerprint, const std::string& path) {
@@ -746,7 +756,9 @@ Status write_variational_state(const VariationalState& st, const std::string& fi
   }
   j["nodes"] = std::move(nodes);
   // nlohmann writes doubles in their shortest round-trip form: a resumed build reads the
-  // very axes it saved.
+  // very axes it saved. The checksum covers everything else, so a damaged digit is refused
+  // rather than resumed into another tree.
+  j["sha256"] = state_checksum(j);
   return write_file_atomic(path, j.dump() + "\n");
 }
 
@@ -763,6 +775,9 @@ Status read_variational_state(const std::string& path, const std::string& finger
   if (j.is_discarded() || !j.is_object()) return bad("not JSON");
   try {
     if (j.value("format", "") != kCheckpointFormat || j.value("version", 0) != 1) return bad("not a vobb checkpoint");
+    // States saved before checksums were written have none; any other must match.
+    if (j.contains("sha256") && (!j["sha256"].is_string() || j["sha256"].get<std::string>() != state_checksum(j)))
+      return bad("checksum does not match the contents");
     if (j.at("fingerprint").get<std::string>() != fingerprint)
       return Status::error(path + ": checkpoint of another build (mesh, options or estimator differ); "
                            "use another --checkpoint folder or remove it");

@@ -123,8 +123,10 @@ Tree build_variational(const Mesh& mesh, const VariationalOptions& options, cons
 Obb tight_box(const Mesh& mesh, const std::vector<int32_t>& faces, const std::array<Vec3, 3>& axes);
 
 // Checkpoint files: JSON with a `fingerprint` naming everything the build depends on (the
-// caller's: mesh hash, options, estimator and m). Doubles round-trip bit for bit. Writes are
-// atomic (temp file + rename). Reading checks the fingerprint and the state's structure.
+// caller's: mesh hash, options, estimator and m) and a SHA-256 of the rest. Doubles round-trip
+// bit for bit. Writes are atomic (temp file + rename). Reading checks the checksum (a state
+// without one, from before checksums, is read unchecked), the fingerprint and the state's
+// structure.
 Status write_variational_state(const VariationalState& state, const std::string& fingerprint, const std::string& path);
 // Not found: ok with *found = false. Wrong fingerprint or a damaged file: an error.
 Status read_variational_state(const std::string& path, const std::string& fingerprint, size_t mesh_faces,

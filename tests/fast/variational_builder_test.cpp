@@ -1,7 +1,9 @@
 #include "fast/variational_builder.h"
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 
@@ -241,12 +243,37 @@ TEST(VariationalBuilder, CheckpointOfAnotherBuildOrDamagedIsRefused) {
   const Status levels = read_variational_state(path, "build A", mesh.faces.size(), &back, &found);
   EXPECT_FALSE(levels);
   EXPECT_NE(levels.message().find("split_levels"), std::string::npos) << levels.message();
-  // A fractional or negative count, which get<int> would truncate: refused.
   ASSERT_TRUE(write_variational_state(last, "build A", path));
   std::string text;
   {
     std::ifstream in(path);
     text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  // One digit of an axis changed: still orthonormal within the structure check's 1e-9, and a
+  // valid state, but not the one saved: the checksum refuses it. The same state without its
+  // checksum (as saved before checksums) is read, and differs from the saved one; so the
+  // refusal is the checksum's.
+  {
+    nlohmann::json j = nlohmann::json::parse(text);
+    int k = 0;  // a nonzero coordinate of the root's first axis (a unit vector has one)
+    while (last.axes[0][0][k] == 0.0) ++k;
+    j["nodes"][0]["axes"][0][k] = std::nextafter(last.axes[0][0][k], 0.0);
+    std::ofstream(path) << j.dump();
+    const Status s = read_variational_state(path, "build A", mesh.faces.size(), &back, &found);
+    EXPECT_FALSE(s);
+    EXPECT_NE(s.message().find("checksum"), std::string::npos) << s.message();
+    j.erase("sha256");
+    std::ofstream(path) << j.dump();
+    ASSERT_TRUE(read_variational_state(path, "build A", mesh.faces.size(), &back, &found));
+    EXPECT_NE(back.axes[0][0][k], last.axes[0][0][k]);
+  }
+  // A fractional or negative count, which get<int> would truncate: refused by the structure
+  // check itself (the checksum is removed, so that it is not what refuses).
+  {
+    nlohmann::json j = nlohmann::json::parse(text);
+    ASSERT_TRUE(j.contains("sha256"));
+    j.erase("sha256");
+    text = j.dump();
   }
   for (const std::string key : {"\"sweeps\":", "\"split_levels\":"}) {
     for (const std::string value : {"1.5", "-1"}) {
