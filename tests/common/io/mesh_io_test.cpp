@@ -202,6 +202,74 @@ TEST(MeshIo, TruncationAtEveryByteIsHandled) {
   }
 }
 
+// Seeded random damage of a valid file in every format (bytes overwritten, bits flipped,
+// spans deleted, awkward tokens inserted, the tail cut): each damaged file is refused with one
+// line, or read as a mesh whose faces index its vertices, which the solidity checks then judge
+// without crashing, naming any NaN or Inf. An exploratory campaign through the
+// ASan/UBSan build of `vobb` (4,000 damaged meshes, trees and box files, 1,500 damaged
+// checkpoints; not in the repository) found no crash, hang or multi-line error; this keeps a
+// deterministic 1,800 damaged meshes in the suite.
+TEST(MeshIo, DamagedFilesAreReadOrRefusedInOneLine) {
+  const Mesh m = analytic::cube().mesh;
+  const struct {
+    MeshFormat format;
+    const char* ext;
+  } cases[] = {{MeshFormat::kOff, "off"}, {MeshFormat::kObj, "obj"}, {MeshFormat::kPlyAscii, "ply"},
+               {MeshFormat::kPlyBinary, "ply"}, {MeshFormat::kStlAscii, "stl"}, {MeshFormat::kStlBinary, "stl"}};
+  const std::vector<std::string> tokens = {"nan", "inf", "-1", "1e308", "1e400", "4294967295", "99999999999999999999",
+                                           "0x10", "", " ", "\n", std::string(1, '\0'), ".", "e5", "1e73", "-0"};
+  std::mt19937 rng(2026);  // mt19937's output is fixed by the standard; only raw draws are used
+  auto below = [&](size_t n) { return static_cast<size_t>(rng() % n); };
+  int read = 0, refused = 0;
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.ext);
+    const std::string full = test::temp_path(std::string("whole.") + c.ext);
+    ASSERT_TRUE(save_mesh(m, full, c.format));
+    std::ifstream in(full, std::ios::binary);
+    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const std::string damaged_path = test::temp_path(std::string("damaged.") + c.ext);
+    for (int trial = 0; trial < 300; ++trial) {
+      std::string d = bytes;
+      for (size_t edits = 1 + below(4); edits > 0 && !d.empty(); --edits) {
+        const size_t at = below(d.size());
+        switch (below(5)) {
+          case 0: d[at] = static_cast<char>(rng() & 0xff); break;
+          case 1: d[at] = static_cast<char>(d[at] ^ (1 << below(8))); break;
+          case 2: d.erase(at, 1 + below(8)); break;
+          case 3: d.insert(at, tokens[below(tokens.size())]); break;
+          default: d.resize(at); break;
+        }
+      }
+      write_text(damaged_path, d);
+      LoadedMesh lm;
+      const Status s = load_mesh(damaged_path, &lm);
+      if (!s) {
+        ++refused;
+        EXPECT_FALSE(s.message().empty()) << trial;
+        EXPECT_EQ(s.message().find('\n'), std::string::npos) << trial << ": " << s.message();
+        continue;
+      }
+      ++read;
+      for (const auto& f : lm.mesh.faces)
+        for (int k = 0; k < 3; ++k) ASSERT_LT(static_cast<size_t>(f[k]), lm.mesh.vertices.size()) << trial;
+      // The reader keeps NaN and Inf as written; the solidity checks must name them.
+      bool finite = true;
+      for (const Vec3& v : lm.mesh.vertices) finite &= v.allFinite();
+      const SolidityReport r = check_solidity(lm.mesh);
+      EXPECT_EQ(r.verdict().find('\n'), std::string::npos) << trial;
+      if (!finite) {
+        EXPECT_NE(r.verdict().find("non-finite"), std::string::npos) << trial << ": " << r.verdict();
+      }
+    }
+    std::remove(full.c_str());
+    std::remove(damaged_path.c_str());
+  }
+  // Both outcomes occur, so neither branch's checks are vacuous.
+  EXPECT_GT(read, 0);
+  EXPECT_GT(refused, 0);
+  std::printf("damaged files read: %d, refused: %d\n", read, refused);
+}
+
 TEST(MeshIo, MissingFileAndDirectory) {
   LoadedMesh lm;
   Status s = load_mesh("/nonexistent/dir/mesh.off", &lm);
