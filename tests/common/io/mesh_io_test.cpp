@@ -32,6 +32,15 @@ void expect_same_triangles(const Mesh& a, const Mesh& b) {
     for (int k = 0; k < 3; ++k) ASSERT_EQ(a.corner(f, k), b.corner(f, k)) << "face " << f;
 }
 
+// Every format vobb writes and reads itself, with its file extension.
+struct NativeFormat {
+  MeshFormat format;
+  const char* ext;
+};
+constexpr NativeFormat kEveryNativeFormat[] = {{MeshFormat::kOff, "off"}, {MeshFormat::kObj, "obj"},
+                                               {MeshFormat::kPlyAscii, "ply"}, {MeshFormat::kPlyBinary, "ply"},
+                                               {MeshFormat::kStlAscii, "stl"}, {MeshFormat::kStlBinary, "stl"}};
+
 void write_text(const std::string& path, const std::string& text) {
   std::ofstream(path, std::ios::binary) << text;
 }
@@ -176,12 +185,7 @@ TEST(MeshIo, BigEndianPlyWithExtraProperties) {
 // crashes or hangs (STYLE §8). Runs every format over every cut point of a small mesh.
 TEST(MeshIo, TruncationAtEveryByteIsHandled) {
   const Mesh m = analytic::tetrahedron().mesh;
-  const struct {
-    MeshFormat format;
-    const char* ext;
-  } cases[] = {{MeshFormat::kOff, "off"}, {MeshFormat::kObj, "obj"}, {MeshFormat::kPlyAscii, "ply"},
-               {MeshFormat::kPlyBinary, "ply"}, {MeshFormat::kStlAscii, "stl"}, {MeshFormat::kStlBinary, "stl"}};
-  for (const auto& c : cases) {
+  for (const auto& c : kEveryNativeFormat) {
     const std::string full = test::temp_path(std::string("full.") + c.ext);
     ASSERT_TRUE(save_mesh(m, full, c.format));
     std::ifstream in(full, std::ios::binary);
@@ -211,17 +215,12 @@ TEST(MeshIo, TruncationAtEveryByteIsHandled) {
 // deterministic 1,800 damaged meshes in the suite.
 TEST(MeshIo, DamagedFilesAreReadOrRefusedInOneLine) {
   const Mesh m = analytic::cube().mesh;
-  const struct {
-    MeshFormat format;
-    const char* ext;
-  } cases[] = {{MeshFormat::kOff, "off"}, {MeshFormat::kObj, "obj"}, {MeshFormat::kPlyAscii, "ply"},
-               {MeshFormat::kPlyBinary, "ply"}, {MeshFormat::kStlAscii, "stl"}, {MeshFormat::kStlBinary, "stl"}};
   const std::vector<std::string> tokens = {"nan", "inf", "-1", "1e308", "1e400", "4294967295", "99999999999999999999",
                                            "0x10", "", " ", "\n", std::string(1, '\0'), ".", "e5", "1e73", "-0"};
   std::mt19937 rng(2026);  // mt19937's output is fixed by the standard; only raw draws are used
   auto below = [&](size_t n) { return static_cast<size_t>(rng() % n); };
   int read = 0, refused = 0;
-  for (const auto& c : cases) {
+  for (const auto& c : kEveryNativeFormat) {
     SCOPED_TRACE(c.ext);
     const std::string full = test::temp_path(std::string("whole.") + c.ext);
     ASSERT_TRUE(save_mesh(m, full, c.format));
