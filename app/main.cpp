@@ -508,7 +508,7 @@ int run_compare(const std::string& mesh_path, const BuildFlags& flags, bool json
 
 constexpr const char* kThreadsHelp =
     "Threads for the CPU twin's batches of boxes (default: every core this process may use); "
-    "the tree is the same for any number";
+    "the tree is the same for any number. No effect on the GL estimator or on obbtree";
 
 int main(int argc, char** argv) {
   CLI::App app{"vobb: tight oriented-bounding-box trees for solid meshes, with exact outer volumes"};

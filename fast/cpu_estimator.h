@@ -22,7 +22,9 @@ class CpuObvEstimator {
   // OBV estimate of each box at resolution m >= 1, in world volume units. The boxes of a batch
   // are estimated in parallel (TBB; as many threads as the caller's arena allows), each by one
   // thread exactly as alone, so the values do not depend on the number of threads.
-  // Not to be called on one estimator from several threads at once (faces_used).
+  // Not to be called on one estimator from several threads at once (faces_used), nor under a
+  // changed floating-point environment (a CGAL rounding scope): TBB's workers keep the one
+  // captured when their arena started, so only the default gives the single-box values.
   std::vector<double> estimate(const std::vector<Obb>& boxes, int m) const;
   double estimate(const Obb& box, int m) const;
   // For the culling ablation benchmark: cast against every face.

@@ -262,7 +262,14 @@ TEST(VariationalBuilder, CheckpointOfAnotherBuildOrDamagedIsRefused) {
     const Status s = read_variational_state(path, "build A", mesh.faces.size(), &back, &found);
     EXPECT_FALSE(s);
     EXPECT_NE(s.message().find("checksum"), std::string::npos) << s.message();
+    // The checksum under a damaged key name is not taken for a state without one.
+    j["sha257"] = j["sha256"];
     j.erase("sha256");
+    std::ofstream(path) << j.dump();
+    const Status renamed = read_variational_state(path, "build A", mesh.faces.size(), &back, &found);
+    EXPECT_FALSE(renamed);
+    EXPECT_NE(renamed.message().find("unknown field 'sha257'"), std::string::npos) << renamed.message();
+    j.erase("sha257");
     std::ofstream(path) << j.dump();
     ASSERT_TRUE(read_variational_state(path, "build A", mesh.faces.size(), &back, &found));
     EXPECT_NE(back.axes[0][0][k], last.axes[0][0][k]);
