@@ -777,11 +777,10 @@ Status read_variational_state(const std::string& path, const std::string& finger
     if (j.value("format", "") != kCheckpointFormat || j.value("version", 0) != 1) return bad("not a vobb checkpoint");
     // Every top-level key must be one this builder writes: a damaged key name (a "sha256"
     // spelled otherwise) would otherwise pass as a state from before checksums.
+    const std::set<std::string> known{"format", "version", "fingerprint", "split_levels", "sweeps",
+                                      "sweeping_done", "budget_spent", "nodes", "sha256"};
     for (const auto& item : j.items())
-      if (!std::set<std::string>{"format", "version", "fingerprint", "split_levels", "sweeps", "sweeping_done",
-                                 "budget_spent", "nodes", "sha256"}
-               .count(item.key()))
-        return bad("unknown field '" + item.key().substr(0, 40) + "'");
+      if (!known.count(item.key())) return bad("unknown field '" + item.key().substr(0, 40) + "'");
     // States saved before checksums were written have none; any other must match.
     if (j.contains("sha256") && (!j["sha256"].is_string() || j["sha256"].get<std::string>() != state_checksum(j)))
       return bad("checksum does not match the contents");
