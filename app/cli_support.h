@@ -3,6 +3,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
@@ -54,10 +55,10 @@ inline const CLI::Validator kFinite(
 // A seed: decimal digits only, at most 2^64 - 1.
 inline const CLI::Validator kSeed(
     [](std::string& s) -> std::string {
-      if (s.empty() || s.size() > 20) return "seed '" + s + "' is not an integer in [0, 2^64 - 1]";
-      for (char c : s)
-        if (!std::isdigit(static_cast<unsigned char>(c))) return "seed '" + s + "' is not an integer in [0, 2^64 - 1]";
-      if (s.size() == 20 && s > "18446744073709551615") return "seed '" + s + "' is not an integer in [0, 2^64 - 1]";
+      const bool digits = !s.empty() && s.size() <= 20 &&
+                          std::all_of(s.begin(), s.end(), [](unsigned char c) { return std::isdigit(c) != 0; });
+      if (!digits || (s.size() == 20 && s > "18446744073709551615"))
+        return "seed '" + s + "' is not an integer in [0, 2^64 - 1]";
       return "";
     },
     "SEED");

@@ -171,7 +171,7 @@ vobb::Status build_tree(const vobb::Mesh& mesh, const BuildFlags& f, const vobb:
       vobb::Status w = vobb::write_variational_state(st, fingerprint, state_path);
       if (!w && save_error) {
         save_error = w;
-        std::fprintf(stderr, "\nvobb: warning: checkpoint not saved: %s\n", w.message().c_str());
+        std::fprintf(stderr, "\nvobb: warning: checkpoint not saved: %s\n", one_line(w.message()).c_str());
       }
       if (w && st.split_levels == kill_at) ::raise(SIGKILL);
     };
