@@ -509,6 +509,14 @@ int run_compare(const std::string& mesh_path, const BuildFlags& flags, bool json
 constexpr const char* kThreadsHelp =
     "Threads for the CPU twin's batches of boxes (default: every core this process may use); "
     "the tree is the same for any number. No effect on the GL estimator or on obbtree";
+constexpr const char* kCertifyThreadsHelp =
+    "Threads for the boxes' OBV and for the layers, one layer per thread at a time (default: every "
+    "core this process may use); the values are exact, so the same for any number. Each thread "
+    "that computes a union holds its own Nef polyhedron of the mesh";
+constexpr const char* kCompareThreadsHelp =
+    "Threads for the CPU twin's batches of boxes and for certifying both trees (default: every core "
+    "this process may use); trees and values are the same for any number. No effect on the GL "
+    "estimator or on obbtree";
 
 int main(int argc, char** argv) {
   CLI::App app{"vobb: tight oriented-bounding-box trees for solid meshes, with exact outer volumes"};
@@ -568,6 +576,8 @@ int main(int argc, char** argv) {
   cert->add_option("--path", omv_path, "Exact path for OMV: auto, clip, nef, or both (and compare)")
       ->capture_default_str()->check(CLI::IsMember({"auto", "clip", "nef", "both"}));
   cert->add_flag("--quiet", quiet, "No per-layer progress on stderr");
+  int certify_threads = 0;
+  cert->add_option("--threads", certify_threads, kCertifyThreadsHelp)->check(CLI::Range(1, 4096));
 
   std::string boxes_path, backend = "auto";
   std::vector<int> ms = {8, 16, 32};
@@ -599,7 +609,7 @@ int main(int argc, char** argv) {
   cmp->add_option("--sweeps", cf.sweeps, "Most bottom-up merging sweeps")->capture_default_str()->check(CLI::Range(0, 100));
   cmp->add_flag("--json", compare_json, "Print JSON (DESIGN §7)");
   cmp->add_flag("--quiet", cf.quiet, "No progress on stderr");
-  cmp->add_option("--threads", cf.threads, kThreadsHelp)->check(CLI::Range(1, 4096));
+  cmp->add_option("--threads", cf.threads, kCompareThreadsHelp)->check(CLI::Range(1, 4096));
   std::string compare_figure;
   cmp->add_option("--figure", compare_figure, "Also draw both trees' boxes at levels 1..8 over the mesh to this PNG");
   std::string compare_figure_up = "y";
@@ -648,9 +658,10 @@ int main(int argc, char** argv) {
                  one_line(what).c_str(), help.c_str());
     return kExitBadInput;
   }
-  // The CPU twin estimates each batch of boxes in parallel; the values, and so the trees, do
-  // not depend on how many threads (fast/cpu_estimator.h).
-  const int threads = build->parsed() ? bf.threads : cmp->parsed() ? cf.threads : 0;
+  // The CPU twin estimates each batch of boxes in parallel, and certify computes OBVs and
+  // layers in parallel; the values, and so the trees, do not depend on how many threads
+  // (fast/cpu_estimator.h, exact/certify.h).
+  const int threads = build->parsed() ? bf.threads : cmp->parsed() ? cf.threads : cert->parsed() ? certify_threads : 0;
   std::optional<tbb::global_control> thread_limit;
   if (threads > 0) thread_limit.emplace(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
   if (info->parsed()) return run_info(mesh, json, rational);

@@ -1,11 +1,27 @@
 #include "exact/certify.h"
 
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+#include <tbb/task_group.h>
+
+#include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cstdio>
 #include <memory>
+#include <mutex>
+#include <numeric>
 
 #include "exact/outer_volume.h"
 #include "common/stopwatch.h"
+
+// CGAL's lazy exact kernel is thread-safe only with CGAL_HAS_THREADS (CGAL >= 5.4), and then
+// only for distinct objects: every thread below builds its own Nef(X), and no CGAL object is
+// shared between threads. ClipSolver's const members read shared rationals and write nothing.
+#include <CGAL/config.h>
+#ifndef CGAL_HAS_THREADS
+#error "vobb_exact certifies layers in parallel: CGAL must be configured with CGAL_HAS_THREADS"
+#endif
 
 namespace vobb::exact {
 
@@ -19,78 +35,102 @@ bool Certificate::ok() const {
 Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& options) {
   const auto t0 = std::chrono::steady_clock::now();
   Certificate cert;
+  std::mutex say_mutex;  // progress lines come from any thread, one at a time
   auto say = [&](const std::string& line) {
-    if (options.progress) options.progress(line);
+    if (!options.progress) return;
+    std::lock_guard<std::mutex> lock(say_mutex);
+    options.progress(line);
   };
   cert.containment = check_conservative(mesh, tree);
   say("containment: " + std::to_string(cert.containment.violations) + " violations in " +
       std::to_string(cert.containment.checked_pairs) + " (node, face) pairs");
 
-  ClipSolver clip(mesh);
-  std::unique_ptr<NefSolver> nef;  // built only when a layer needs it
-  auto need_nef = [&]() -> const NefSolver& {
-    if (!nef) {
-      const auto tn = std::chrono::steady_clock::now();
-      nef = std::make_unique<NefSolver>(mesh);
-      char buf[64];
-      std::snprintf(buf, sizeof buf, "%.2f s", seconds_since(tn));
-      say(std::string("Nef polyhedron of the mesh built in ") + buf);
-    }
-    return *nef;
-  };
-
-  // OBV once per node: a leaf above level i belongs to every later layer too.
+  // OBV once per node (a leaf above level i belongs to every later layer too), by clipping,
+  // one node per task: every node belongs to the layer of its own level.
+  const ClipSolver clip(mesh);
+  const auto tobv = std::chrono::steady_clock::now();
   std::vector<Rational> obv(tree.nodes.size());
-  std::vector<char> have_obv(tree.nodes.size(), 0);
-  std::vector<Rational> weighted;
-  for (int level = 0; level <= tree.depth; ++level) {
-    const auto tl = std::chrono::steady_clock::now();
-    LayerCertificate lc;
-    lc.level = level;
-    const std::vector<int32_t> ids = layer(tree, level);
-    lc.boxes = ids.size();
-    std::vector<Obb> boxes;
-    std::vector<Rational> obvs;
-    for (int32_t id : ids) {
-      if (!have_obv[id]) {
-        obv[id] = clip.obv(tree.nodes[id].box);
-        have_obv[id] = 1;
-      }
-      boxes.push_back(tree.nodes[id].box);
-      obvs.push_back(obv[id]);
-    }
-    lc.sum_obv = sum_pairwise(obvs);
-    // Which boxes may meet another one (conservative bounds): boxes that overlap nothing skip
-    // the union work.
-    std::vector<char> overlapped = clip.may_overlap(boxes);
-    for (char o : overlapped) lc.overlapping_boxes += o ? 1 : 0;
-    OmvPath path = options.path;
-    // Auto: Nef for layers with overlaps. Measured on dino (docs/BENCHMARKS.md), Nef's union
-    // beats the clipping path's overlap cells on every overlapping layer of baseline trees.
-    if (path == OmvPath::kAuto) path = OmvPath::kNef;
-    if (lc.overlapping_boxes == 0 && path != OmvPath::kBoth) {
-      lc.omv = lc.sum_obv;  // disjoint boxes: the union's outer volume is the sum
-      lc.omv_path = "none";
-    } else if (path == OmvPath::kNef) {
-      lc.omv = need_nef().omv(boxes);
-      lc.omv_path = "nef";
-    } else {
-      lc.omv = clip.omv(boxes, lc.sum_obv);
-      lc.omv_path = "clip";
-      if (path == OmvPath::kBoth) {
-        lc.paths_agree = need_nef().omv(boxes) == lc.omv;
-        lc.omv_path = "both";
-      }
-    }
-    lc.seconds = seconds_since(tl);
-    weighted.push_back(Rational(tree.depth - level + 1) * lc.omv);
-    char buf[200];
-    std::snprintf(buf, sizeof buf, "layer %d/%d: %zu boxes (%zu overlapping), OMV %s, sum OBV %s%s, %.2f s",
-                  level, tree.depth, lc.boxes, lc.overlapping_boxes, format_nearest(lc.omv).c_str(),
-                  format_nearest(lc.sum_obv).c_str(), lc.paths_agree ? "" : ", PATHS DISAGREE", lc.seconds);
+  tbb::parallel_for(size_t{0}, tree.nodes.size(), [&](size_t id) { obv[id] = clip.obv(tree.nodes[id].box); });
+  {
+    char buf[96];
+    std::snprintf(buf, sizeof buf, "OBV of %zu boxes in %.2f s", tree.nodes.size(), seconds_since(tobv));
     say(buf);
-    cert.layers.push_back(std::move(lc));
   }
+
+  // One task per layer, the layers with most boxes (the costly unions) first, each taken by
+  // the next free thread. A thread builds its own Nef(X) when a layer first needs it.
+  const int levels = tree.depth + 1;
+  cert.layers.resize(levels);
+  std::vector<int> order(levels);
+  std::vector<std::vector<int32_t>> ids(levels);
+  for (int level = 0; level < levels; ++level) ids[level] = layer(tree, level);
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return ids[a].size() > ids[b].size(); });
+  std::atomic<int> next{0};
+  auto certify_layers = [&]() {
+    std::unique_ptr<NefSolver> nef;  // this thread's own
+    auto need_nef = [&]() -> const NefSolver& {
+      if (!nef) {
+        const auto tn = std::chrono::steady_clock::now();
+        nef = std::make_unique<NefSolver>(mesh);
+        char buf[96];
+        std::snprintf(buf, sizeof buf, "Nef polyhedron of the mesh built in %.2f s (once per thread)",
+                      seconds_since(tn));
+        say(buf);
+      }
+      return *nef;
+    };
+    for (int k; (k = next.fetch_add(1)) < levels;) {
+      const int level = order[k];
+      const auto tl = std::chrono::steady_clock::now();
+      LayerCertificate& lc = cert.layers[level];
+      lc.level = level;
+      lc.boxes = ids[level].size();
+      std::vector<Obb> boxes;
+      std::vector<Rational> obvs;
+      for (int32_t id : ids[level]) {
+        boxes.push_back(tree.nodes[id].box);
+        obvs.push_back(obv[id]);
+      }
+      lc.sum_obv = sum_pairwise(obvs);
+      // Which boxes may meet another one (conservative bounds): boxes that overlap nothing
+      // skip the union work.
+      std::vector<char> overlapped = clip.may_overlap(boxes);
+      for (char o : overlapped) lc.overlapping_boxes += o ? 1 : 0;
+      OmvPath path = options.path;
+      // Auto: Nef for layers with overlaps. Measured on dino (docs/BENCHMARKS.md), Nef's union
+      // beats the clipping path's overlap cells on every overlapping layer of baseline trees.
+      if (path == OmvPath::kAuto) path = OmvPath::kNef;
+      if (lc.overlapping_boxes == 0 && path != OmvPath::kBoth) {
+        lc.omv = lc.sum_obv;  // disjoint boxes: the union's outer volume is the sum
+        lc.omv_path = "none";
+      } else if (path == OmvPath::kNef) {
+        lc.omv = need_nef().omv(boxes);
+        lc.omv_path = "nef";
+      } else {
+        lc.omv = clip.omv(boxes, lc.sum_obv);
+        lc.omv_path = "clip";
+        if (path == OmvPath::kBoth) {
+          lc.paths_agree = need_nef().omv(boxes) == lc.omv;
+          lc.omv_path = "both";
+        }
+      }
+      lc.seconds = seconds_since(tl);
+      char buf[200];
+      std::snprintf(buf, sizeof buf, "layer %d/%d: %zu boxes (%zu overlapping), OMV %s, sum OBV %s%s, %.2f s",
+                    level, tree.depth, lc.boxes, lc.overlapping_boxes, format_nearest(lc.omv).c_str(),
+                    format_nearest(lc.sum_obv).c_str(), lc.paths_agree ? "" : ", PATHS DISAGREE", lc.seconds);
+      say(buf);
+    }
+  };
+  const int workers = std::min(levels, tbb::this_task_arena::max_concurrency());
+  tbb::task_group group;
+  for (int w = 1; w < workers; ++w) group.run(certify_layers);
+  certify_layers();  // this thread takes layers too
+  group.wait();
+
+  std::vector<Rational> weighted;
+  for (const LayerCertificate& lc : cert.layers) weighted.push_back(Rational(tree.depth - lc.level + 1) * lc.omv);
   cert.weighted_error = sum_pairwise(weighted);
   cert.seconds = seconds_since(t0);
   return cert;

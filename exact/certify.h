@@ -31,7 +31,7 @@ struct LayerCertificate {
   bool upper_bound_holds() const { return sum_obv >= omv; }
   std::string omv_path;        // "clip", "nef", "none" (no overlaps: OMV = sum OBV), "both"
   bool paths_agree = true;     // kBoth only: Nef's OMV == clipping's OMV
-  double seconds = 0.0;
+  double seconds = 0.0;  // this layer's sum and union work (the boxes' OBV come first, apart)
 };
 
 struct Certificate {
@@ -44,12 +44,18 @@ struct Certificate {
 
 struct CertifyOptions {
   OmvPath path = OmvPath::kAuto;
-  // Called with one line per finished stage (per layer), so long runs show they are alive.
+  // Called with one line per finished stage (per layer, in the order they finish), so long
+  // runs show they are alive.
   std::function<void(const std::string&)> progress;
 };
 
 // Precondition: the mesh is solid and the tree validated against it (validate_tree, same
 // triangle count). Creates no GL context.
+// Threads: the boxes' OBV are computed in parallel, then the layers, one per thread at a time,
+// the layers with most boxes first; each thread that needs a union builds its own Nef(X), so
+// memory grows with the threads (TBB's: limit them with tbb::global_control or a task_arena).
+// The result is the same rationals for any number of threads; only `seconds` and the order of
+// the progress lines vary. `progress` is called from any of the threads, one call at a time.
 Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& options);
 
 }  // namespace vobb::exact

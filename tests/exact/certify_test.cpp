@@ -1,6 +1,7 @@
 #include "exact/certify.h"
 
 #include <gtest/gtest.h>
+#include <tbb/task_arena.h>
 
 #include "common/io/mesh_io.h"
 #include "common/tree.h"
@@ -100,6 +101,41 @@ TEST(Certify, VariationalTreeCertifiesAndBeatsTheBaselineExactly) {
     EXPECT_TRUE(cb.ok());
     EXPECT_LE(cv.weighted_error, cb.weighted_error);
   }
+}
+
+// Layers and OBVs are computed on several threads, each with its own Nef(X); the certificate
+// must be the same rationals whatever the number. The torus tree overlaps on most layers, so
+// the unions (both paths) do run on the threads.
+TEST(Certify, SameRationalsForAnyThreadCount) {
+  const Mesh m = analytic::polygonal_torus().mesh;
+  ObbTreeOptions o;
+  o.depth = 4;
+  const Tree t = build_obbtree(m, o);
+  CertifyOptions co;
+  co.path = OmvPath::kBoth;
+  Certificate one, four;
+  tbb::task_arena(1).execute([&] { one = certify(m, t, co); });
+  tbb::task_arena(4).execute([&] { four = certify(m, t, co); });
+  ASSERT_EQ(one.layers.size(), 5u);
+  ASSERT_EQ(four.layers.size(), one.layers.size());
+  size_t unions = 0;
+  for (size_t i = 0; i < one.layers.size(); ++i) {
+    const LayerCertificate &a = one.layers[i], &b = four.layers[i];
+    EXPECT_EQ(a.level, static_cast<int>(i));
+    EXPECT_EQ(b.level, a.level);
+    EXPECT_EQ(b.boxes, a.boxes);
+    EXPECT_EQ(b.overlapping_boxes, a.overlapping_boxes);
+    EXPECT_EQ(b.omv, a.omv) << "layer " << i;
+    EXPECT_EQ(b.sum_obv, a.sum_obv) << "layer " << i;
+    EXPECT_EQ(b.omv_path, a.omv_path);
+    EXPECT_TRUE(a.paths_agree && b.paths_agree) << "layer " << i;
+    unions += a.overlapping_boxes > 0 ? 1 : 0;
+  }
+  EXPECT_GE(unions, 3u) << "too few layers needed a union for the threads to matter";
+  EXPECT_EQ(four.weighted_error, one.weighted_error);
+  EXPECT_EQ(four.containment.violations, one.containment.violations);
+  EXPECT_EQ(four.containment.checked_pairs, one.containment.checked_pairs);
+  EXPECT_TRUE(one.ok());
 }
 
 TEST(Certify, RootLayerOfTheCubeIsExact) {
