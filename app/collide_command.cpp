@@ -23,6 +23,7 @@ std::string format_json(const CollideFlags& f, const collision::ExperimentReport
   j["mesh"] = f.mesh;
   j["colliders"] = f.colliders;
   j["seed"] = f.seed;
+  j["collider_scale"] = f.collider_scale;
   j["simulated_seconds"] = r.simulated_seconds;
   j["queries"] = r.queries;
   j["touching_queries"] = r.touching_queries;
@@ -136,6 +137,10 @@ CLI::App* add_collide_command(CLI::App& app, CollideFlags* f) {
   c->add_option("--seconds", f->seconds, "Simulated seconds (dynamic mode)")
       ->capture_default_str()->check(vobb::app::kFinite)->check(CLI::Range(0.0, 1e6));
   c->add_option("--seed", f->seed, "Seed of the collider stream")->capture_default_str()->check(vobb::app::kSeed);
+  c->add_option("--collider-scale", f->collider_scale,
+                "Multiplies every collider's size (at 1: spheres of radius 2-8 % and boxes of half side "
+                "1.5-6 % of the model's bounding radius); the random draws are the same for any value")
+      ->capture_default_str()->check(vobb::app::kFinite)->check(CLI::Range(0.01, 10.0));
   c->add_flag("--static", f->static_mode, "No dynamics: poses sampled on and near the surface");
   c->add_flag("--no-fcl", f->no_fcl, "Skip the FCL replay");
   c->add_flag("--json", f->json, "Print JSON (DESIGN §7)");
@@ -162,6 +167,7 @@ int run_collide_command(const CollideFlags& f) {
   opt.colliders = f.colliders;
   opt.seconds = f.seconds;
   opt.seed = f.seed;
+  opt.collider_scale = f.collider_scale;
   opt.fcl = !f.no_fcl;
   // Nothing has been written yet (outputs are written whole at the end), so ending here
   // leaves no partial file.

@@ -1,5 +1,5 @@
 // `vobb collide MESH TREE.json [TREE.json ...] [--colliders N] [--seconds S] [--seed S]
-// [--static] [--no-fcl] [--json] [-o FILE]`: the collision experiment (paper §5, issue 7;
+// [--collider-scale K] [--static] [--no-fcl] [--json] [-o FILE]`: the collision experiment (paper §5, issue 7;
 // validate/collision/collision_experiment.h). Thin: parses, loads, calls
 // run_collision_experiment, prints. Exit 0 when every tree agrees with brute force, 1 when one
 // does not, 2 on bad input (one line naming the file).
@@ -18,6 +18,7 @@ struct CollideFlags {
   int colliders = 1000;
   double seconds = 10.0;
   uint64_t seed = 1;
+  double collider_scale = 1.0;
   bool static_mode = false;
   bool no_fcl = false;
   bool json = false;

@@ -39,20 +39,22 @@ class Random {
   std::mt19937_64 engine_;
 };
 
-// Collider sizes, as fractions of the model's bounding radius R.
+// Collider sizes, as fractions of the model's bounding radius R (times collider_scale).
 constexpr double kSphereRadius[2] = {0.02, 0.08};
 constexpr double kBoxHalf[2] = {0.015, 0.06};
 
-Collider random_collider(Random& rng, double R, const Vec3& center, const Eigen::Matrix3d& rot) {
+// `unit` is R times collider_scale. It scales the sizes only, so the random draws are the
+// same for every scale.
+Collider random_collider(Random& rng, double unit, const Vec3& center, const Eigen::Matrix3d& rot) {
   Collider c;
   c.center = center;
   if (rng.uniform() < 0.5) {
     c.shape = ColliderShape::kSphere;
-    c.radius = R * rng.uniform(kSphereRadius[0], kSphereRadius[1]);
+    c.radius = unit * rng.uniform(kSphereRadius[0], kSphereRadius[1]);
   } else {
     c.shape = ColliderShape::kBox;
     for (int k = 0; k < 3; ++k) {
-      c.half[k] = R * rng.uniform(kBoxHalf[0], kBoxHalf[1]);
+      c.half[k] = unit * rng.uniform(kBoxHalf[0], kBoxHalf[1]);
       c.axes[k] = rot.col(k);
     }
   }
@@ -148,7 +150,7 @@ void run_static(QueryEngine& engine, const Tree& first, const ExperimentOptions&
     const Vec3 a = mesh.corner(f, 0), b = mesh.corner(f, 1), c = mesh.corner(f, 2);
     const Vec3 n = (b - a).cross(c - a).normalized();
     const Vec3 on = a + s * (b - a) + t * (c - a);
-    Collider col = random_collider(rng, R, on, rng.rotation());
+    Collider col = random_collider(rng, R * opt.collider_scale, on, rng.rotation());
     const double size = col.shape == ColliderShape::kSphere ? col.radius : col.half.maxCoeff();
     col.center = on + n * (size * rng.uniform(-1.5, 1.5));  // on, inside and near the surface
     engine.query(col);
@@ -389,7 +391,7 @@ void run_dynamic(QueryEngine& engine, const Tree& first, const ExperimentOptions
   for (int i = 0; i < opt.colliders; ++i) {
     Body b;
     b.body = dBodyCreate(scene.world);
-    const Collider c = random_collider(rng, R, Vec3::Zero(), Eigen::Matrix3d::Identity());
+    const Collider c = random_collider(rng, R * opt.collider_scale, Vec3::Zero(), Eigen::Matrix3d::Identity());
     dMass mass;
     if (c.shape == ColliderShape::kSphere) {
       b.geom = dCreateSphere(space, c.radius);
@@ -435,6 +437,8 @@ Status run_collision_experiment(const Mesh& mesh, const std::vector<NamedTree>& 
                                 const ExperimentOptions& options, ExperimentReport* report) {
   if (trees.empty()) return Status::error("collide: no tree given");
   if (options.colliders < 1) return Status::error("collide: need at least one collider");
+  if (!(options.collider_scale >= 0.01 && options.collider_scale <= 10))  // NaN fails too
+    return Status::error("collide: the collider scale must be within [0.01, 10]");
   for (const NamedTree& t : trees) {
     Status s = validate_tree(*t.tree, t.name);
     if (!s) return s;

@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 #include <sys/wait.h>
 
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
@@ -130,6 +131,44 @@ TEST(CollisionExperiment, SameSeedSameCounts) {
   EXPECT_NE(a.trees[0].counts.box_tests, c.trees[0].counts.box_tests);
 }
 
+// --collider-scale multiplies the sizes only. Tiny and huge colliders still agree with brute
+// force on every query, and on the same draws (static: the same surface points, the offsets
+// scaled with the size) larger colliders open strictly more boxes, so the scale is applied.
+// Out-of-range scales are refused.
+TEST(CollisionExperiment, ColliderScaleKeepsAgreementAndGrowsTests) {
+  const Mesh mesh = analytic::polygonal_torus().mesh;
+  const Tree base = baseline(mesh, 4);
+  uint64_t previous = 0;
+  for (double scale : {0.05, 1.0, 5.0}) {
+    SCOPED_TRACE(scale);
+    ExperimentOptions opt;
+    opt.dynamic = false;
+    opt.colliders = 100;
+    opt.seed = 7;
+    opt.collider_scale = scale;
+    ExperimentReport r;
+    ASSERT_TRUE(run_collision_experiment(mesh, {{"base", &base}}, opt, &r));
+    EXPECT_TRUE(r.brute_force_agrees) << r.first_disagreement;
+    EXPECT_GT(r.touching_queries, 0u);
+    EXPECT_GT(r.trees[0].counts.box_tests, previous);
+    previous = r.trees[0].counts.box_tests;
+  }
+  ExperimentOptions dyn;
+  dyn.colliders = 30;
+  dyn.seconds = 2.0;
+  dyn.collider_scale = 3.0;
+  ExperimentReport r;
+  ASSERT_TRUE(run_collision_experiment(mesh, {{"base", &base}}, dyn, &r));
+  EXPECT_TRUE(r.brute_force_agrees) << r.first_disagreement;
+  EXPECT_GT(r.touching_queries, 0u);
+  for (double bad : {0.0, 0.009, 10.5, std::nan("")}) {
+    dyn.collider_scale = bad;
+    const Status s = run_collision_experiment(mesh, {{"base", &base}}, dyn, &r);
+    ASSERT_FALSE(s) << bad;
+    EXPECT_NE(s.message().find("collider scale"), std::string::npos) << s.message();
+  }
+}
+
 // A tree whose box misses one of its faces is refused before any query: pruning on it could
 // hide a touching face.
 TEST(CollisionExperiment, RefusesANonConservativeTree) {
@@ -176,6 +215,16 @@ TEST(CollideCli, StaticRunJsonAndBadInput) {
   EXPECT_EQ(r.code, 2);
   EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
   EXPECT_NE(r.err.find(tree_path), std::string::npos) << r.err;
+  // A collider scale out of range, or not a number: a usage error naming the option.
+  for (const char* scale : {"0", "nan", "11"}) {
+    r = vobb_cli("collide " + mesh_path + " " + tree_path + " --static --colliders 5 --collider-scale " + scale);
+    EXPECT_EQ(r.code, 2) << scale;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_NE(r.err.find("collider-scale"), std::string::npos) << r.err;
+  }
+  r = vobb_cli("collide " + mesh_path + " " + tree_path + " --static --colliders 5 --json --collider-scale 0.5");
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["collider_scale"], 0.5);
   r = vobb_cli("collide /nonexistent/mesh.off " + tree_path);
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("mesh.off"), std::string::npos) << r.err;
