@@ -75,14 +75,15 @@ std::string format_json(const CollideFlags& f, const collision::ExperimentReport
   return j.dump(2) + "\n";
 }
 
-std::string format_text(const collision::ExperimentReport& r) {
+std::string format_text(const CollideFlags& f, const collision::ExperimentReport& r) {
   using collision::reduction_pct;
   std::string out;
   char line[512];
   const double unit = r.dynamic ? r.simulated_seconds : static_cast<double>(r.queries);
-  std::snprintf(line, sizeof line, "%s: %llu queries (%llu touching)%s%.3g s simulated; brute force agrees: %s\n",
+  std::snprintf(line, sizeof line,
+                "%s: %llu queries (%llu touching), %.3g s simulated, collider scale %g; brute force agrees: %s\n",
                 r.dynamic ? "dynamic" : "static", static_cast<unsigned long long>(r.queries),
-                static_cast<unsigned long long>(r.touching_queries), r.dynamic ? ", " : ", ", r.simulated_seconds,
+                static_cast<unsigned long long>(r.touching_queries), r.simulated_seconds, f.collider_scale,
                 r.brute_force_agrees ? "yes" : ("NO (" + r.first_disagreement + ")").c_str());
   out += line;
   std::snprintf(line, sizeof line, "%-28s %14s %10s %14s %10s %10s %9s %14s %14s %9s %9s\n", "tree", "box tests",
@@ -139,7 +140,8 @@ CLI::App* add_collide_command(CLI::App& app, CollideFlags* f) {
   c->add_option("--seed", f->seed, "Seed of the collider stream")->capture_default_str()->check(vobb::app::kSeed);
   c->add_option("--collider-scale", f->collider_scale,
                 "Multiplies every collider's size (at 1: spheres of radius 2-8 % and boxes of half side "
-                "1.5-6 % of the model's bounding radius); the random draws are the same for any value")
+                "1.5-6 % of R, half the diagonal of the first tree's root box); the random draws are the "
+                "same for any value")
       ->capture_default_str()->check(vobb::app::kFinite)->check(CLI::Range(0.01, 10.0));
   c->add_flag("--static", f->static_mode, "No dynamics: poses sampled on and near the surface");
   c->add_flag("--no-fcl", f->no_fcl, "Skip the FCL replay");
@@ -180,7 +182,7 @@ int run_collide_command(const CollideFlags& f) {
   collision::ExperimentReport report;
   s = collision::run_collision_experiment(mesh.mesh, named, opt, &report);
   if (!s) return refuse(s);
-  const std::string out = f.json ? format_json(f, report) : format_text(report);
+  const std::string out = f.json ? format_json(f, report) : format_text(f, report);
   if (f.output.empty()) {
     std::fputs(out.c_str(), stdout);
   } else {

@@ -6,6 +6,7 @@ find_package(CLI11 REQUIRED)
 find_package(fmt REQUIRED)
 find_package(OpenSSL REQUIRED)  # SHA-256 of the mesh in tree files
 find_package(TBB REQUIRED)      # the CPU twin estimates a batch of boxes in parallel
+find_package(CGAL REQUIRED)     # here, so that every directory sees CGAL::CGAL (exact/, tests/)
 
 find_path(GMP_INCLUDE_DIR gmpxx.h REQUIRED)
 find_library(GMP_LIBRARY gmp REQUIRED)

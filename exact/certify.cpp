@@ -15,13 +15,8 @@
 #include "exact/outer_volume.h"
 #include "common/stopwatch.h"
 
-// CGAL's lazy exact kernel is thread-safe only with CGAL_HAS_THREADS (CGAL >= 5.4), and then
-// only for distinct objects: every thread below builds its own Nef(X), and no CGAL object is
-// shared between threads. ClipSolver's const members read shared rationals and write nothing.
-#include <CGAL/config.h>
-#ifndef CGAL_HAS_THREADS
-#error "vobb_exact certifies layers in parallel: CGAL must be configured with CGAL_HAS_THREADS"
-#endif
+// Threads share no CGAL object: each builds its own NefSolver (nef_solver.cpp checks that CGAL
+// is built thread-aware). ClipSolver's const members read shared rationals and write nothing.
 
 namespace vobb::exact {
 
@@ -69,58 +64,66 @@ Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& op
   std::atomic<int> next{0};
   auto certify_layers = [&]() {
     std::unique_ptr<NefSolver> nef;  // this thread's own
+    double nef_build_seconds = 0;    // within the current layer, kept out of its time
     auto need_nef = [&]() -> const NefSolver& {
       if (!nef) {
         const auto tn = std::chrono::steady_clock::now();
         nef = std::make_unique<NefSolver>(mesh);
+        nef_build_seconds = seconds_since(tn);
         char buf[96];
         std::snprintf(buf, sizeof buf, "Nef polyhedron of the mesh built in %.2f s (once per thread)",
-                      seconds_since(tn));
+                      nef_build_seconds);
         say(buf);
       }
       return *nef;
     };
     for (int k; (k = next.fetch_add(1)) < levels;) {
-      const int level = order[k];
-      const auto tl = std::chrono::steady_clock::now();
-      LayerCertificate& lc = cert.layers[level];
-      lc.level = level;
-      lc.boxes = ids[level].size();
-      std::vector<Obb> boxes;
-      std::vector<Rational> obvs;
-      for (int32_t id : ids[level]) {
-        boxes.push_back(tree.nodes[id].box);
-        obvs.push_back(obv[id]);
-      }
-      lc.sum_obv = sum_pairwise(obvs);
-      // Which boxes may meet another one (conservative bounds): boxes that overlap nothing
-      // skip the union work.
-      std::vector<char> overlapped = clip.may_overlap(boxes);
-      for (char o : overlapped) lc.overlapping_boxes += o ? 1 : 0;
-      OmvPath path = options.path;
-      // Auto: Nef for layers with overlaps. Measured on dino (docs/BENCHMARKS.md), Nef's union
-      // beats the clipping path's overlap cells on every overlapping layer of baseline trees.
-      if (path == OmvPath::kAuto) path = OmvPath::kNef;
-      if (lc.overlapping_boxes == 0 && path != OmvPath::kBoth) {
-        lc.omv = lc.sum_obv;  // disjoint boxes: the union's outer volume is the sum
-        lc.omv_path = "none";
-      } else if (path == OmvPath::kNef) {
-        lc.omv = need_nef().omv(boxes);
-        lc.omv_path = "nef";
-      } else {
-        lc.omv = clip.omv(boxes, lc.sum_obv);
-        lc.omv_path = "clip";
-        if (path == OmvPath::kBoth) {
-          lc.paths_agree = need_nef().omv(boxes) == lc.omv;
-          lc.omv_path = "both";
+      try {
+        const int level = order[k];
+        const auto tl = std::chrono::steady_clock::now();
+        nef_build_seconds = 0;
+        LayerCertificate& lc = cert.layers[level];
+        lc.level = level;
+        lc.boxes = ids[level].size();
+        std::vector<Obb> boxes;
+        std::vector<Rational> obvs;
+        for (int32_t id : ids[level]) {
+          boxes.push_back(tree.nodes[id].box);
+          obvs.push_back(obv[id]);
         }
+        lc.sum_obv = sum_pairwise(obvs);
+        // Which boxes may meet another one (conservative bounds): boxes that overlap nothing
+        // skip the union work.
+        std::vector<char> overlapped = clip.may_overlap(boxes);
+        for (char o : overlapped) lc.overlapping_boxes += o ? 1 : 0;
+        OmvPath path = options.path;
+        // Auto: Nef for layers with overlaps. Measured on dino (docs/BENCHMARKS.md), Nef's union
+        // beats the clipping path's overlap cells on every overlapping layer of baseline trees.
+        if (path == OmvPath::kAuto) path = OmvPath::kNef;
+        if (lc.overlapping_boxes == 0 && path != OmvPath::kBoth) {
+          lc.omv = lc.sum_obv;  // disjoint boxes: the union's outer volume is the sum
+          lc.omv_path = "none";
+        } else if (path == OmvPath::kNef) {
+          lc.omv = need_nef().omv(boxes);
+          lc.omv_path = "nef";
+        } else {
+          lc.omv = clip.omv(boxes, lc.sum_obv);
+          lc.omv_path = "clip";
+          if (path == OmvPath::kBoth) {
+            lc.paths_agree = need_nef().omv(boxes) == lc.omv;
+            lc.omv_path = "both";
+          }
+        }
+        lc.seconds = seconds_since(tl) - nef_build_seconds;
+        char buf[200];
+        std::snprintf(buf, sizeof buf, "layer %d/%d: %zu boxes (%zu overlapping), OMV %s, sum OBV %s%s, %.2f s",
+                      level, tree.depth, lc.boxes, lc.overlapping_boxes, format_nearest(lc.omv).c_str(),
+                      format_nearest(lc.sum_obv).c_str(), lc.paths_agree ? "" : ", PATHS DISAGREE", lc.seconds);
+        say(buf);
+      } catch (...) {
+        next = levels;  // a failure: the other threads take no further layer
+        throw;              // task_group passes it on to the caller
       }
-      lc.seconds = seconds_since(tl);
-      char buf[200];
-      std::snprintf(buf, sizeof buf, "layer %d/%d: %zu boxes (%zu overlapping), OMV %s, sum OBV %s%s, %.2f s",
-                    level, tree.depth, lc.boxes, lc.overlapping_boxes, format_nearest(lc.omv).c_str(),
-                    format_nearest(lc.sum_obv).c_str(), lc.paths_agree ? "" : ", PATHS DISAGREE", lc.seconds);
-      say(buf);
     }
   };
   const int workers = std::min(levels, tbb::this_task_arena::max_concurrency());

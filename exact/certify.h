@@ -31,7 +31,9 @@ struct LayerCertificate {
   bool upper_bound_holds() const { return sum_obv >= omv; }
   std::string omv_path;        // "clip", "nef", "none" (no overlaps: OMV = sum OBV), "both"
   bool paths_agree = true;     // kBoth only: Nef's OMV == clipping's OMV
-  double seconds = 0.0;  // this layer's sum and union work (the boxes' OBV come first, apart)
+  // This layer's own work: its sums, overlap bounds and union. Not the boxes' OBV (computed
+  // first, for all layers at once) nor the building of a thread's Nef(X).
+  double seconds = 0.0;
 };
 
 struct Certificate {

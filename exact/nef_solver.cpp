@@ -7,6 +7,13 @@
 #include <CGAL/Polyhedron_3.h>
 
 #include <type_traits>
+
+// certify() runs NefSolvers on several threads at once, one per thread. CGAL's lazy exact
+// kernel is safe for that (distinct objects on distinct threads) only when CGAL is built
+// thread-aware (CGAL >= 5.4 with CGAL_HAS_THREADS).
+#ifndef CGAL_HAS_THREADS
+#error "certify runs NefSolvers on several threads: CGAL must be configured with CGAL_HAS_THREADS"
+#endif
 #include <unordered_map>
 
 #include "common/solidity.h"

@@ -105,7 +105,9 @@ TEST(Certify, VariationalTreeCertifiesAndBeatsTheBaselineExactly) {
 
 // Layers and OBVs are computed on several threads, each with its own Nef(X); the certificate
 // must be the same rationals whatever the number. The torus tree overlaps on most layers, so
-// the unions (both paths) do run on the threads.
+// unions (both paths) run, on whichever threads take their layers. (Which thread takes what is
+// up to the scheduler, so this cannot prove that two ran at once; a ThreadSanitizer check of
+// the same pattern with std::thread is noted in docs/BENCHMARKS.md.)
 TEST(Certify, SameRationalsForAnyThreadCount) {
   const Mesh m = analytic::polygonal_torus().mesh;
   ObbTreeOptions o;

@@ -35,8 +35,9 @@ struct ExperimentOptions {
   double step = 0.01;      // ODE time step, s
   uint64_t seed = 1;
   // Multiplies every collider's size: spheres of radius 0.02–0.08 R and boxes of half sides
-  // 0.015–0.06 R at 1 (R: the model's bounding radius). Finite, in [0.01, 10]. The random
-  // draws (drop points, shapes, orientations, relative sizes) do not depend on it.
+  // 0.015–0.06 R at 1 (R: half the diagonal of the first tree's root box). Finite, in
+  // [0.01, 10]. The random draws (drop points, shapes, orientations, relative sizes) do not
+  // depend on it; in the dynamic scene, which body a later re-drop goes to does.
   double collider_scale = 1.0;
   bool fcl = true;         // replay through FCL
   // Called, and must not return, when ODE stops on an internal error (its assertions fire at
