@@ -77,53 +77,53 @@ Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& op
       }
       return *nef;
     };
-    for (int k; (k = next.fetch_add(1)) < levels;) {
-      try {
-        const int level = order[k];
-        const auto tl = std::chrono::steady_clock::now();
-        nef_build_seconds = 0;
-        LayerCertificate& lc = cert.layers[level];
-        lc.level = level;
-        lc.boxes = ids[level].size();
-        std::vector<Obb> boxes;
-        std::vector<Rational> obvs;
-        for (int32_t id : ids[level]) {
-          boxes.push_back(tree.nodes[id].box);
-          obvs.push_back(obv[id]);
-        }
-        lc.sum_obv = sum_pairwise(obvs);
-        // Which boxes may meet another one (conservative bounds): boxes that overlap nothing
-        // skip the union work.
-        std::vector<char> overlapped = clip.may_overlap(boxes);
-        for (char o : overlapped) lc.overlapping_boxes += o ? 1 : 0;
-        OmvPath path = options.path;
-        // Auto: Nef for layers with overlaps. Measured on dino (docs/BENCHMARKS.md), Nef's union
-        // beats the clipping path's overlap cells on every overlapping layer of baseline trees.
-        if (path == OmvPath::kAuto) path = OmvPath::kNef;
-        if (lc.overlapping_boxes == 0 && path != OmvPath::kBoth) {
-          lc.omv = lc.sum_obv;  // disjoint boxes: the union's outer volume is the sum
-          lc.omv_path = "none";
-        } else if (path == OmvPath::kNef) {
-          lc.omv = need_nef().omv(boxes);
-          lc.omv_path = "nef";
-        } else {
-          lc.omv = clip.omv(boxes, lc.sum_obv);
-          lc.omv_path = "clip";
-          if (path == OmvPath::kBoth) {
-            lc.paths_agree = need_nef().omv(boxes) == lc.omv;
-            lc.omv_path = "both";
-          }
-        }
-        lc.seconds = seconds_since(tl) - nef_build_seconds;
-        char buf[200];
-        std::snprintf(buf, sizeof buf, "layer %d/%d: %zu boxes (%zu overlapping), OMV %s, sum OBV %s%s, %.2f s",
-                      level, tree.depth, lc.boxes, lc.overlapping_boxes, format_nearest(lc.omv).c_str(),
-                      format_nearest(lc.sum_obv).c_str(), lc.paths_agree ? "" : ", PATHS DISAGREE", lc.seconds);
-        say(buf);
-      } catch (...) {
-        next = levels;  // a failure: the other threads take no further layer
-        throw;              // task_group passes it on to the caller
+    auto certify_layer = [&](int level) {
+      const auto tl = std::chrono::steady_clock::now();
+      nef_build_seconds = 0;
+      LayerCertificate& lc = cert.layers[level];
+      lc.level = level;
+      lc.boxes = ids[level].size();
+      std::vector<Obb> boxes;
+      std::vector<Rational> obvs;
+      for (int32_t id : ids[level]) {
+        boxes.push_back(tree.nodes[id].box);
+        obvs.push_back(obv[id]);
       }
+      lc.sum_obv = sum_pairwise(obvs);
+      // Which boxes may meet another one (conservative bounds): boxes that overlap nothing
+      // skip the union work.
+      std::vector<char> overlapped = clip.may_overlap(boxes);
+      for (char o : overlapped) lc.overlapping_boxes += o ? 1 : 0;
+      OmvPath path = options.path;
+      // Auto: Nef for layers with overlaps. Measured on dino (docs/BENCHMARKS.md), Nef's union
+      // beats the clipping path's overlap cells on every overlapping layer of baseline trees.
+      if (path == OmvPath::kAuto) path = OmvPath::kNef;
+      if (lc.overlapping_boxes == 0 && path != OmvPath::kBoth) {
+        lc.omv = lc.sum_obv;  // disjoint boxes: the union's outer volume is the sum
+        lc.omv_path = "none";
+      } else if (path == OmvPath::kNef) {
+        lc.omv = need_nef().omv(boxes);
+        lc.omv_path = "nef";
+      } else {
+        lc.omv = clip.omv(boxes, lc.sum_obv);
+        lc.omv_path = "clip";
+        if (path == OmvPath::kBoth) {
+          lc.paths_agree = need_nef().omv(boxes) == lc.omv;
+          lc.omv_path = "both";
+        }
+      }
+      lc.seconds = seconds_since(tl) - nef_build_seconds;
+      char buf[200];
+      std::snprintf(buf, sizeof buf, "layer %d/%d: %zu boxes (%zu overlapping), OMV %s, sum OBV %s%s, %.2f s",
+                    level, tree.depth, lc.boxes, lc.overlapping_boxes, format_nearest(lc.omv).c_str(),
+                    format_nearest(lc.sum_obv).c_str(), lc.paths_agree ? "" : ", PATHS DISAGREE", lc.seconds);
+      say(buf);
+    };
+    try {
+      for (int k; (k = next.fetch_add(1)) < levels;) certify_layer(order[k]);
+    } catch (...) {
+      next = levels;  // a failure: the other threads take no further layer
+      throw;          // task_group passes it on to the caller
     }
   };
   const int workers = std::min(levels, tbb::this_task_arena::max_concurrency());
