@@ -44,8 +44,9 @@
 // Boxes are written through fit_obb (exactly conservative). Deterministic: the search runs on
 // the calling thread, ties by face id, box index and node id; the same mesh, options and
 // estimator values give the same tree (the estimator may evaluate a batch in parallel, as the
-// CPU twin does: its values do not depend on the thread count). The build state after each level and each sweep can be saved (checkpoint) and a build
-// resumed from it gives the same tree as an uninterrupted one. A time budget ends the search
+// CPU twin does: its values do not depend on the thread count). The build state after each
+// level and each sweep can be saved (checkpoint) and a build resumed from it gives the same
+// tree as an uninterrupted one. A time budget ends the search
 // early: the nodes not yet split get the baseline split, and no further sweep starts. A state
 // saved after the budget was spent keeps it spent when resumed.
 #pragma once
