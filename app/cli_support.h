@@ -13,7 +13,10 @@
 
 namespace vobb::app {
 
-constexpr int kExitOk = 0, kExitCheckFailed = 1, kExitBadInput = 2;
+// 3: the run could not finish for a reason that is not the input: out of memory, standard
+// output not writable (a full disk), or a library's internal check. One line on stderr; files
+// are written atomically, so none is left half-written.
+constexpr int kExitOk = 0, kExitCheckFailed = 1, kExitBadInput = 2, kExitCouldNotFinish = 3;
 
 // A message as one printable line: control characters (a newline in a file name, bytes of a
 // binary file quoted in a parse error) become \xNN.

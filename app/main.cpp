@@ -6,9 +6,11 @@
 #include <chrono>
 #include <cmath>
 #include <memory>
+#include <new>
 #include <cstdio>
 #include <cstdlib>
 #include <csignal>
+#include <exception>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -40,6 +42,7 @@ using vobb::seconds_since;
 
 using vobb::app::kExitBadInput;
 using vobb::app::kExitCheckFailed;
+using vobb::app::kExitCouldNotFinish;
 using vobb::app::kExitOk;
 using vobb::app::one_line;
 using vobb::app::refuse;
@@ -664,13 +667,34 @@ int main(int argc, char** argv) {
   const int threads = build->parsed() ? bf.threads : cmp->parsed() ? cf.threads : cert->parsed() ? certify_threads : 0;
   std::optional<tbb::global_control> thread_limit;
   if (threads > 0) thread_limit.emplace(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
-  if (info->parsed()) return run_info(mesh, json, rational);
-  if (build->parsed()) return run_build(mesh, out, bf);
-  if (exp->parsed()) return run_export(tree_path, level, out);
-  if (validate_cmd->parsed()) return vobb::app::run_validate_command(validate_flags);
-  if (collide_cmd->parsed()) return vobb::app::run_collide_command(collide_flags);
-  if (obv->parsed()) return run_obv(mesh, boxes_path, ms, backend, json);
-  if (cmp->parsed()) return run_compare(mesh, cf, compare_json, compare_figure, compare_figure_up);
-  if (cert->parsed()) return run_certify(mesh, tree_path, json, rational, omv_path, quiet);
-  return kExitBadInput;
+  auto run = [&]() -> int {
+    if (info->parsed()) return run_info(mesh, json, rational);
+    if (build->parsed()) return run_build(mesh, out, bf);
+    if (exp->parsed()) return run_export(tree_path, level, out);
+    if (validate_cmd->parsed()) return vobb::app::run_validate_command(validate_flags);
+    if (collide_cmd->parsed()) return vobb::app::run_collide_command(collide_flags);
+    if (obv->parsed()) return run_obv(mesh, boxes_path, ms, backend, json);
+    if (cmp->parsed()) return run_compare(mesh, cf, compare_json, compare_figure, compare_figure_up);
+    if (cert->parsed()) return run_certify(mesh, tree_path, json, rational, omv_path, quiet);
+    return kExitBadInput;
+  };
+  // Bad input never throws (it is a Status); what can is running out of memory, or a library's
+  // own assertion (CGAL's). Either ends the run with one line, not an abort.
+  const std::string who = command.empty() ? "vobb" : "vobb " + command;
+  int rc;
+  try {
+    rc = run();
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "%s: out of memory\n", who.c_str());
+    return kExitCouldNotFinish;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s: internal error: %s\n", who.c_str(), one_line(e.what()).c_str());
+    return kExitCouldNotFinish;
+  }
+  // A report printed to a full disk or a closed stream must not end as a success.
+  if (std::fflush(stdout) != 0 || std::ferror(stdout)) {
+    std::fprintf(stderr, "%s: cannot write standard output\n", who.c_str());
+    return kExitCouldNotFinish;
+  }
+  return rc;
 }

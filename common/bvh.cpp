@@ -13,7 +13,10 @@ AabbTree::AabbTree(std::vector<Aabb> boxes) : boxes_(std::move(boxes)) {
   std::vector<Vec3> centroids(n);
   for (int32_t i = 0; i < n; ++i) {
     order_[i] = i;
-    centroids[i] = 0.5 * (boxes_[i].lo + boxes_[i].hi);
+    // An empty box (a primitive of no extent: a flat box's empty cell) has infinite bounds the
+    // wrong way round; its centroid would be NaN, which no ordering can sort. It overlaps
+    // nothing, so any finite centroid will do.
+    centroids[i] = boxes_[i].empty() ? Vec3::Zero() : Vec3(0.5 * (boxes_[i].lo + boxes_[i].hi));
   }
   if (n > 0) {
     nodes_.reserve(2 * (n / kLeafSize + 1));

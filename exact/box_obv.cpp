@@ -97,17 +97,23 @@ Rational ClipSolver::obv(const Obb& box) const {
   const double Rd = R.get_d();
 
   // Faces that may reach the column {|T_0|, |T_1| <= R, T_2 >= -R}: a conservative test on
-  // boxes in double, padded by 1e-9 relative (far above the rounding of three products).
+  // boxes in double. Every quantity below is off by a few units of rounding (u = 2^-53) of
+  // the magnitudes it is computed from: 0.5 (lo + hi) - c by 2u (|lo| + |hi| + |c|) per axis,
+  // which is at the coordinates' scale, not the box's (a box of size 0.01 at 1e6 has its
+  // faces' centres rounded by 1e-10, its own size's 1e-8); the products and sums of T by 3u of
+  // sum |w| (|lo| + |hi| + |c|); w's and R's conversion to double by u of themselves. The pad,
+  // 1e-9 of the sum of those magnitudes, is far above all of it.
   const double cd[3] = {box.center[0], box.center[1], box.center[2]};
   auto accept = [&](const Aabb& b) {
     if (b.empty()) return false;
     for (int k = 0; k < 3; ++k) {
-      double mid = 0, rad = 0;
+      double mid = 0, rad = 0, scale = 0;
       for (int i = 0; i < 3; ++i) {
         mid += (0.5 * (b.lo[i] + b.hi[i]) - cd[i]) * wd[k][i];
         rad += std::abs(wd[k][i]) * 0.5 * (b.hi[i] - b.lo[i]);
+        scale += std::abs(wd[k][i]) * (std::abs(b.lo[i]) + std::abs(b.hi[i]) + std::abs(cd[i]));
       }
-      const double pad = 1e-9 * (std::abs(mid) + rad + Rd);
+      const double pad = 1e-9 * (scale + rad + Rd);
       if (mid - rad > Rd + pad && k < 2) return false;  // beyond the +side
       if (mid + rad < -Rd - pad) return false;           // beyond the -side (or below)
     }

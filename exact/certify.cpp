@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <exception>
 #include <chrono>
 #include <cstdio>
 #include <memory>
@@ -129,8 +130,17 @@ Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& op
   const int workers = std::min(levels, tbb::this_task_arena::max_concurrency());
   tbb::task_group group;
   for (int w = 1; w < workers; ++w) group.run(certify_layers);
-  certify_layers();  // this thread takes layers too
-  group.wait();
+  // This thread takes layers too. Its failure is held until the workers have stopped: the
+  // group must be waited for before it is destroyed, and its wait rethrows a worker's failure,
+  // which during the unwinding of this thread's own would end the process.
+  std::exception_ptr failed;
+  try {
+    certify_layers();
+  } catch (...) {
+    failed = std::current_exception();
+  }
+  group.wait();  // a worker's failure, if any, goes on from here
+  if (failed) std::rethrow_exception(failed);
 
   std::vector<Rational> weighted;
   for (const LayerCertificate& lc : cert.layers) weighted.push_back(Rational(tree.depth - lc.level + 1) * lc.omv);

@@ -8,9 +8,9 @@
 //  - ClipSolver (path b): everything rests on the signed prism decomposition of X along a
 //    direction d: 1_X = sum_T sign(n_T . -d) 1[prism of T swept along d], so for a convex C,
 //    vol(C ∩ X) = sum_T sign vol(C ∩ prism_T). OBV works in the box's own frame, where most
-//    faces are closed forms (box_obv.cpp). OMV = sum OBV - sum vol(S \ X) over the disjoint
-//    convex cells S in which a box meets earlier boxes (half-space splits; d = -z there, each
-//    prism a convex clip). Only faces whose column meets a cell are visited; a layer whose
+//    faces are closed forms (box_obv.cpp). OMV = sum OBV - sum vol(S \ X) over convex cells
+//    S that split each box's part inside earlier boxes (half-space splits, disjoint within one
+//    box; d = -z there, each prism a convex clip). Only faces whose column meets a cell are visited; a layer whose
 //    boxes overlap nothing does no union work.
 //  - NefSolver (path a): CGAL Nef polyhedra, (U_j O_j) - X, then the volume.
 // Precondition for both: the mesh is a solid (check_solidity passed). Neither creates a GL
@@ -41,8 +41,11 @@ class ClipSolver {
   std::vector<char> may_overlap(const std::vector<Obb>& boxes) const;
   // vol(cell ∩ X).
   Rational inside_volume(const ConvexCell& cell) const;
-  // Disjoint convex cells whose union is the set of points covered by two or more boxes
-  // (each box's part inside earlier boxes). Empty when no two boxes overlap.
+  // Convex cells that make up, for each box j, S_j = B_j ∩ (B_1 ∪ ... ∪ B_{j-1}), its part
+  // inside earlier boxes: the cells of one S_j are disjoint, while cells of different j may
+  // overlap (a point in three boxes lies in S_2 and S_3). So their volumes sum to
+  // sum_j vol(B_j) - vol(U_j B_j), the overlap term, not to the volume of the points covered
+  // twice. Empty when no two boxes overlap.
   std::vector<ConvexCell> overlap_cells(const std::vector<Obb>& boxes) const;
 
  private:

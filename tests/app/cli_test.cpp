@@ -144,6 +144,19 @@ TEST(CliBadInput, PhysicsFailureIsOneLineNotAnAbort) {
   EXPECT_EQ(vobb_cli("collide " + mesh + " " + tree + " --static --colliders 30 --no-fcl").code, 0);
 }
 
+// A report that cannot be written (standard output on a full device) ends with exit 3 and one
+// line, not with exit 0 and nothing written.
+TEST(CliBadInput, UnwritableStandardOutputIsExitThree) {
+  const std::string mesh = write_cube("full_cube.off", 1);
+  for (const char* args : {" --json", ""}) {
+    const CliRun r = vobb_cli("info " + mesh + args + " >/dev/full");
+    EXPECT_EQ(r.code, 3) << args << ": " << r.err;
+    EXPECT_EQ(line_count(r.err), 1u) << r.err;
+    EXPECT_NE(r.err.find("vobb info: cannot write standard output"), std::string::npos) << r.err;
+  }
+  EXPECT_EQ(vobb_cli("info " + mesh + " >/dev/null").code, 0);
+}
+
 TEST(Cli, BuildExportAndInfoOnAnAnalyticMesh) {
   const std::string mesh = test::temp_path("torus.off");
   {

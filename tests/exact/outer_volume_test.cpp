@@ -76,6 +76,59 @@ TEST(ExactObv, RationallyRotatedBoxHoldingTheWholeCube) {
   EXPECT_EQ(NefSolver(m).obv(b), expected);
 }
 
+// A tetrahedron far from the origin whose tip reaches a hair's breadth (less than one ulp of
+// its coordinates, ulp(1e6) = 2^-33 ≈ 1.2e-10) into a thin box. ClipSolver::obv culls faces by
+// their bounding boxes in double; the face's box centre 0.5 (lo + hi) - c is rounded at the
+// coordinates' scale, not the box's, so a cull padded only relative to the box's frame drops
+// the face and returns the whole box. The cases are those where 0.5 (lo + hi) rounds down, so
+// the rounded face box ends short of the box: any such case drops the face without the right
+// padding. The tip's cap inside the box has a positive volume, so OBV < vol(box), and the
+// Nef path, which culls nothing in double, must give the same rational.
+TEST(ExactObv, FaceReachingJustIntoAThinBoxFarFromTheOrigin) {
+  const double ulp = std::ldexp(1.0, -33);
+  int cases = 0;
+  for (int trial = 0; trial < 400 && cases < 3; ++trial) {
+    const double cx = 1000000.01, h0 = 0.01 + trial * 1.37e-7;
+    const Rational plane = Rational(cx) - Rational(h0);  // the box's -x face, exactly
+    double tip = plane.get_d();
+    while (Rational(tip) <= plane) tip = std::nextafter(tip, INFINITY);
+    if (Rational(Rational(tip) - plane) > Rational(3e-11)) continue;  // reaches in too far
+    double base = 0;
+    for (int k = 8591; k < 8700; k += 2) {  // base about 1e-6 behind the tip
+      base = tip - k * ulp;
+      if (Rational(base + tip) < Rational(base) + Rational(tip)) break;  // rounds down
+      base = 0;
+    }
+    if (base == 0) continue;
+    ++cases;
+    Mesh m;  // the tip at +x, outward
+    m.vertices = {Vec3(tip, 0, 0), Vec3(base, 1, 0), Vec3(base, -1, 1), Vec3(base, -1, -1)};
+    m.faces = {{0, 1, 2}, {0, 2, 3}, {0, 3, 1}, {1, 3, 2}};
+    Obb box;
+    box.center = Vec3(cx, 0, 0);
+    box.half = Vec3(h0, 10, 10);
+    const Rational whole = Rational(8) * Rational(h0) * Rational(10) * Rational(10);
+    const Rational clip = ClipSolver(m).obv(box);
+    EXPECT_LT(clip, whole) << "trial " << trial << ": the tip's cap was dropped";
+    EXPECT_EQ(clip, NefSolver(m).obv(box)) << "trial " << trial;
+  }
+  EXPECT_EQ(cases, 3) << "the sweep should find faces whose rounded bounds end short of the box";
+}
+
+// overlap_cells' contract: per box, its part inside earlier boxes. Three copies of one box:
+// the second and third each lie wholly inside earlier ones, so the cells hold 2 V (the overlap
+// term 3 V - V), although the points covered twice or more fill only V.
+TEST(ExactOmv, OverlapCellsSumToTheOverlapTermNotTheTwiceCoveredVolume) {
+  const Mesh m = far_tetrahedron();
+  const Obb b = aabox(Vec3(0, 0, 0), Vec3(2, 1, 1));
+  const ClipSolver clip(m);
+  Rational cells = 0;
+  for (const ConvexCell& c : clip.overlap_cells({b, b, b})) cells += c.volume();
+  EXPECT_EQ(cells, 4);
+  EXPECT_EQ(clip.omv({b, b, b}), 2);
+  EXPECT_TRUE(clip.overlap_cells({b}).empty());
+}
+
 TEST(ExactObv, CubeWithCavity) {
   const Mesh m = analytic::cube_with_cavity(4, 1, 3).mesh;
   // The cavity itself is all outside volume; a box around it has the cavity's 8 outside.
@@ -156,6 +209,14 @@ void expect_paths_agree(const Mesh& m, uint64_t seed, int sets) {
 TEST(ExactPaths, AgreeOnRandomBoxSetsOverAnalyticMeshes) {
   expect_paths_agree(analytic::polygonal_torus(1, 0.5, 0.75).mesh, 1, 15);
   expect_paths_agree(analytic::cube_with_cavity().mesh, 2, 15);
+}
+
+// The same far from the origin (DESIGN §6's offset regime): the coordinates' rounding is then
+// far larger than the boxes' own, which the double-precision culls must allow for.
+TEST(ExactPaths, AgreeOnRandomBoxSetsFarFromTheOrigin) {
+  Mesh m = analytic::polygonal_torus(1, 0.5, 0.75).mesh;
+  for (Vec3& v : m.vertices) v += Vec3(1e6, -3e6, 2e6);  // exact: small dyadics plus integers
+  expect_paths_agree(m, 3, 15);
 }
 
 class ExactPathsReal : public ::testing::TestWithParam<const char*> {};
