@@ -316,7 +316,10 @@ BoxPlan BoxPlanner::plan(const Obb& box, int m) const {
   } else {
     Aabb world;
     for (const Vec3& c : corners(box)) world.extend(c);
-    const Vec3 pad = Vec3::Constant(1e-9 * (world.hi - world.lo).norm());
+    // The corners are rounded at the scale of the coordinates, not of the box (a box of size
+    // 0.01 at 1e6 has corners off by 1e-10): the pad covers both, far above a few roundings.
+    const double scale = std::max(world.lo.cwiseAbs().maxCoeff(), world.hi.cwiseAbs().maxCoeff());
+    const Vec3 pad = Vec3::Constant(1e-9 * ((world.hi - world.lo).norm() + scale));
     world.lo -= pad;
     world.hi += pad;
     // Faces in mesh order, as without culling: the same plan, the same float blend order.
