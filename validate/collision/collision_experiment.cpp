@@ -167,6 +167,7 @@ struct Scene {
   dJointGroupID contacts = nullptr;
   dGeomID model = nullptr;
   uint64_t joints = 0;
+  double R = 1;  // the model's bounding radius: the scene's unit of length
 };
 
 constexpr int kMaxContactsPerPair = 4;
@@ -299,7 +300,9 @@ void near_callback(void* data, dGeomID o1, dGeomID o2) {
     contact.surface.mode = dContactBounce | dContactSoftCFM | dContactApprox1;
     contact.surface.mu = 0.5;
     contact.surface.bounce = 0.3;
-    contact.surface.bounce_vel = 0.05;
+    // Scale-free: a bounce threshold in units of R per second (velocities scale with R,
+    // gravity being 2 R/s^2); CFM, like ODE's ERP, is unitless once masses do not grow with R.
+    contact.surface.bounce_vel = 0.05 * s->R;
     contact.surface.soft_cfm = 1e-4;
     contact.geom = geoms[i];
     const dJointID j = dJointCreateContact(s->world, s->contacts, &contact);
@@ -362,6 +365,7 @@ void run_dynamic(QueryEngine& engine, const Tree& first, const ExperimentOptions
     top = std::max(top, corners[i].z());
     bottom = std::min(bottom, corners[i].z());
   }
+  scene.R = R;
   scene.world = dWorldCreate();
   dWorldSetGravity(scene.world, 0, 0, -2.0 * R);  // a drop of 4R takes 2 s
   dWorldSetQuickStepNumIterations(scene.world, 20);
@@ -392,13 +396,17 @@ void run_dynamic(QueryEngine& engine, const Tree& first, const ExperimentOptions
     Body b;
     b.body = dBodyCreate(scene.world);
     const Collider c = random_collider(rng, R * opt.collider_scale, Vec3::Zero(), Eigen::Matrix3d::Identity());
+    // Density 1 / R^3: a collider's mass depends on its size relative to R, not on the
+    // model's units, so forces scale with R like every length and the contacts' CFM keeps
+    // its meaning (the scene is the same at any scale; exactly so for powers of two).
+    const double density = 1.0 / (R * R * R);
     dMass mass;
     if (c.shape == ColliderShape::kSphere) {
       b.geom = dCreateSphere(space, c.radius);
-      dMassSetSphere(&mass, 1.0, c.radius);
+      dMassSetSphere(&mass, density, c.radius);
     } else {
       b.geom = dCreateBox(space, 2 * c.half[0], 2 * c.half[1], 2 * c.half[2]);
-      dMassSetBox(&mass, 1.0, 2 * c.half[0], 2 * c.half[1], 2 * c.half[2]);
+      dMassSetBox(&mass, density, 2 * c.half[0], 2 * c.half[1], 2 * c.half[2]);
     }
     dBodySetMass(b.body, &mass);
     dGeomSetBody(b.geom, b.body);
@@ -439,6 +447,11 @@ Status run_collision_experiment(const Mesh& mesh, const std::vector<NamedTree>& 
   if (options.colliders < 1) return Status::error("collide: need at least one collider");
   if (!(options.collider_scale >= 0.01 && options.collider_scale <= 10))  // NaN fails too
     return Status::error("collide: the collider scale must be within [0.01, 10]");
+  if (options.dynamic) {
+    // At most 10^9 steps; NaN fails every comparison.
+    if (!(options.step > 0 && options.step <= 1) || !(options.seconds >= 0 && options.seconds <= 1e9 * options.step))
+      return Status::error("collide: the time step must be in (0, 1] s and the simulated time in [0, 1e9 steps]");
+  }
   for (const NamedTree& t : trees) {
     Status s = validate_tree(*t.tree, t.name);
     if (!s) return s;
@@ -468,6 +481,16 @@ Status run_collision_experiment(const Mesh& mesh, const std::vector<NamedTree>& 
   else
     run_static(engine, *trees[0].tree, options);
   report->exact_fallbacks = exact_fallbacks() - fallbacks0;
+  // Colliders start 0.2 R to 4.2 R above the model, a fall of at least 0.45 s: a shorter run
+  // asks nothing, and "every answer agrees" would say nothing.
+  if (report->queries == 0) {
+    char why[160];
+    std::snprintf(why, sizeof why,
+                  "collide: no collider reached the model in %g simulated seconds (the first arrive after "
+                  "about 0.45 s); simulate longer",
+                  report->simulated_seconds);
+    return Status::error(why);
+  }
   return Status::ok();
 }
 

@@ -12,7 +12,10 @@
 // along the normal), no dynamics; exactly repeatable.
 // Per query, each tree's set of touching faces must equal brute force's; FCL replays the same
 // pose on FCL's own OBB tree and on each of our trees (fcl_referee.h).
-// Units: lengths in mesh units; sizes and gravity scale with the model's bounding radius R.
+// Units: lengths in mesh units. The scene is defined relative to the model's bounding radius R
+// (sizes, drop heights, gravity 2 R/s^2, the bounce threshold; masses do not grow with R^3), so
+// the model's units do not change it: scaling mesh and trees by a power of two gives the same
+// counts exactly.
 // Deterministic: same inputs and seed, same counts (wall times aside).
 #pragma once
 
@@ -84,9 +87,11 @@ struct NamedTree {
   const Tree* tree = nullptr;
 };
 
-// Checks each tree against the mesh (structure, face count, conservative boxes) and runs the
-// experiment. A failed Status names the tree; a disagreement with brute force is not a failed
-// Status but `report->brute_force_agrees == false`.
+// Checks each tree against the mesh (structure, face count, conservative boxes) and the options
+// (dynamic: 0 < step <= 1 s, at most 10^9 steps), and runs the experiment. A failed Status
+// names the tree or the option; a run in which no collider reached the model fails too (too
+// short to test anything). A disagreement with brute force is not a failed Status but
+// `report->brute_force_agrees == false`.
 Status run_collision_experiment(const Mesh& mesh, const std::vector<NamedTree>& trees,
                                 const ExperimentOptions& options, ExperimentReport* report);
 
