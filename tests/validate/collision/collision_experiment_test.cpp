@@ -259,7 +259,44 @@ TEST(CollideCli, StaticRunJsonAndBadInput) {
   r = vobb_cli("collide /nonexistent/mesh.off " + tree_path);
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("mesh.off"), std::string::npos) << r.err;
-  for (const std::string& p : {mesh_path, other_path, tree_path, out_path}) std::remove(p.c_str());
+  // Too short to reach the model (the colliders fall for at least 0.45 s): nothing was asked,
+  // so nothing is reported as agreeing.
+  r = vobb_cli("collide " + mesh_path + " " + tree_path + " --colliders 20 --seconds 0.2");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_NE(r.err.find("no collider reached the model"), std::string::npos) << r.err;
+
+  // Text: where FCL did not run, its columns say "-", not a count of 0 or a change of -100 %.
+  // A root with a single child (valid for us, not for FCL's binary BVH) is skipped by FCL with
+  // a note; the baseline after it gets FCL counts but no change against the first tree.
+  Tree single = baseline(torus, 0);
+  TreeNode child = single.nodes[0];
+  child.id = 1;
+  child.parent = 0;
+  child.level = 1;
+  single.nodes[0].children = {1};
+  single.nodes.push_back(child);
+  single.depth = 1;
+  const std::string single_path = test::temp_path("single_child.json");
+  ASSERT_TRUE(write_tree(single, single_path));
+  r = vobb_cli("collide " + mesh_path + " " + single_path + " " + tree_path + " --static --colliders 20");
+  EXPECT_EQ(r.code, 0) << r.err;
+  std::istringstream lines(r.out);
+  std::string line;
+  int rows = 0;
+  while (std::getline(lines, line)) {
+    if (line.rfind(single_path, 0) == 0) {  // no FCL at all
+      ++rows;
+      EXPECT_NE(line.find("              -              -         -         -"), std::string::npos) << line;
+    } else if (line.rfind(tree_path, 0) == 0) {  // FCL counts, no FCL change
+      ++rows;
+      EXPECT_NE(line.find("         -         -"), std::string::npos) << line;
+      EXPECT_EQ(line.find("-100.00"), std::string::npos) << line;
+    }
+  }
+  EXPECT_EQ(rows, 2) << r.out;
+  EXPECT_NE(r.out.find("FCL skipped: " + single_path + ": a node has a single child"), std::string::npos) << r.out;
+  for (const std::string& p : {mesh_path, other_path, tree_path, out_path, single_path}) std::remove(p.c_str());
 }
 
 }  // namespace
