@@ -66,7 +66,7 @@ class QueryEngine {
  public:
   QueryEngine(const Mesh& mesh, const std::vector<NamedTree>& trees, const ExperimentOptions& opt,
               ExperimentReport* report)
-      : mesh_(mesh), scale_(mesh_scale(mesh)), report_(report) {
+      : mesh_(mesh), scale_(mesh_scale(mesh)), report_(report), tamper_(opt.tamper_answer) {
     for (const NamedTree& t : trees) traversals_.emplace_back(mesh, *t.tree);
     if (opt.fcl) {
       fcl_own_ = FclModel::fcl_own(mesh);
@@ -96,6 +96,7 @@ class QueryEngine {
       const auto t1 = Clock::now();
       traversals_[i].query(pc, &faces_, &tr.counts);
       tr.narrow_phase_seconds += std::chrono::duration<double>(Clock::now() - t1).count();
+      if (tamper_) tamper_(i, report_->queries, &faces_);
       if (faces_ != brute_) {
         ++tr.disagreements;
         if (report_->brute_force_agrees) {
@@ -125,6 +126,7 @@ class QueryEngine {
   const Mesh& mesh_;
   const double scale_;
   ExperimentReport* report_;
+  const std::function<void(size_t, uint64_t, std::vector<int32_t>*)> tamper_;
   std::vector<TreeTraversal> traversals_;
   std::unique_ptr<FclModel> fcl_own_;
   std::vector<std::unique_ptr<FclModel>> fcl_trees_;

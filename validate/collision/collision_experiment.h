@@ -47,6 +47,10 @@ struct ExperimentOptions {
   // some scales of the model: its tolerances are absolute). The message is one line. Unset:
   // the message goes to stderr and the process aborts, as ODE itself would.
   std::function<void(const std::string&)> on_physics_failure;
+  // For tests of the check itself: called with the tree's index, the query's number (from 1)
+  // and that tree's answer (its touching faces, sorted) before the answer is compared with
+  // brute force; it may change the answer. Empty: answers are compared as found.
+  std::function<void(size_t tree, uint64_t query, std::vector<int32_t>* faces)> tamper_answer;
 };
 
 struct FclCounts {

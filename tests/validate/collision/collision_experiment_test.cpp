@@ -102,6 +102,31 @@ TEST(CollisionExperiment, DynamicSceneAgreesWithBruteForce) {
 
 // FCL, replaying the poses on the baseline tree loaded through our splitter and fitter, and on
 // its own OBB tree, gives the same yes/no answer as our traversal on every query.
+// The check can fail: a tree whose answers are changed (one face dropped from every touching
+// answer, one added to every clear one) disagrees on every query, and only that tree; the
+// report says so and names it.
+TEST(CollisionExperiment, ChangedAnswersAreCaughtOnEveryQuery) {
+  const Mesh mesh = analytic::polygonal_torus().mesh;
+  const Tree base = baseline(mesh, 4), loose = inflated(base);
+  ExperimentOptions opt;
+  opt.dynamic = false;
+  opt.colliders = 60;
+  opt.fcl = false;
+  opt.tamper_answer = [](size_t tree, uint64_t, std::vector<int32_t>* faces) {
+    if (tree != 1) return;
+    if (faces->empty())
+      faces->push_back(0);
+    else
+      faces->pop_back();
+  };
+  ExperimentReport r;
+  ASSERT_TRUE(run_collision_experiment(mesh, {{"base", &base}, {"loose", &loose}}, opt, &r));
+  EXPECT_FALSE(r.brute_force_agrees);
+  EXPECT_EQ(r.trees[0].disagreements, 0u);
+  EXPECT_EQ(r.trees[1].disagreements, r.queries);
+  EXPECT_EQ(r.first_disagreement.rfind("loose: query 1 ", 0), 0u) << r.first_disagreement;
+}
+
 TEST(CollisionExperiment, FclReplayOfBaselineGivesOurAnswers) {
   const Mesh mesh = analytic::polygonal_torus().mesh;
   const Tree base = baseline(mesh, 4);
