@@ -143,6 +143,26 @@ TEST(CollisionExperiment, FclReplayOfBaselineGivesOurAnswers) {
   EXPECT_GT(f.tree_node_bv_tests, 0u);
 }
 
+// A node of more than two children reaches FCL's binary BVH through padding nodes
+// (fcl_referee.h): the loaded arity-4 tree still holds our partition, so FCL's answers and
+// touching faces are ours, and its tests on our nodes are fewer than its raw count.
+TEST(CollisionExperiment, FclReplayOfAnArityFourTree) {
+  const Mesh mesh = analytic::polygonal_torus().mesh;
+  ObbTreeOptions opt;
+  opt.depth = 3;
+  opt.arity = 4;
+  Tree quad = build_obbtree(mesh, opt);
+  ASSERT_GT(quad.nodes[0].children.size(), 2u);
+  const ExperimentReport r = run(mesh, {{"quad", &quad}}, false, 300, 6);
+  ASSERT_TRUE(r.brute_force_agrees);
+  const FclCounts& f = r.trees[0].fcl;
+  ASSERT_TRUE(f.available) << f.note;
+  EXPECT_EQ(f.answer_disagreements, 0u);
+  EXPECT_EQ(f.face_disagreements, 0u);
+  EXPECT_GT(f.tree_node_bv_tests, 0u);
+  EXPECT_LT(f.tree_node_bv_tests, f.bv_tests);
+}
+
 TEST(CollisionExperiment, SameSeedSameCounts) {
   const Mesh mesh = analytic::polygonal_torus().mesh;
   const Tree base = baseline(mesh, 4);
