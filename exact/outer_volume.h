@@ -10,8 +10,8 @@
 //    vol(C ∩ X) = sum_T sign vol(C ∩ prism_T). OBV works in the box's own frame, where most
 //    faces are closed forms (box_obv.cpp). OMV = sum OBV - sum vol(S \ X) over convex cells
 //    S that split each box's part inside earlier boxes (half-space splits, disjoint within one
-//    box; d = -z there, each prism a convex clip). Only faces whose column meets a cell are visited; a layer whose
-//    boxes overlap nothing does no union work.
+//    box; d = -z there, each prism a convex clip). Only faces whose column meets a cell are
+//    visited; a layer whose boxes overlap nothing does no union work.
 //  - NefSolver (path a): CGAL Nef polyhedra, (U_j O_j) - X, then the volume.
 // Precondition for both: the mesh is a solid (check_solidity passed). Neither creates a GL
 // context nor reads a file.
