@@ -1,8 +1,8 @@
 #include "app/collide_command.h"
 
+#include <fmt/printf.h>
 #include <nlohmann/json.hpp>
 
-#include <cstdarg>
 #include <cstdio>
 #include <cstdlib>
 
@@ -76,48 +76,34 @@ std::string format_json(const CollideFlags& f, const collision::ExperimentReport
   return j.dump(2) + "\n";
 }
 
-// printf into a string of any length (a tree's file name can be long).
-std::string format(const char* fmt, ...) __attribute__((format(printf, 1, 2)));
-std::string format(const char* fmt, ...) {
-  va_list ap, again;
-  va_start(ap, fmt);
-  va_copy(again, ap);
-  const int n = std::vsnprintf(nullptr, 0, fmt, ap);
-  va_end(ap);
-  std::string out(n > 0 ? static_cast<size_t>(n) : 0, '\0');
-  if (n > 0) std::vsnprintf(out.data(), out.size() + 1, fmt, again);
-  va_end(again);
-  return out;
-}
-
 std::string format_text(const CollideFlags& f, const collision::ExperimentReport& r) {
   using collision::reduction_pct;
   using ull = unsigned long long;
   std::string out;
   const double unit = r.dynamic ? r.simulated_seconds : static_cast<double>(r.queries);
-  out += format("%s: %llu queries (%llu touching), %.3g s simulated, collider scale %g; brute force agrees: %s\n",
+  out += fmt::sprintf("%s: %llu queries (%llu touching), %.3g s simulated, collider scale %g; brute force agrees: %s\n",
                 r.dynamic ? "dynamic" : "static", static_cast<ull>(r.queries), static_cast<ull>(r.touching_queries),
                 r.simulated_seconds, f.collider_scale,
                 r.brute_force_agrees ? "yes" : ("NO (" + r.first_disagreement + ")").c_str());
-  out += format("%-28s %14s %10s %14s %10s %10s %9s %14s %14s %9s %9s\n", "tree", "box tests",
+  out += fmt::sprintf("%-28s %14s %10s %14s %10s %10s %9s %14s %14s %9s %9s\n", "tree", "box tests",
                 r.dynamic ? "per s" : "per query", "leaf tests", "contacts", "narrow s", "change %", "fcl bv tests",
                 "fcl on nodes", "fcl %", "nodes %");
   const auto& t0 = r.trees.front();
   for (const auto& t : r.trees) {
-    out += format("%-28s %14llu %10.4g %14llu %10llu %10.3f %+9.2f", t.name.c_str(), static_cast<ull>(t.counts.box_tests),
+    out += fmt::sprintf("%-28s %14llu %10.4g %14llu %10llu %10.3f %+9.2f", t.name.c_str(), static_cast<ull>(t.counts.box_tests),
                   t.counts.box_tests / unit, static_cast<ull>(t.counts.leaf_tests), static_cast<ull>(t.counts.contacts),
                   t.narrow_phase_seconds, -reduction_pct(t0.counts.box_tests, t.counts.box_tests));
     // FCL's columns only where it ran on this tree, its changes only where it ran on the first.
     if (!t.fcl.available) {
-      out += format(" %14s %14s %9s %9s\n", "-", "-", "-", "-");
+      out += fmt::sprintf(" %14s %14s %9s %9s\n", "-", "-", "-", "-");
       continue;
     }
-    out += format(" %14llu %14llu", static_cast<ull>(t.fcl.bv_tests), static_cast<ull>(t.fcl.tree_node_bv_tests));
+    out += fmt::sprintf(" %14llu %14llu", static_cast<ull>(t.fcl.bv_tests), static_cast<ull>(t.fcl.tree_node_bv_tests));
     if (t0.fcl.available)
-      out += format(" %+9.2f %+9.2f\n", -reduction_pct(t0.fcl.bv_tests, t.fcl.bv_tests),
+      out += fmt::sprintf(" %+9.2f %+9.2f\n", -reduction_pct(t0.fcl.bv_tests, t.fcl.bv_tests),
                     -reduction_pct(t0.fcl.tree_node_bv_tests, t.fcl.tree_node_bv_tests));
     else
-      out += format(" %9s %9s\n", "-", "-");
+      out += fmt::sprintf(" %9s %9s\n", "-", "-");
   }
   for (const auto& t : r.trees)
     if (!t.fcl.available && !t.fcl.note.empty()) out += "FCL skipped: " + t.fcl.note + "\n";
@@ -126,14 +112,14 @@ std::string format_text(const CollideFlags& f, const collision::ExperimentReport
     out += "  " + t.name + ":";
     for (size_t l = 0; l < t.counts.box_tests_by_level.size(); ++l) {
       const uint64_t n = t.counts.box_tests_by_level[l];
-      out += format(" %llu", static_cast<ull>(n));
+      out += fmt::sprintf(" %llu", static_cast<ull>(n));
       if (&t != &t0 && l < t0.counts.box_tests_by_level.size())
-        out += format(" (%+.1f)", -reduction_pct(t0.counts.box_tests_by_level[l], n));
+        out += fmt::sprintf(" (%+.1f)", -reduction_pct(t0.counts.box_tests_by_level[l], n));
     }
     out += "\n";
   }
   if (r.fcl_own.available)
-    out += format("FCL's own OBB tree: %llu bv tests, %llu leaf tests\n", static_cast<ull>(r.fcl_own.bv_tests),
+    out += fmt::sprintf("FCL's own OBB tree: %llu bv tests, %llu leaf tests\n", static_cast<ull>(r.fcl_own.bv_tests),
                   static_cast<ull>(r.fcl_own.leaf_tests));
   return out;
 }
