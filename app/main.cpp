@@ -71,6 +71,12 @@ struct BuildFlags {
   double time_budget = 0;    // seconds; 0: none
 };
 
+// Which GL the run got, on stderr (the library prints nothing).
+void say_renderer(const vobb::GlContext& gl) {
+  std::fprintf(stderr, "vobb: GL renderer: %s (EGL %s, OpenGL %s)\n", gl.renderer().c_str(), gl.platform().c_str(),
+               gl.version().c_str());
+}
+
 // The OBV estimator that the variational builder runs in its loop. auto: the GL estimator on an
 // EGL device (a GPU); on llvmpipe, or without a context, the CPU twin, which is faster there
 // (docs/BENCHMARKS.md) and gives the same texels in double.
@@ -81,6 +87,7 @@ vobb::Status make_estimator(const vobb::Mesh& mesh, const BuildFlags& f, std::un
     if (!s && f.backend == "gl") return s;
     if (s && f.m > (*gl)->max_m())
       return vobb::Status::error("--m " + std::to_string(f.m) + " exceeds the GL estimator's limit");
+    if (s && !f.quiet) say_renderer((*gl)->context());
   }
   const int m = f.m;
   if (*gl) {
@@ -339,6 +346,7 @@ int run_obv(const std::string& mesh_path, const std::string& boxes_path, const s
       std::fprintf(stderr, "vobb: warning: %s; using the CPU twin instead\n", s.message().c_str());
       want_cpu = true;
     } else {
+      say_renderer(gl->context());
       for (int m : ms)
         if (m > gl->max_m()) {
           const vobb::Status too_big = vobb::Status::error("--m " + std::to_string(m) + " exceeds the GL estimator's limit " +
@@ -491,6 +499,7 @@ int run_compare(const std::string& mesh_path, const BuildFlags& flags, bool json
     if (!gl) {
       s = vobb::GlContext::create(&own);
       if (!s) return refuse(vobb::Status::error(figure_path + ": cannot draw the figure: " + s.message()));
+      if (!flags.quiet) say_renderer(*own);
     }
     const std::vector<vobb::FigureRow> rows = {{"obbtree", &r[0].tree}, {"variational", &r[1].tree}};
     vobb::FigureOptions fo;

@@ -5,10 +5,8 @@
 #define GL_GLEXT_PROTOTYPES 1
 #include <GL/glcorearb.h>
 
-#include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <mutex>
 #include <vector>
 
 namespace vobb {
@@ -122,11 +120,7 @@ Status GlContext::create(std::unique_ptr<GlContext>* out, bool device_only) {
   const GLubyte* renderer = glGetString(GL_RENDERER);
   const GLubyte* version = glGetString(GL_VERSION);
   g->renderer_ = renderer != nullptr ? reinterpret_cast<const char*>(renderer) : "unknown";
-  static std::once_flag logged;
-  std::call_once(logged, [&] {
-    std::fprintf(stderr, "vobb: GL renderer: %s (EGL %s, OpenGL %s)\n", g->renderer_.c_str(), g->platform_.c_str(),
-                 version != nullptr ? reinterpret_cast<const char*>(version) : "?");
-  });
+  g->version_ = version != nullptr ? reinterpret_cast<const char*>(version) : "unknown";
   *out = std::move(g);
   return Status::ok();
 }

@@ -3,7 +3,8 @@
 //
 // Order of attempts: an EGL device that is a real GPU (EGL_EXT_device_enumeration; Mesa's
 // software device is skipped), then Mesa's surfaceless platform (llvmpipe on a machine without
-// a GPU). The renderer string is logged once per process on stderr.
+// a GPU). The library prints nothing: renderer(), platform() and version() are for the caller
+// to report.
 // The environment variable VOBB_GL=off refuses to make any context (to run without GL, or to
 // exercise the fallback); VOBB_EGL_PLATFORM=device|surfaceless tries only that platform.
 #pragma once
@@ -29,12 +30,13 @@ class GlContext {
   void make_current() const;
   const std::string& renderer() const { return renderer_; }
   const std::string& platform() const { return platform_; }  // "device" or "surfaceless"
+  const std::string& version() const { return version_; }    // GL_VERSION
 
  private:
   GlContext() = default;
   void* display_ = nullptr;
   void* context_ = nullptr;
-  std::string renderer_, platform_;
+  std::string renderer_, platform_, version_;
 };
 
 // Builds a GL program from (stage type, GLSL source) pairs, e.g. {{GL_VERTEX_SHADER, vs},

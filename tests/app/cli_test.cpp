@@ -128,10 +128,9 @@ TEST(CliBadInput, NonFiniteAndNegativeNumbersAndOddNames) {
   EXPECT_NE(odd.err.find("no\\x0asuch.off"), std::string::npos) << odd.err;
 }
 
-// ODE's tolerances are absolute; at 1e22 its quaternion normalisation fails an assertion.
+// ODE's tolerances are absolute: at 1e60 (the scale-free scene runs at 1e22) it fails an assertion.
 // The run ends with one line naming ODE's message, exit 2, and no report file.
 TEST(CliBadInput, PhysicsFailureIsOneLineNotAnAbort) {
-  // ODE's fixed tolerances: the scale-free scene still trips them at this scale.
   const std::string mesh = write_cube("huge_cube.off", 1e60);
   const std::string tree = test::temp_path("huge_tree.json");
   ASSERT_EQ(vobb_cli("build " + mesh + " -o " + tree + " --method obbtree --depth 2").code, 0);
@@ -259,6 +258,25 @@ TEST(Cli, BuildExportAndInfoOnAnAnalyticMesh) {
   r = vobb_cli("certify " + mesh + " " + tree + " --quiet");
   EXPECT_EQ(r.code, 0) << r.out << r.err;
   for (const std::string& p : {mesh, tree, boxes, margin_tree, plain_tree}) std::remove(p.c_str());
+}
+
+// The library prints nothing about GL; the command line names the renderer once on stderr,
+// and --quiet leaves it out (the build's closing summary line stays).
+TEST(Cli, GlRendererIsNamedByTheCommandLineOnlyWhenNotQuiet) {
+  const std::string mesh = write_cube("gl_cube.off", 1);
+  const std::string tree = test::temp_path("gl_cube_tree.json");
+  const std::string flags = " -o " + tree + " --method variational --depth 1 --m 4 --backend gl";
+  CliRun r = vobb_cli("build " + mesh + flags);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const size_t at = r.err.find("vobb: GL renderer: ");
+  ASSERT_NE(at, std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("GL renderer", at + 19), std::string::npos) << "named twice: " << r.err;
+  r = vobb_cli("build " + mesh + flags + " --quiet");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.err.find("GL renderer"), std::string::npos) << r.err;
+  EXPECT_EQ(line_count(r.err), 1u) << r.err;  // the summary line only
+  std::remove(mesh.c_str());
+  std::remove(tree.c_str());
 }
 
 // A variational build killed (SIGKILL) once its checkpoint holds two split levels, then started

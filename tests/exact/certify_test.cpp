@@ -3,6 +3,10 @@
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
 
+#include <atomic>
+#include <stdexcept>
+#include <string>
+
 #include "common/io/mesh_io.h"
 #include "common/tree.h"
 #include "data/analytic_meshes.h"
@@ -138,6 +142,47 @@ TEST(Certify, SameRationalsForAnyThreadCount) {
   EXPECT_EQ(four.containment.violations, one.containment.violations);
   EXPECT_EQ(four.containment.checked_pairs, one.containment.checked_pairs);
   EXPECT_TRUE(one.ok());
+}
+
+// A failure on any thread (here the caller's progress callback, which runs on whichever thread
+// finished a layer) leaves certify as the same exception, on one thread or several, and a
+// later call on the same inputs still gives the full certificate: no terminate, no lost error.
+TEST(Certify, FailureOnAnyThreadReachesTheCaller) {
+  const Mesh m = analytic::polygonal_torus().mesh;
+  ObbTreeOptions o;
+  o.depth = 4;
+  const Tree t = build_obbtree(m, o);
+  CertifyOptions failing;
+  failing.path = OmvPath::kBoth;
+  std::atomic<int> layer_lines{0};
+  failing.progress = [&](const std::string& line) {
+    if (line.rfind("layer ", 0) == 0) {
+      ++layer_lines;
+      throw std::runtime_error("stop at: " + line);
+    }
+  };
+  for (int threads : {1, 4}) {
+    layer_lines = 0;
+    tbb::task_arena arena(threads);
+    bool thrown = false;
+    arena.execute([&] {
+      try {
+        certify(m, t, failing);
+      } catch (const std::runtime_error& e) {
+        thrown = std::string(e.what()).rfind("stop at: layer ", 0) == 0;
+      }
+    });
+    EXPECT_TRUE(thrown) << threads << " threads";
+    // Each thread stops at its first finished layer and no thread takes a layer afterwards, so
+    // at most one line per thread arrives out of the tree's 5 layers.
+    EXPECT_GE(layer_lines.load(), 1) << threads << " threads";
+    EXPECT_LE(layer_lines.load(), threads) << threads << " threads";
+  }
+  CertifyOptions plain;
+  plain.path = OmvPath::kBoth;
+  const Certificate c = certify(m, t, plain);
+  EXPECT_EQ(c.layers.size(), 5u);
+  EXPECT_TRUE(c.ok());
 }
 
 TEST(Certify, RootLayerOfTheCubeIsExact) {
