@@ -1,15 +1,19 @@
 #!/usr/bin/env python3
-"""Writes OFF meshes whose faces crowd around one vertex or one edge.
+"""Writes OFF meshes whose faces crowd around one vertex or one edge, or cross each other.
 
 double-cone K: a closed double cone, K triangles from each of two apexes to a unit circle.
 Each apex is shared by K faces, where a search over overlapping face boxes is quadratic
 (every face's box holds its apex).
 crowded-edge K: K triangles on one edge, their third vertices on a circle around it (a
 non-manifold edge; the faces meet only along it).
+spikes K: K closed thin tetrahedra (4 K faces), each from a random point on the unit sphere
+through the centre to the opposite side, so nearly every pair of spikes crosses near the centre:
+about 4 K^2 intersecting pairs of faces (crossing sheets, where counting them all is quadratic).
 Used by vobb-bench-self-intersections.
-Usage: fan_meshes.py double-cone|crowded-edge K OUT.off
+Usage: fan_meshes.py double-cone|crowded-edge|spikes K OUT.off
 """
 import math
+import random
 import sys
 
 
@@ -29,8 +33,35 @@ def crowded_edge(k):
     return verts, [(0, 1, 2 + i) for i in range(k)]
 
 
+def spikes(k):
+    rng = random.Random(1)
+    verts, faces = [], []
+    for _ in range(k):
+        z = rng.uniform(-1, 1)
+        t = rng.uniform(0, 2 * math.pi)
+        r = math.sqrt(1 - z * z)
+        d = (r * math.cos(t), r * math.sin(t), z)
+        a = (1.0, 0.0, 0.0) if abs(d[0]) < 0.9 else (0.0, 1.0, 0.0)
+        u = cross(d, a)
+        n = math.sqrt(sum(c * c for c in u))
+        u = tuple(c / n for c in u)
+        v = cross(d, u)
+        w = 0.01  # the base's radius
+        b = len(verts)
+        verts.append(d)
+        for j in range(3):
+            c, s = math.cos(2 * math.pi * j / 3), math.sin(2 * math.pi * j / 3)
+            verts.append(tuple(-d[i] + w * (c * u[i] + s * v[i]) for i in range(3)))
+        faces += [(b, b + 1, b + 2), (b, b + 2, b + 3), (b, b + 3, b + 1), (b + 1, b + 3, b + 2)]
+    return verts, faces
+
+
+def cross(p, q):
+    return (p[1] * q[2] - p[2] * q[1], p[2] * q[0] - p[0] * q[2], p[0] * q[1] - p[1] * q[0])
+
+
 def main():
-    shapes = {"double-cone": double_cone, "crowded-edge": crowded_edge}
+    shapes = {"double-cone": double_cone, "crowded-edge": crowded_edge, "spikes": spikes}
     if len(sys.argv) != 4 or sys.argv[1] not in shapes:
         sys.exit(__doc__)
     verts, faces = shapes[sys.argv[1]](int(sys.argv[2]))

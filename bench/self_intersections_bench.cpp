@@ -2,8 +2,9 @@
 // replaced, which tests every pair of faces whose bounding boxes overlap, on the same mesh in
 // one run. Both must find the same number of intersecting pairs, or the program fails. Median
 // of `--repeat` runs; the box-pair search is skipped (its column says so) once one of its runs
-// takes longer than `--reference-limit` seconds.
-// Usage: vobb-bench-self-intersections [--repeat N] [--reference-limit S] MESH...
+// takes longer than `--reference-limit` seconds. With `--stop-at P` it also times the search
+// stopped at P pairs (what check_solidity runs, with P = kSelfIntersectionsCounted).
+// Usage: vobb-bench-self-intersections [--repeat N] [--reference-limit S] [--stop-at P] MESH...
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -48,14 +49,17 @@ size_t box_pairs(const vobb::Mesh& m, const std::vector<char>& skip) {
 int main(int argc, char** argv) {
   int repeat = 5;
   double limit = 60.0;
+  size_t stop_at = 0;
   std::vector<std::string> meshes;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--repeat") && i + 1 < argc) repeat = std::max(1, std::atoi(argv[++i]));
     else if (!std::strcmp(argv[i], "--reference-limit") && i + 1 < argc) limit = std::atof(argv[++i]);
+    else if (!std::strcmp(argv[i], "--stop-at") && i + 1 < argc) stop_at = std::strtoull(argv[++i], nullptr, 10);
     else meshes.push_back(argv[i]);
   }
-  std::printf("| mesh | faces | most faces at a vertex | pairs | search s | exact tests | box-pair search s | box-pair / search |\n");
-  std::printf("|---|---|---|---|---|---|---|---|\n");
+  std::printf("| mesh | faces | most faces at a vertex | pairs | search s | exact tests | box-pair search s | box-pair / search |%s\n",
+              stop_at ? " search stopped at P s | its pairs | search / stopped |" : "");
+  std::printf("|---|---|---|---|---|---|---|---|%s\n", stop_at ? "---|---|---|" : "");
   for (const std::string& path : meshes) {
     vobb::LoadedMesh lm;
     const vobb::Status s = vobb::load_mesh(path, &lm);
@@ -88,9 +92,24 @@ int main(int argc, char** argv) {
     const double tn = median(t_new);
     const bool old_done = t_old.size() == static_cast<size_t>(repeat);
     const double to = old_done ? median(t_old) : t_old.back();
-    std::printf("| %s | %zu | %d | %zu | %.3f | %zu | %s%.3f | %s%.1f |\n", path.c_str(), m.faces.size(),
+    std::printf("| %s | %zu | %d | %zu | %.3f | %zu | %s%.3f | %s%.1f |", path.c_str(), m.faces.size(),
                 *std::max_element(valence.begin(), valence.end()), found.pairs, tn, found.exact_tests,
                 old_done ? "" : "> ", to, old_done ? "" : "> ", to / tn);
+    if (stop_at) {
+      vobb::SelfIntersectionSearch cut;
+      std::vector<double> t_cut;
+      for (int r = 0; r < repeat; ++r)
+        t_cut.push_back(seconds([&] { cut = vobb::find_self_intersections(m, skip, stop_at); }));
+      // Stopped or not, the pairs it found are the full search's first ones: never more.
+      if (cut.pairs > found.pairs || (!cut.stopped && cut.pairs != found.pairs)) {
+        std::fprintf(stderr, "%s: the stopped search found %zu pairs, the full one %zu\n", path.c_str(),
+                     cut.pairs, found.pairs);
+        return 1;
+      }
+      const double tc = median(t_cut);
+      std::printf(" %.3f | %s%zu | %.1f |", tc, cut.stopped ? ">= " : "", cut.pairs, tn / tc);
+    }
+    std::printf("\n");
     std::fflush(stdout);
   }
   return 0;

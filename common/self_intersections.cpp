@@ -412,12 +412,20 @@ bool faces_intersect(const Mesh& mesh, size_t f, size_t g) {
                                       s[(gi[0] + 1) % 3], s[(gi[0] + 2) % 3]);
 }
 
-SelfIntersectionSearch find_self_intersections(const Mesh& mesh, const std::vector<char>& skip) {
+SelfIntersectionSearch find_self_intersections(const Mesh& mesh, const std::vector<char>& skip,
+                                               size_t stop_at) {
   VOBB_ASSERT(skip.size() == mesh.faces.size(), "find_self_intersections: one skip flag per face");
   SelfIntersectionSearch out;
+  // Once stopped, every loop below ends at its next check and no tree descends further.
+  auto done = [&] { return out.stopped; };
+  auto found = [&](size_t n) {
+    out.pairs += n;
+    if (stop_at > 0 && out.pairs >= stop_at) out.stopped = true;
+  };
   auto decide = [&](int32_t f, int32_t g) {
+    if (out.stopped) return;
     ++out.exact_tests;
-    if (faces_intersect(mesh, f, g)) ++out.pairs;
+    if (faces_intersect(mesh, f, g)) found(1);
   };
   std::vector<int32_t> faces;
   for (size_t f = 0; f < mesh.faces.size(); ++f)
@@ -435,12 +443,12 @@ SelfIntersectionSearch find_self_intersections(const Mesh& mesh, const std::vect
       }
     std::sort(recs.begin(), recs.end());
     std::vector<int32_t> third;
-    for (size_t i = 0; i < recs.size();) {
+    for (size_t i = 0; i < recs.size() && !done();) {
       size_t j = i + 1;
       while (j < recs.size() && recs[j][0] == recs[i][0] && recs[j][1] == recs[i][1]) ++j;
       const int32_t lo = recs[i][0], hi = recs[i][1];
       if (j - i <= kSmallEdge) {
-        for (size_t x = i; x < j; ++x)
+        for (size_t x = i; x < j && !done(); ++x)
           for (size_t y = x + 1; y < j; ++y) {
             const Face& F = mesh.faces[recs[x][2]];
             ++out.filter_steps;
@@ -454,7 +462,7 @@ SelfIntersectionSearch find_self_intersections(const Mesh& mesh, const std::vect
           const Face& F = mesh.faces[recs[x][2]];
           third.push_back(F[0] + F[1] + F[2] - lo - hi);
         }
-        out.pairs += pairs_in_same_half_plane(mesh, lo, hi, third, &out.filter_steps);
+        found(pairs_in_same_half_plane(mesh, lo, hi, third, &out.filter_steps));
       }
       i = j;
     }
@@ -470,7 +478,7 @@ SelfIntersectionSearch find_self_intersections(const Mesh& mesh, const std::vect
     for (int32_t f : faces)
       for (int32_t v : mesh.faces[f]) around[fill[v]++] = f;
     std::vector<Aabb> cones;
-    for (size_t v = 0; v < mesh.vertices.size(); ++v) {
+    for (size_t v = 0; v < mesh.vertices.size() && !done(); ++v) {
       const int32_t* fan = around.data() + start[v];
       const int32_t k = start[v + 1] - start[v];
       if (k < 2) continue;
@@ -482,7 +490,7 @@ SelfIntersectionSearch find_self_intersections(const Mesh& mesh, const std::vect
                             mesh.vertices[F[(c + 2) % 3]]);
       }
       if (k <= kSmallFan) {  // the usual vertex: a tree would cost more than it saves
-        for (int32_t i = 0; i < k; ++i)
+        for (int32_t i = 0; i < k && !done(); ++i)
           for (int32_t j = i + 1; j < k; ++j) {
             ++out.filter_steps;
             if (cones[i].overlaps(cones[j]) &&
@@ -496,14 +504,14 @@ SelfIntersectionSearch find_self_intersections(const Mesh& mesh, const std::vect
       // faces, the c^2 / 2 such pairs would otherwise all pass the cone filter).
       const std::vector<int32_t> fan_faces(fan, fan + k);
       const FaceTree tree(mesh, fan_faces, cones);
-      for (int32_t i = 0; i < k; ++i) {
+      for (int32_t i = 0; i < k && !done(); ++i) {
         const Face& F = mesh.faces[fan[i]];
         std::array<int32_t, 3> skip = F;
         for (int32_t& x : skip)
           if (x == static_cast<int32_t>(v)) x = -1;
         const Aabb& cone = cones[i];
         tree.query(
-            fan[i], skip, &out.filter_steps, [&](const Aabb& b) { return b.overlaps(cone); },
+            fan[i], skip, &out.filter_steps, [&](const Aabb& b) { return !done() && b.overlaps(cone); },
             [&](int32_t g, const Aabb& box) {
               if (box.overlaps(cone) && shared_vertices(F, mesh.faces[g]) == 1) decide(fan[i], g);
             });
@@ -520,11 +528,12 @@ SelfIntersectionSearch find_self_intersections(const Mesh& mesh, const std::vect
     const Aabb all = mesh.bounds();  // S for the separator: no coordinate exceeds it
     const double largest = std::max(max_abs(all.lo), max_abs(all.hi));
     for (int32_t f : faces) {
+      if (done()) break;
       const Face& F = mesh.faces[f];
       const Vec3 t[3] = {mesh.vertices[F[0]], mesh.vertices[F[1]], mesh.vertices[F[2]]};
       const TriangleSeparator sep(t, mesh.face_bounds(f), largest);
       tree.query(
-          f, F, &out.filter_steps, [&](const Aabb& b) { return sep.may_meet(b); },
+          f, F, &out.filter_steps, [&](const Aabb& b) { return !done() && sep.may_meet(b); },
           [&](int32_t g, const Aabb& box) {
             if (shared_vertices(F, mesh.faces[g]) == 0 && sep.may_meet(box)) decide(f, g);
           });

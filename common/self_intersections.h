@@ -20,7 +20,10 @@
 //     (a separating-axis test) and pruned at subtrees whose faces all list one of the query's
 //     vertices.
 // Meshes can still be made where the pairs that meet, or nearly meet, number n^2 (crossing
-// sheets); then the count costs that much.
+// sheets); then the count costs that much. A caller that only needs to know that there are
+// many can stop the search once it has found `stop_at` pairs: the pairs that meet then cost
+// no more than that, while pairs that nearly meet (the filters pass them, the exact test says
+// no) cannot be cut short.
 #pragma once
 
 #include <cstddef>
@@ -34,13 +37,16 @@ struct SelfIntersectionSearch {
   size_t pairs = 0;         // pairs of faces that intersect
   size_t exact_tests = 0;   // pairs decided by exact predicates
   size_t filter_steps = 0;  // boxes, tree nodes and cones looked at by the filters
+  bool stopped = false;     // stop_at was reached: `pairs` (>= stop_at) is a lower bound
 };
 
 // Counts the intersecting pairs among the faces f with skip[f] == 0 (skip has one entry per
 // face). Preconditions: every coordinate is finite, and every face not skipped has three
 // distinct, non-collinear vertices (check_solidity skips degenerate faces). Faces listing the
-// same three vertices count once as a pair. Deterministic.
-SelfIntersectionSearch find_self_intersections(const Mesh& mesh, const std::vector<char>& skip);
+// same three vertices count once as a pair. Deterministic, also where it stops early (the same
+// pairs are found in the same order). stop_at = 0: count every pair.
+SelfIntersectionSearch find_self_intersections(const Mesh& mesh, const std::vector<char>& skip,
+                                               size_t stop_at = 0);
 
 // Exact test of whether two non-degenerate faces of `mesh` meet anywhere other than at the
 // vertices they share (by index). Faces listing the same three vertices meet.

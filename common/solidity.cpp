@@ -43,7 +43,8 @@ std::string DefectCount::describe() const {
       return "non-manifold vertices: " + n + " vertices where separate fans of faces meet";
     case Defect::kInconsistentOrientation:
       return "inconsistent orientation (flipped faces): " + n + " edges";
-    case Defect::kSelfIntersection: return "self-intersecting: " + n + " pairs of faces";
+    case Defect::kSelfIntersection:
+      return "self-intersecting: " + std::string(at_least ? "at least " : "") + n + " pairs of faces";
     case Defect::kInwardOriented:
       return "inward oriented: " + n + " shells face the wrong way";
   }
@@ -257,8 +258,8 @@ SolidityReport check_solidity(const Mesh& mesh) {
   {
     std::vector<char> skip(nf, 0);
     for (size_t f = 0; f < nf; ++f) skip[f] = degenerate[f] || duplicate[f];
-    const size_t pairs = find_self_intersections(mesh, skip).pairs;
-    if (pairs) r.defects.push_back({Defect::kSelfIntersection, pairs});
+    const SelfIntersectionSearch found = find_self_intersections(mesh, skip, kSelfIntersectionsCounted);
+    if (found.pairs) r.defects.push_back({Defect::kSelfIntersection, found.pairs, found.stopped});
   }
   if (!r.defects.empty()) return r;  // volume and nesting mean nothing on a broken surface
 

@@ -81,7 +81,11 @@ std::string format_report_json(const MeshReport& r, bool rational) {
   j["solid"] = s.solid();
   j["verdict"] = s.verdict();
   nlohmann::ordered_json d = nlohmann::ordered_json::array();
-  for (const DefectCount& dc : s.defects) d.push_back({{"defect", defect_name(dc.defect)}, {"count", dc.count}});
+  for (const DefectCount& dc : s.defects) {
+    nlohmann::ordered_json one = {{"defect", defect_name(dc.defect)}, {"count", dc.count}};
+    if (dc.at_least) one["count_is_lower_bound"] = true;  // the search stopped there
+    d.push_back(one);
+  }
   j["defects"] = d;
   return j.dump(2) + "\n";
 }

@@ -8,6 +8,7 @@
 #include <cstdlib>
 
 #include <cstdio>
+#include <cmath>
 #include <fstream>
 #include <sstream>
 
@@ -142,6 +143,29 @@ TEST(CliBadInput, PhysicsFailureIsOneLineNotAnAbort) {
   EXPECT_FALSE(test::exists(out));
   // The static scene has no physics and works at this scale.
   EXPECT_EQ(vobb_cli("collide " + mesh + " " + tree + " --static --colliders 30 --no-fcl").code, 0);
+}
+
+// Crossing sheets (1,500 triangles through one segment, 1,124,250 meeting pairs): refused
+// in one line with exit 2, the count stopped at its limit, and the JSON report says so.
+TEST(CliBadInput, CrossingSheetsAreRefusedWithALowerBound) {
+  const std::string mesh = test::temp_path("crossing_sheets.off");
+  {
+    std::ofstream f(mesh);
+    f.precision(17);
+    const int k = 1500;
+    f << "OFF\n" << 3 * k << " " << k << " 0\n";
+    for (int i = 0; i < k; ++i) {
+      const double a = M_PI * i / k;
+      f << -std::cos(a) << " " << -std::sin(a) << " -1\n" << std::cos(a) << " " << std::sin(a) << " -1\n0 0 1\n";
+    }
+    for (int i = 0; i < k; ++i) f << "3 " << 3 * i << " " << 3 * i + 1 << " " << 3 * i + 2 << "\n";
+  }
+  const CliRun r = vobb_cli("info " + mesh + " --json");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(line_count(r.err), 1u) << r.err;
+  EXPECT_NE(r.err.find("self-intersecting: at least 1000000 pairs of faces"), std::string::npos) << r.err;
+  EXPECT_NE(r.out.find("\"count_is_lower_bound\": true"), std::string::npos) << r.out;
+  std::remove(mesh.c_str());
 }
 
 // A report that cannot be written (standard output on a full device) ends with exit 3 and one

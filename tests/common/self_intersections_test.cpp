@@ -247,5 +247,48 @@ TEST(FindSelfIntersections, WorkAroundHighValenceVerticesGrowsLikeNLogN) {
   }
 }
 
+// k triangles, each with vertices of its own, in the planes through the z axis at angles
+// pi i / k; each holds the segment from (0, 0, -1) to (0, 0, 1), so every pair meets there:
+// k (k - 1) / 2 meeting pairs, none sharing a vertex index.
+Mesh pinwheel(int k) {
+  Mesh m;
+  for (int i = 0; i < k; ++i) {
+    const double a = M_PI * i / k;
+    const int32_t b = static_cast<int32_t>(m.vertices.size());
+    m.vertices.push_back(Vec3(-std::cos(a), -std::sin(a), -1));
+    m.vertices.push_back(Vec3(std::cos(a), std::sin(a), -1));
+    m.vertices.push_back(Vec3(0, 0, 1));
+    m.faces.push_back({b, b + 1, b + 2});
+  }
+  return m;
+}
+
+// A caller that only needs "many" stops the search at stop_at pairs. Every pair of the
+// pinwheel meets, so a search that stops where it should has made exactly stop_at exact tests.
+TEST(FindSelfIntersections, StopsAtTheGivenNumberOfPairs) {
+  const int k = 200;
+  const size_t all = k * (k - 1) / 2;  // 19,900
+  const Mesh m = pinwheel(k);
+  const std::vector<char> skip(m.faces.size(), 0);
+  const SelfIntersectionSearch full = find_self_intersections(m, skip);
+  EXPECT_EQ(full.pairs, all);
+  EXPECT_FALSE(full.stopped);
+  const SelfIntersectionSearch cut = find_self_intersections(m, skip, 1000);
+  EXPECT_TRUE(cut.stopped);
+  EXPECT_EQ(cut.pairs, 1000u);
+  EXPECT_EQ(cut.exact_tests, 1000u);
+  EXPECT_LT(cut.filter_steps, full.filter_steps);
+  const SelfIntersectionSearch again = find_self_intersections(m, skip, 1000);  // deterministic
+  EXPECT_EQ(again.exact_tests, cut.exact_tests);
+  EXPECT_EQ(again.filter_steps, cut.filter_steps);
+  // A limit the mesh does not reach changes nothing; one it just reaches stops there.
+  const SelfIntersectionSearch above = find_self_intersections(m, skip, all + 1);
+  EXPECT_FALSE(above.stopped);
+  EXPECT_EQ(above.pairs, all);
+  const SelfIntersectionSearch at = find_self_intersections(m, skip, all);
+  EXPECT_TRUE(at.stopped);
+  EXPECT_EQ(at.pairs, all);
+}
+
 }  // namespace
 }  // namespace vobb

@@ -102,6 +102,35 @@ TEST(Solidity, OverlappingShellsSelfIntersect) {
   EXPECT_GT(r.defects[0].count, 0u);
 }
 
+// Crossing sheets: 1,500 triangles through one segment, 1,124,250 meeting pairs. The count
+// stops at kSelfIntersectionsCounted, and the verdict says it is a lower bound.
+TEST(Solidity, CountOfSelfIntersectionsStopsAtItsLimit) {
+  Mesh m;
+  const int k = 1500;
+  for (int i = 0; i < k; ++i) {
+    const double a = M_PI * i / k;
+    const int32_t b = static_cast<int32_t>(m.vertices.size());
+    m.vertices.push_back(Vec3(-std::cos(a), -std::sin(a), -1));
+    m.vertices.push_back(Vec3(std::cos(a), std::sin(a), -1));
+    m.vertices.push_back(Vec3(0, 0, 1));
+    m.faces.push_back({b, b + 1, b + 2});
+  }
+  const SolidityReport r = check_solidity(m);
+  const DefectCount* found = nullptr;
+  for (const DefectCount& d : r.defects)
+    if (d.defect == Defect::kSelfIntersection) found = &d;
+  ASSERT_NE(found, nullptr) << r.verdict();
+  EXPECT_TRUE(found->at_least);
+  EXPECT_EQ(found->count, kSelfIntersectionsCounted);
+  EXPECT_NE(r.verdict().find("self-intersecting: at least 1000000 pairs of faces"), std::string::npos)
+      << r.verdict();
+  // Below the limit the count is exact and says so.
+  const SolidityReport two = check_solidity(append(cube().mesh, cube(1, Vec3(0.5, 0.5, 0.5)).mesh));
+  ASSERT_FALSE(two.defects.empty());
+  EXPECT_FALSE(two.defects[0].at_least);
+  EXPECT_EQ(two.verdict().find("at least"), std::string::npos) << two.verdict();
+}
+
 TEST(Solidity, NestedShellTouchingTheOuterOneSelfIntersects) {
   // A cavity whose face lies on the outer surface: faces touch without sharing vertices.
   Mesh m = analytic::cube_with_cavity(4, 0, 2).mesh;  // cavity [0, 2]^3 touches 3 outer faces
