@@ -7,12 +7,15 @@
 #include <sys/stat.h>
 #include <sys/wait.h>
 
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
 #include <string>
 #include <vector>
+
+#include "common/mesh.h"
 
 namespace vobb::test {
 
@@ -79,6 +82,32 @@ inline CliRun vobb_cli(const std::string& args) {
   r.err = ss.str();
   std::remove(err_path.c_str());
   return r;
+}
+
+// Crossing sheets: k triangles, each with vertices of its own, in the planes through the z
+// axis at angles pi i / k. Each holds the segment from (0, 0, -1) to (0, 0, 1), so every pair
+// meets there: k (k - 1) / 2 meeting pairs, none sharing a vertex index (a reader that welds
+// equal vertices makes them all share (0, 0, 1)). Open, so not a solid either way.
+inline Mesh pinwheel(int k) {
+  Mesh m;
+  for (int i = 0; i < k; ++i) {
+    const double a = M_PI * i / k;
+    const int32_t b = static_cast<int32_t>(m.vertices.size());
+    m.vertices.push_back(Vec3(-std::cos(a), -std::sin(a), -1));
+    m.vertices.push_back(Vec3(std::cos(a), std::sin(a), -1));
+    m.vertices.push_back(Vec3(0, 0, 1));
+    m.faces.push_back({b, b + 1, b + 2});
+  }
+  return m;
+}
+
+// `m` as an OFF file at `path`, coordinates to 17 significant digits.
+inline void write_off(const Mesh& m, const std::string& path) {
+  std::ofstream f(path);
+  f.precision(17);
+  f << "OFF\n" << m.vertices.size() << " " << m.faces.size() << " 0\n";
+  for (const Vec3& v : m.vertices) f << v.x() << " " << v.y() << " " << v.z() << "\n";
+  for (const Face& t : m.faces) f << "3 " << t[0] << " " << t[1] << " " << t[2] << "\n";
 }
 
 }  // namespace vobb::test

@@ -8,7 +8,6 @@
 #include <cstdlib>
 
 #include <cstdio>
-#include <cmath>
 #include <fstream>
 #include <sstream>
 
@@ -149,17 +148,7 @@ TEST(CliBadInput, PhysicsFailureIsOneLineNotAnAbort) {
 // in one line with exit 2, the count stopped at its limit, and the JSON report says so.
 TEST(CliBadInput, CrossingSheetsAreRefusedWithALowerBound) {
   const std::string mesh = test::temp_path("crossing_sheets.off");
-  {
-    std::ofstream f(mesh);
-    f.precision(17);
-    const int k = 1500;
-    f << "OFF\n" << 3 * k << " " << k << " 0\n";
-    for (int i = 0; i < k; ++i) {
-      const double a = M_PI * i / k;
-      f << -std::cos(a) << " " << -std::sin(a) << " -1\n" << std::cos(a) << " " << std::sin(a) << " -1\n0 0 1\n";
-    }
-    for (int i = 0; i < k; ++i) f << "3 " << 3 * i << " " << 3 * i + 1 << " " << 3 * i + 2 << "\n";
-  }
+  test::write_off(test::pinwheel(1500), mesh);
   const CliRun r = vobb_cli("info " + mesh + " --json");
   EXPECT_EQ(r.code, 2);
   EXPECT_EQ(line_count(r.err), 1u) << r.err;

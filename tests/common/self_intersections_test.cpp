@@ -7,6 +7,7 @@
 #include <string>
 
 #include "common/exact_predicates.h"
+#include "test_common.h"
 
 namespace vobb {
 namespace {
@@ -247,28 +248,12 @@ TEST(FindSelfIntersections, WorkAroundHighValenceVerticesGrowsLikeNLogN) {
   }
 }
 
-// k triangles, each with vertices of its own, in the planes through the z axis at angles
-// pi i / k; each holds the segment from (0, 0, -1) to (0, 0, 1), so every pair meets there:
-// k (k - 1) / 2 meeting pairs, none sharing a vertex index.
-Mesh pinwheel(int k) {
-  Mesh m;
-  for (int i = 0; i < k; ++i) {
-    const double a = M_PI * i / k;
-    const int32_t b = static_cast<int32_t>(m.vertices.size());
-    m.vertices.push_back(Vec3(-std::cos(a), -std::sin(a), -1));
-    m.vertices.push_back(Vec3(std::cos(a), std::sin(a), -1));
-    m.vertices.push_back(Vec3(0, 0, 1));
-    m.faces.push_back({b, b + 1, b + 2});
-  }
-  return m;
-}
-
 // A caller that only needs "many" stops the search at stop_at pairs. Every pair of the
 // pinwheel meets, so a search that stops where it should has made exactly stop_at exact tests.
 TEST(FindSelfIntersections, StopsAtTheGivenNumberOfPairs) {
   const int k = 200;
   const size_t all = k * (k - 1) / 2;  // 19,900
-  const Mesh m = pinwheel(k);
+  const Mesh m = test::pinwheel(k);
   const std::vector<char> skip(m.faces.size(), 0);
   const SelfIntersectionSearch full = find_self_intersections(m, skip);
   EXPECT_EQ(full.pairs, all);

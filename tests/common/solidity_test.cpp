@@ -105,16 +105,7 @@ TEST(Solidity, OverlappingShellsSelfIntersect) {
 // Crossing sheets: 1,500 triangles through one segment, 1,124,250 meeting pairs. The count
 // stops at kSelfIntersectionsCounted, and the verdict says it is a lower bound.
 TEST(Solidity, CountOfSelfIntersectionsStopsAtItsLimit) {
-  Mesh m;
-  const int k = 1500;
-  for (int i = 0; i < k; ++i) {
-    const double a = M_PI * i / k;
-    const int32_t b = static_cast<int32_t>(m.vertices.size());
-    m.vertices.push_back(Vec3(-std::cos(a), -std::sin(a), -1));
-    m.vertices.push_back(Vec3(std::cos(a), std::sin(a), -1));
-    m.vertices.push_back(Vec3(0, 0, 1));
-    m.faces.push_back({b, b + 1, b + 2});
-  }
+  const Mesh m = test::pinwheel(1500);
   const SolidityReport r = check_solidity(m);
   const DefectCount* found = nullptr;
   for (const DefectCount& d : r.defects)

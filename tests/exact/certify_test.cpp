@@ -112,11 +112,20 @@ TEST(Certify, VariationalTreeCertifiesAndBeatsTheBaselineExactly) {
 // unions (both paths) run, on whichever threads take their layers. (Which thread takes what is
 // up to the scheduler, so this cannot prove that two ran at once; a ThreadSanitizer check of
 // the same pattern with std::thread is noted in docs/BENCHMARKS.md.)
+// The polygonal torus and its depth-4 baseline tree, whose layers overlap on most levels.
+struct TorusTree {
+  Mesh mesh = analytic::polygonal_torus().mesh;
+  Tree tree = [this] {
+    ObbTreeOptions o;
+    o.depth = 4;
+    return build_obbtree(mesh, o);
+  }();
+};
+
 TEST(Certify, SameRationalsForAnyThreadCount) {
-  const Mesh m = analytic::polygonal_torus().mesh;
-  ObbTreeOptions o;
-  o.depth = 4;
-  const Tree t = build_obbtree(m, o);
+  const TorusTree torus;
+  const Mesh& m = torus.mesh;
+  const Tree& t = torus.tree;
   CertifyOptions co;
   co.path = OmvPath::kBoth;
   Certificate one, four;
@@ -148,10 +157,9 @@ TEST(Certify, SameRationalsForAnyThreadCount) {
 // finished a layer) leaves certify as the same exception, on one thread or several, and a
 // later call on the same inputs still gives the full certificate: no terminate, no lost error.
 TEST(Certify, FailureOnAnyThreadReachesTheCaller) {
-  const Mesh m = analytic::polygonal_torus().mesh;
-  ObbTreeOptions o;
-  o.depth = 4;
-  const Tree t = build_obbtree(m, o);
+  const TorusTree torus;
+  const Mesh& m = torus.mesh;
+  const Tree& t = torus.tree;
   CertifyOptions failing;
   failing.path = OmvPath::kBoth;
   std::atomic<int> layer_lines{0};
