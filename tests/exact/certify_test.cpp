@@ -112,22 +112,25 @@ TEST(Certify, VariationalTreeCertifiesAndBeatsTheBaselineExactly) {
 // unions (both paths) run, on whichever threads take their layers. (Which thread takes what is
 // up to the scheduler, so this cannot prove that two ran at once; a ThreadSanitizer check of
 // the same pattern with std::thread is noted in docs/BENCHMARKS.md.)
-// The polygonal torus and its depth-4 baseline tree, whose layers overlap on most levels.
-struct TorusTree {
-  Mesh mesh = analytic::polygonal_torus().mesh;
-  Tree tree = [this] {
+// The polygonal torus and its depth-4 baseline tree, whose layers overlap on most levels,
+// certified by both exact paths.
+class CertifyTorus : public ::testing::Test {
+ protected:
+  const Mesh m = analytic::polygonal_torus().mesh;
+  const Tree t = [this] {
     ObbTreeOptions o;
     o.depth = 4;
-    return build_obbtree(mesh, o);
+    return build_obbtree(m, o);
   }();
+  static CertifyOptions both_paths() {
+    CertifyOptions co;
+    co.path = OmvPath::kBoth;
+    return co;
+  }
 };
 
-TEST(Certify, SameRationalsForAnyThreadCount) {
-  const TorusTree torus;
-  const Mesh& m = torus.mesh;
-  const Tree& t = torus.tree;
-  CertifyOptions co;
-  co.path = OmvPath::kBoth;
+TEST_F(CertifyTorus, SameRationalsForAnyThreadCount) {
+  const CertifyOptions co = both_paths();
   Certificate one, four;
   tbb::task_arena(1).execute([&] { one = certify(m, t, co); });
   tbb::task_arena(4).execute([&] { four = certify(m, t, co); });
@@ -156,12 +159,8 @@ TEST(Certify, SameRationalsForAnyThreadCount) {
 // A failure on any thread (here the caller's progress callback, which runs on whichever thread
 // finished a layer) leaves certify as the same exception, on one thread or several, and a
 // later call on the same inputs still gives the full certificate: no terminate, no lost error.
-TEST(Certify, FailureOnAnyThreadReachesTheCaller) {
-  const TorusTree torus;
-  const Mesh& m = torus.mesh;
-  const Tree& t = torus.tree;
-  CertifyOptions failing;
-  failing.path = OmvPath::kBoth;
+TEST_F(CertifyTorus, FailureOnAnyThreadReachesTheCaller) {
+  CertifyOptions failing = both_paths();
   std::atomic<int> layer_lines{0};
   failing.progress = [&](const std::string& line) {
     if (line.rfind("layer ", 0) == 0) {
@@ -186,9 +185,7 @@ TEST(Certify, FailureOnAnyThreadReachesTheCaller) {
     EXPECT_GE(layer_lines.load(), 1) << threads << " threads";
     EXPECT_LE(layer_lines.load(), threads) << threads << " threads";
   }
-  CertifyOptions plain;
-  plain.path = OmvPath::kBoth;
-  const Certificate c = certify(m, t, plain);
+  const Certificate c = certify(m, t, both_paths());
   EXPECT_EQ(c.layers.size(), 5u);
   EXPECT_TRUE(c.ok());
 }
