@@ -114,10 +114,22 @@ Rational exact_signed_volume(const Mesh& mesh) {
 }
 
 double to_double_nearest(const Rational& q) {
+  // Below 2^-1022 doubles are the multiples of 2^-1074 (subnormals): MPFR has no subnormals,
+  // so rounding to 53 bits there and then to the double would round twice. Instead q 2^1074 is
+  // rounded once to the nearest integer (ties to even), which a double holds exactly (< 2^53).
+  const Rational least_normal = Rational(1) / Rational(mpz_class(1) << 1022);
+  if (abs(q) < least_normal) {
+    const Rational scaled = q * Rational(mpz_class(1) << 1074);
+    mpz_class lo, rem;
+    mpz_fdiv_qr(lo.get_mpz_t(), rem.get_mpz_t(), scaled.get_num_mpz_t(), scaled.get_den_mpz_t());
+    const int half = cmp(mpz_class(2 * rem), scaled.get_den());  // 2 rem against the denominator
+    if (half > 0 || (half == 0 && mpz_odd_p(lo.get_mpz_t()))) ++lo;
+    return std::ldexp(lo.get_d(), -1074);  // |lo| <= 2^52: exact, and so is the scaling
+  }
   mpfr_t x;
   mpfr_init2(x, 53);
   mpfr_set_q(x, q.get_mpq_t(), MPFR_RNDN);
-  double d = mpfr_get_d(x, MPFR_RNDN);
+  double d = mpfr_get_d(x, MPFR_RNDN);  // exact: x has 53 bits and a normal exponent (or overflows)
   mpfr_clear(x);
   return d;
 }

@@ -102,18 +102,23 @@ Rational ClipSolver::obv(const Obb& box) const {
   // which is at the coordinates' scale, not the box's (a box of size 0.01 at 1e6 has its
   // faces' centres rounded by 1e-10, its own size's 1e-8); the products and sums of T by 3u of
   // sum |w| (|lo| + |hi| + |c|); w's and R's conversion to double by u of themselves. The pad,
-  // 1e-9 of the sum of those magnitudes, is far above all of it.
+  // 1e-9 of the sum of those magnitudes, is far above all of it. Where w, R or the products
+  // are subnormal those errors are absolute instead: 2^-1074 for each conversion of w (times
+  // |lo| + |hi| + |c|) and of R, 2^-1075 for each of the 20-odd operations; the floor
+  // 2^-1060 (1 + sum (|lo| + |hi| + |c|)) is above all of that.
   const double cd[3] = {box.center[0], box.center[1], box.center[2]};
   auto accept = [&](const Aabb& b) {
     if (b.empty()) return false;
     for (int k = 0; k < 3; ++k) {
-      double mid = 0, rad = 0, scale = 0;
+      double mid = 0, rad = 0, scale = 0, coords = 0;
       for (int i = 0; i < 3; ++i) {
         mid += (0.5 * (b.lo[i] + b.hi[i]) - cd[i]) * wd[k][i];
         rad += std::abs(wd[k][i]) * 0.5 * (b.hi[i] - b.lo[i]);
-        scale += std::abs(wd[k][i]) * (std::abs(b.lo[i]) + std::abs(b.hi[i]) + std::abs(cd[i]));
+        const double size = std::abs(b.lo[i]) + std::abs(b.hi[i]) + std::abs(cd[i]);
+        scale += std::abs(wd[k][i]) * size;
+        coords += size;
       }
-      const double pad = 1e-9 * (scale + rad + Rd);
+      const double pad = 1e-9 * (scale + rad + Rd) + 0x1p-1060 * (1 + coords);
       if (mid - rad > Rd + pad && k < 2) return false;  // beyond the +side
       if (mid + rad < -Rd - pad) return false;           // beyond the -side (or below)
     }

@@ -48,17 +48,22 @@ void ConvexCell::refresh_shadow() {
 }
 
 Side ConvexCell::classify(const HalfSpace& h) const {
-  // n.v - d in double: each of the 7 inputs is within one ulp (2 eps relative) of its exact
-  // value, and the 3 products and 3 sums add at most 6 roundings of eps/2: the result is
-  // within 8 eps (sum |n_i v_i| + |d|) of the exact value; 16 eps is used. An absolute
-  // 2^-1000 covers underflow in the products.
+  // n.v - d in double: each of the 7 inputs is within one ulp of its exact value: 2 eps
+  // relative, or, where it is subnormal (or flushed to 0), 2^-1074 absolute. The 3 products
+  // and 3 sums add at most 6 roundings of eps/2: the result is within 8 eps (sum |n_i v_i| +
+  // |d|) of the exact value (16 eps is used), plus the subnormal inputs' absolute errors times
+  // what they multiply: 2^-1074 (sum |n_i| + sum |v_i| + 1), taken as 2^-1072 of it. An absolute
+  // 2^-1000 covers underflow in the products and sums.
   constexpr double kEps = std::numeric_limits<double>::epsilon();
   static const double kTiny = std::ldexp(1.0, -1000);
+  static const double kSubnormal = std::ldexp(1.0, -1072);
+  const double n_sum = std::abs(h.nd[0]) + std::abs(h.nd[1]) + std::abs(h.nd[2]);
   bool all_in = true, all_out = true;
   for (const Vec3& p : vd_) {
     const double a = h.nd[0] * p[0], b = h.nd[1] * p[1], c = h.nd[2] * p[2];
     const double v = a + b + c - h.dd;
-    const double err = 16 * kEps * (std::abs(a) + std::abs(b) + std::abs(c) + std::abs(h.dd)) + kTiny;
+    const double err = 16 * kEps * (std::abs(a) + std::abs(b) + std::abs(c) + std::abs(h.dd)) + kTiny +
+                       kSubnormal * (n_sum + std::abs(p[0]) + std::abs(p[1]) + std::abs(p[2]) + 1);
     if (!(v < -err)) all_in = false;  // surely inside needs v surely below 0
     if (!(v > err)) all_out = false;
     if (!all_in && !all_out) return Side::kCrossing;

@@ -103,6 +103,11 @@ inline bool texel_hit(const LocalTriangle& t, const Vec3& d, int face, bool far_
 // estimated and true outer fractions both lie in [0, 1], so it is off by at most its pyramid.
 // The bound falls as 1/m (boundary texels grow as m); the observed error falls as m^-2, since
 // the per-texel errors cancel (DESIGN §4).
+// "Exact OBV" here is that of the box and faces as the plan holds them: local coordinates
+// rounded to double, with errors of about u |v - c| / h_k on axis k. Neither this bound nor
+// cpu_rounding_bound covers that rounding (open: a review found a thin rotated box, aspect
+// 5.7e-4, into which a face reaches by less than it; the face is culled, both bounds are 0,
+// and the exact OBV is 3e-18 on a box of volume 1.2e-4).
 double resolution_bound(const BoxPlan& plan, int m);
 
 // Scale factor 2^-e bringing the largest |x_i| into [0.5, 1): exact in binary, so it keeps

@@ -106,5 +106,26 @@ TEST(ToDoubleNearest, RoundsToNearestNotTowardZero) {
   EXPECT_EQ(format_nearest(Rational(1, 10)), "0.10000000000000001");
 }
 
+// Below 2^-1022 the doubles are the multiples of 2^-1074: one rounding to nearest, ties to
+// even, and no double rounding through 53 bits (which sent (0.5 + 2^-60) 2^-1074 to 0).
+TEST(ToDoubleNearest, SubnormalsRoundOnce) {
+  const Rational tiny = Rational(1) / Rational(mpz_class(1) << 1074);  // 2^-1074
+  const double least = std::ldexp(1.0, -1074);
+  const Rational just_above_half = (Rational(1, 2) + Rational(1) / Rational(mpz_class(1) << 60)) * tiny;
+  EXPECT_EQ(to_double_nearest(just_above_half), least);
+  EXPECT_EQ(to_double_nearest(-just_above_half), -least);
+  EXPECT_EQ(to_double_nearest(Rational(1, 2) * tiny), 0.0);              // tie: to even (0)
+  EXPECT_EQ(to_double_nearest(Rational(3, 2) * tiny), 2 * least);        // tie: to even (2)
+  EXPECT_EQ(to_double_nearest(Rational(5, 2) * tiny), 2 * least);        // tie: to even (2)
+  EXPECT_EQ(to_double_nearest(Rational(7, 3) * tiny), 2 * least);
+  // The top of the subnormal range rounds up into the least normal double.
+  const Rational least_normal = Rational(1) / Rational(mpz_class(1) << 1022);
+  EXPECT_EQ(to_double_nearest(least_normal - Rational(1, 4) * tiny), std::ldexp(1.0, -1022));
+  EXPECT_EQ(to_double_nearest(least_normal - Rational(3, 4) * tiny), std::ldexp(1.0, -1022) - least);
+  // Every subnormal double converts back to itself.
+  for (double d : {least, 3 * least, std::ldexp(1.0, -1030) + least, std::ldexp(1.0, -1022) - least})
+    EXPECT_EQ(to_double_nearest(Rational(d)), d);
+}
+
 }  // namespace
 }  // namespace vobb

@@ -115,6 +115,59 @@ TEST(ExactObv, FaceReachingJustIntoAThinBoxFarFromTheOrigin) {
   EXPECT_EQ(cases, 3) << "the sweep should find faces whose rounded bounds end short of the box";
 }
 
+// A thin box whose frame underflows: two half extents of 1.2e-159, so the frame rows
+// (products of two half extents) are subnormal, and the unit cube's face x = 0 reaches 2e-17
+// into the box. ClipSolver's face cull in double must keep that face (its pad needs an
+// absolute floor where the products are subnormal); Nef culls nothing in double.
+TEST(ExactObv, FaceReachingIntoABoxWhoseFrameIsSubnormal) {
+  const Mesh m = analytic::cube().mesh;  // [0, 1]^3
+  Obb box;
+  box.center = Vec3(-0.10212525489764322, 0.5, 0.5);
+  box.half = Vec3(0.10212525489764324, 1.1951044021640368e-159, 1.1951044021640368e-159);
+  const Rational whole = Rational(8) * Rational(box.half[0]) * Rational(box.half[1]) * Rational(box.half[2]);
+  const Rational clip = ClipSolver(m).obv(box);
+  EXPECT_LT(clip, whole) << "the face inside the box was dropped";
+  EXPECT_EQ(clip, NefSolver(m).obv(box));
+}
+
+// ConvexCell::classify decides a cell's side of a plane in double and must never be wrong.
+// Cells of boxes of about 1e-312 near the origin have subnormal vertex shadows, off by up to
+// 2^-1074 absolutely; against a plane whose normal is 1e24 long that is 1e-300, far above
+// the 2^-1000 allowance for underflow alone. Every decided side is checked on the corners.
+TEST(ConvexCell, ClassifyIsNeverWrongWithSubnormalVertices) {
+  std::mt19937_64 rng(1);
+  std::uniform_real_distribution<double> uni(-1, 1);
+  const double least = std::ldexp(1.0, -1074);
+  int decided = 0;
+  for (int it = 0; it < 20000; ++it) {
+    Vec3 normal(uni(rng), uni(rng), uni(rng));
+    normal.normalize();
+    HalfSpace h;
+    for (int i = 0; i < 3; ++i) h.n[i] = Rational(normal[i] * 1e24);
+    h.d = 0;
+    h.set_shadow();
+    const Vec3 a0 = Vec3(uni(rng), uni(rng), uni(rng)).cross(normal).normalized();
+    Obb b;
+    b.center = Vec3(least * static_cast<int>(rng() % 21 - 10), least * static_cast<int>(rng() % 21 - 10),
+                    least * static_cast<int>(rng() % 21 - 10));
+    b.axes = {a0, normal, a0.cross(normal).normalized()};
+    b.half = Vec3(1e-312 * (1 + uni(rng)), least * (1 + static_cast<int>(rng() % 3)), 1e-312 * (1 + uni(rng)));
+    const ConvexCell cell = ConvexCell::from_box(b);
+    if (cell.empty()) continue;
+    const Side side = cell.classify(h);
+    if (side == Side::kCrossing) continue;
+    ++decided;
+    const ExactBoxFrame f(b);
+    for (int k = 0; k < 8; ++k) {
+      Rational x[3];
+      f.corner(k, x);
+      const int s = sgn(h.n[0] * x[0] + h.n[1] * x[1] + h.n[2] * x[2] - h.d);
+      ASSERT_TRUE(side == Side::kInside ? s < 0 : s > 0) << "iteration " << it << ", corner " << k;
+    }
+  }
+  EXPECT_GT(decided, 1000) << "too few decided cells for the check to mean anything";
+}
+
 // overlap_cells' contract: per box, its part inside earlier boxes. Three copies of one box:
 // the second and third each lie wholly inside earlier ones, so the cells hold 2 V (the overlap
 // term 3 V - V), although the points covered twice or more fill only V.
