@@ -167,7 +167,8 @@ vobb::Status build_tree(const vobb::Mesh& mesh, const BuildFlags& f, const vobb:
     if (ec) return vobb::Status::error(f.checkpoint + ": cannot make the checkpoint folder: " + ec.message());
     state_path = (std::filesystem::path(f.checkpoint) / "state.json").string();
     const std::string fingerprint = build_fingerprint(mesh, f, gl);
-    vobb::Status s = vobb::read_variational_state(state_path, fingerprint, mesh.faces.size(), &resume, &resuming);
+    vobb::Status s = vobb::read_variational_state(state_path, fingerprint, mesh.faces.size(), f.arity, f.depth, &resume,
+                                                  &resuming);
     if (!s) return s;
     if (resuming && !f.quiet)
       std::fprintf(stderr, "vobb: resuming from %s (%d levels split, %d sweeps done)\n", state_path.c_str(),

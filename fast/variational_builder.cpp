@@ -763,7 +763,7 @@ Status write_variational_state(const VariationalState& st, const std::string& fi
 }
 
 Status read_variational_state(const std::string& path, const std::string& fingerprint, size_t mesh_faces,
-                              VariationalState* state, bool* found) {
+                              int arity, int depth, VariationalState* state, bool* found) {
   *found = false;
   std::ifstream in(path, std::ios::binary);
   if (!in) return Status::ok();
@@ -839,10 +839,11 @@ Status read_variational_state(const std::string& path, const std::string& finger
     }
     // Links and the face partition, checked as a tree would be.
     Tree t;
-    t.arity = 1 << 30;
+    t.arity = arity;
     t.mesh_triangles = mesh_faces;
     t.nodes = st.nodes;
     for (const TreeNode& n : t.nodes) t.depth = std::max(t.depth, static_cast<int>(n.level));
+    if (t.depth > depth || st.split_levels > depth) return bad("deeper than the build's depth " + std::to_string(depth));
     for (TreeNode& n : t.nodes) std::sort(n.children.begin(), n.children.end());
     const Status s = validate_tree(t, path);
     if (!s) return s;

@@ -129,8 +129,10 @@ Obb tight_box(const Mesh& mesh, const std::vector<int32_t>& faces, const std::ar
 // without one, from before checksums, is read unchecked), the fingerprint and the state's
 // structure.
 Status write_variational_state(const VariationalState& state, const std::string& fingerprint, const std::string& path);
-// Not found: ok with *found = false. Wrong fingerprint or a damaged file: an error.
+// Not found: ok with *found = false. Wrong fingerprint or a damaged file: an error. The state
+// must fit the build it resumes: faces below mesh_faces, at most `arity` children per node and
+// no node below level `depth` (a state edited by hand could otherwise pass the fingerprint).
 Status read_variational_state(const std::string& path, const std::string& fingerprint, size_t mesh_faces,
-                              VariationalState* state, bool* found);
+                              int arity, int depth, VariationalState* state, bool* found);
 
 }  // namespace vobb

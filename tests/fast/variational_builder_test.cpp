@@ -206,7 +206,7 @@ TEST(VariationalBuilder, ResumedBuildEqualsUninterrupted) {
     ASSERT_TRUE(write_variational_state(saved[k], "fp", path));
     VariationalState back;
     bool found = false;
-    ASSERT_TRUE(read_variational_state(path, "fp", mesh.faces.size(), &back, &found));
+    ASSERT_TRUE(read_variational_state(path, "fp", mesh.faces.size(), o.arity, o.depth, &back, &found));
     ASSERT_TRUE(found);
     VariationalOptions r = o;
     r.checkpoint = nullptr;
@@ -227,22 +227,32 @@ TEST(VariationalBuilder, CheckpointOfAnotherBuildOrDamagedIsRefused) {
   ASSERT_TRUE(write_variational_state(last, "build A", path));
   VariationalState back;
   bool found = false;
-  const Status other = read_variational_state(path, "build B", mesh.faces.size(), &back, &found);
+  const Status other = read_variational_state(path, "build B", mesh.faces.size(), o.arity, o.depth, &back, &found);
   EXPECT_FALSE(other);
   EXPECT_NE(other.message().find("another build"), std::string::npos) << other.message();
   // Faces beyond the mesh: a damaged state, refused rather than crashed on.
-  EXPECT_FALSE(read_variational_state(path, "build A", mesh.faces.size() / 2, &back, &found));
+  EXPECT_FALSE(read_variational_state(path, "build A", mesh.faces.size() / 2, o.arity, o.depth, &back, &found));
   // Axes that are not orthonormal, and levels beyond split_levels: refused too.
   VariationalState skew = last;
   skew.axes[0][1] = skew.axes[0][0];
   ASSERT_TRUE(write_variational_state(skew, "build A", path));
-  EXPECT_FALSE(read_variational_state(path, "build A", mesh.faces.size(), &back, &found));
+  EXPECT_FALSE(read_variational_state(path, "build A", mesh.faces.size(), o.arity, o.depth, &back, &found));
   VariationalState behind = last;
   behind.split_levels = 1;
   ASSERT_TRUE(write_variational_state(behind, "build A", path));
-  const Status levels = read_variational_state(path, "build A", mesh.faces.size(), &back, &found);
+  const Status levels = read_variational_state(path, "build A", mesh.faces.size(), o.arity, o.depth, &back, &found);
   EXPECT_FALSE(levels);
   EXPECT_NE(levels.message().find("split_levels"), std::string::npos) << levels.message();
+  // A state that does not fit the build resuming it (a fingerprint edited by hand): more
+  // children than its arity, or nodes below its depth. Refused, not an assertion later.
+  ASSERT_TRUE(write_variational_state(last, "build A", path));
+  const Status narrow = read_variational_state(path, "build A", mesh.faces.size(), 1, o.depth, &back, &found);
+  EXPECT_FALSE(narrow);
+  EXPECT_NE(narrow.message().find("arity"), std::string::npos) << narrow.message();
+  const Status shallow = read_variational_state(path, "build A", mesh.faces.size(), o.arity, 1, &back, &found);
+  EXPECT_FALSE(shallow);
+  EXPECT_NE(shallow.message().find("deeper than the build's depth 1"), std::string::npos) << shallow.message();
+  EXPECT_TRUE(read_variational_state(path, "build A", mesh.faces.size(), o.arity, o.depth, &back, &found));
   ASSERT_TRUE(write_variational_state(last, "build A", path));
   std::string text;
   {
@@ -259,19 +269,19 @@ TEST(VariationalBuilder, CheckpointOfAnotherBuildOrDamagedIsRefused) {
     while (last.axes[0][0][k] == 0.0) ++k;
     j["nodes"][0]["axes"][0][k] = std::nextafter(last.axes[0][0][k], 0.0);
     std::ofstream(path) << j.dump();
-    const Status s = read_variational_state(path, "build A", mesh.faces.size(), &back, &found);
+    const Status s = read_variational_state(path, "build A", mesh.faces.size(), o.arity, o.depth, &back, &found);
     EXPECT_FALSE(s);
     EXPECT_NE(s.message().find("checksum"), std::string::npos) << s.message();
     // The checksum under a damaged key name is not taken for a state without one.
     j["sha257"] = j["sha256"];
     j.erase("sha256");
     std::ofstream(path) << j.dump();
-    const Status renamed = read_variational_state(path, "build A", mesh.faces.size(), &back, &found);
+    const Status renamed = read_variational_state(path, "build A", mesh.faces.size(), o.arity, o.depth, &back, &found);
     EXPECT_FALSE(renamed);
     EXPECT_NE(renamed.message().find("unknown field 'sha257'"), std::string::npos) << renamed.message();
     j.erase("sha257");
     std::ofstream(path) << j.dump();
-    ASSERT_TRUE(read_variational_state(path, "build A", mesh.faces.size(), &back, &found));
+    ASSERT_TRUE(read_variational_state(path, "build A", mesh.faces.size(), o.arity, o.depth, &back, &found));
     EXPECT_NE(back.axes[0][0][k], last.axes[0][0][k]);
   }
   // A fractional or negative count, which get<int> would truncate: refused by the structure
@@ -290,7 +300,7 @@ TEST(VariationalBuilder, CheckpointOfAnotherBuildOrDamagedIsRefused) {
       std::string edited = text;
       edited.replace(at + key.size(), end - at - key.size(), value);
       std::ofstream(path) << edited;
-      const Status s = read_variational_state(path, "build A", mesh.faces.size(), &back, &found);
+      const Status s = read_variational_state(path, "build A", mesh.faces.size(), o.arity, o.depth, &back, &found);
       EXPECT_FALSE(s) << key << value;
       EXPECT_NE(s.message().find("mistyped"), std::string::npos) << s.message();
     }
@@ -298,9 +308,9 @@ TEST(VariationalBuilder, CheckpointOfAnotherBuildOrDamagedIsRefused) {
   {
     std::ofstream(path) << "{\"format\":\"vobb-variational-state\",\"version\":1,\"fingerprint\":\"build A\"";
   }
-  EXPECT_FALSE(read_variational_state(path, "build A", mesh.faces.size(), &back, &found));
+  EXPECT_FALSE(read_variational_state(path, "build A", mesh.faces.size(), o.arity, o.depth, &back, &found));
   std::remove(path.c_str());
-  EXPECT_TRUE(read_variational_state(path, "build A", mesh.faces.size(), &back, &found));
+  EXPECT_TRUE(read_variational_state(path, "build A", mesh.faces.size(), o.arity, o.depth, &back, &found));
   EXPECT_FALSE(found);
 }
 
