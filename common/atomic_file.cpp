@@ -1,39 +1,78 @@
 #include "common/atomic_file.h"
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 
 namespace vobb {
 
-Status write_file_atomic(const std::string& path, const std::string& content) {
-  const std::string tmp = path + ".tmp." + std::to_string(::getpid());
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) return Status::error(path + ": cannot write: " + std::strerror(errno));
+namespace {
+
+// Writes all of `content` to fd; false with errno set on failure.
+bool write_all(int fd, const std::string& content) {
   size_t done = 0;
   while (done < content.size()) {
     const ssize_t n = ::write(fd, content.data() + done, content.size() - done);
     if (n < 0) {
       if (errno == EINTR) continue;
-      const std::string why = std::strerror(errno);
-      ::close(fd);
-      ::unlink(tmp.c_str());
-      return Status::error(path + ": cannot write: " + why);
+      return false;
     }
     done += static_cast<size_t>(n);
+  }
+  return true;
+}
+
+}  // namespace
+
+Status write_file_atomic(const std::string& path, const std::string& content) {
+  auto fail = [&](const std::string& why) { return Status::error(path + ": cannot write: " + why); };
+  // A symbolic link is followed: its target is replaced, the link stays.
+  std::error_code ec;
+  std::string target = path;
+  if (std::filesystem::is_symlink(std::filesystem::symlink_status(path, ec))) {
+    const std::filesystem::path resolved = std::filesystem::weakly_canonical(path, ec);
+    if (ec) return fail(ec.message());
+    target = resolved.string();
+  }
+  // Something that is not a regular file (a device such as /dev/null, a pipe) is written to
+  // in place: it cannot be replaced, and must not be.
+  struct stat st;
+  if (::stat(target.c_str(), &st) == 0 && !S_ISREG(st.st_mode)) {
+    if (S_ISDIR(st.st_mode)) return fail("is a directory");
+    const int fd = ::open(target.c_str(), O_WRONLY | O_CLOEXEC);
+    if (fd < 0) return fail(std::strerror(errno));
+    const bool ok = write_all(fd, content);
+    const std::string why = std::strerror(errno);
+    if (::close(fd) != 0 && ok) return fail(std::strerror(errno));
+    return ok ? Status::ok() : fail(why);
+  }
+  // The temporary file's name is short whatever the target's (a name of 255 bytes is valid).
+  static std::atomic<unsigned> counter{0};
+  const std::filesystem::path dir = std::filesystem::path(target).parent_path();
+  const std::string tmp = (dir / (".vobb-" + std::to_string(::getpid()) + "-" + std::to_string(counter++) + ".tmp")).string();
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+  if (fd < 0) return fail(std::strerror(errno));
+  if (!write_all(fd, content)) {
+    const std::string why = std::strerror(errno);
+    ::close(fd);
+    ::unlink(tmp.c_str());
+    return fail(why);
   }
   if (::fsync(fd) != 0 || ::close(fd) != 0) {
     const std::string why = std::strerror(errno);
     ::unlink(tmp.c_str());
-    return Status::error(path + ": cannot write: " + why);
+    return fail(why);
   }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+  if (std::rename(tmp.c_str(), target.c_str()) != 0) {
     const std::string why = std::strerror(errno);
     ::unlink(tmp.c_str());
-    return Status::error(path + ": cannot write: " + why);
+    return fail(why);
   }
   return Status::ok();
 }

@@ -1,0 +1,80 @@
+#include "common/atomic_file.h"
+
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "test_common.h"
+
+namespace vobb {
+namespace {
+
+std::string slurp(const std::string& path) {
+  std::ifstream f(path);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
+// The content replaces the file whole, and nothing else is left in the folder.
+TEST(WriteFileAtomic, ReplacesTheFileAndLeavesNoTemporary) {
+  const std::filesystem::path dir = test::temp_path("atomic_dir");
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directory(dir);
+  const std::string path = (dir / "out.txt").string();
+  ASSERT_TRUE(write_file_atomic(path, "first"));
+  ASSERT_TRUE(write_file_atomic(path, "second"));
+  EXPECT_EQ(slurp(path), "second");
+  EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir), std::filesystem::directory_iterator()), 1);
+  // A name of 255 bytes (NAME_MAX) is valid: the temporary file's own name must not depend on it.
+  const std::string longest = (dir / std::string(255, 'n')).string();
+  EXPECT_TRUE(write_file_atomic(longest, "long")) << "a valid name refused";
+  EXPECT_EQ(slurp(longest), "long");
+  // A folder is refused, and left as it was.
+  EXPECT_FALSE(write_file_atomic(dir.string(), "x"));
+  EXPECT_TRUE(std::filesystem::is_directory(dir));
+  std::filesystem::remove_all(dir);
+}
+
+// A symbolic link is followed: the file it points to gets the content, the link stays a link.
+TEST(WriteFileAtomic, FollowsASymbolicLink) {
+  const std::filesystem::path dir = test::temp_path("atomic_link");
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directory(dir);
+  const std::filesystem::path target = dir / "target.txt", link = dir / "link.txt";
+  ASSERT_TRUE(write_file_atomic(target.string(), "old"));
+  std::filesystem::create_symlink(target.filename(), link);
+  ASSERT_TRUE(write_file_atomic(link.string(), "new"));
+  EXPECT_TRUE(std::filesystem::is_symlink(std::filesystem::symlink_status(link)));
+  EXPECT_EQ(slurp(target.string()), "new");
+  std::filesystem::remove_all(dir);
+}
+
+// A named pipe cannot be replaced by a file: it is written to in place (its reader gets the
+// content) and stays a pipe. The reader opens first, without blocking, so that a failure
+// cannot hang the test.
+TEST(WriteFileAtomic, WritesIntoAPipeInPlace) {
+  const std::string fifo = test::temp_path("atomic_fifo");
+  std::filesystem::remove(fifo);
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  const int reader = ::open(fifo.c_str(), O_RDONLY | O_NONBLOCK);
+  ASSERT_GE(reader, 0);
+  EXPECT_TRUE(write_file_atomic(fifo, "through the pipe"));  // fits the pipe's buffer
+  char buf[64] = {};
+  const ssize_t n = ::read(reader, buf, sizeof buf - 1);
+  ::close(reader);
+  EXPECT_EQ(std::string(buf, n > 0 ? n : 0), "through the pipe");
+  struct stat st;
+  ASSERT_EQ(::stat(fifo.c_str(), &st), 0);
+  EXPECT_TRUE(S_ISFIFO(st.st_mode));
+  std::filesystem::remove(fifo);
+}
+
+}  // namespace
+}  // namespace vobb
