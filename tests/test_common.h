@@ -56,6 +56,14 @@ inline bool real_meshes_required() {
       VOBB_SKIP_WITHOUT_REAL_MESHES(std::string("real mesh ") + (name) + " is absent");   \
   } while (0)
 
+// The whole file's bytes ("" when it cannot be read).
+inline std::string slurp(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
 inline std::string temp_path(const std::string& name) {
   const char* dir = std::getenv("TMPDIR");
   return std::string(dir ? dir : "/tmp") + "/vobb_test_" + std::to_string(::getpid()) + "_" + name;

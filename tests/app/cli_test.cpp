@@ -22,12 +22,7 @@ using test::vobb_cli;
 
 size_t line_count(const std::string& s) { return std::count(s.begin(), s.end(), '\n'); }
 
-std::string slurp(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
+using test::slurp;
 
 // Every file in the corpus: exit 2, exactly one line on stderr naming the file and the
 // defect phrase from EXPECTED.tsv; `build` on it writes no tree file.

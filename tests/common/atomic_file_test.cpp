@@ -6,8 +6,6 @@
 #include <unistd.h>
 
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 #include <string>
 
 #include "test_common.h"
@@ -15,12 +13,7 @@
 namespace vobb {
 namespace {
 
-std::string slurp(const std::string& path) {
-  std::ifstream f(path);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
+using test::slurp;
 
 // The content replaces the file whole, and nothing else is left in the folder.
 TEST(WriteFileAtomic, ReplacesTheFileAndLeavesNoTemporary) {
