@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "fast/cpu_estimator.h"
 #include "fast/cubemap.h"
 #include "vobb/shaders.h"
 
@@ -119,6 +120,11 @@ std::vector<double> GlObvEstimator::estimate(const std::vector<Obb>& boxes, int 
   for (size_t b = 0; b < boxes.size(); ++b) {
     const BoxPlan plan = planner_.plan(boxes[b], m);
     if (plan.flat) continue;  // OBV 0
+    if (!gl_evaluates_in_float(plan)) {  // the CPU twin's expression, in double (header)
+      ++cpu_fallbacks_;
+      out[b] = plan.frame.volume_scale * (plan.constant + 4.0 / (3.0 * m * m) * sum_texel_hits(plan, m));
+      continue;
+    }
     out[b] = plan.frame.volume_scale * plan.constant;  // the whole answer when nothing is drawn
     const size_t records_before = g.batch_records.size();
     const int tile = static_cast<int>(g.batch_boxes.size());
@@ -231,10 +237,22 @@ void GlObvEstimator::flush(int m) {
 // assembled in double exactly as the CPU twin does, so the second term, cpu_rounding_bound,
 // also covers that assembly. The bound is first-principles, not fitted: the test asserts it,
 // and reports how close the observed deviations come to it.
+namespace {
+constexpr double kFloatMin = 1.1754943508222875e-38;  // FLT_MIN, 2^-126
+}  // namespace
+
+bool gl_evaluates_in_float(const BoxPlan& plan) {
+  for (const LocalTriangle& t : plan.tris) {
+    const double fn = pow2_normalizer(t.normal[0], t.normal[1], t.normal[2]);
+    if (t.plane != 0 && std::abs(t.plane * fn) < 3 * kFloatMin) return false;
+  }
+  return true;
+}
+
 double gl_deviation_bound(const BoxPlan& plan, int m) {
+  if (!gl_evaluates_in_float(plan)) return 0.0;  // evaluated by the CPU twin's code (header)
   if (plan.flat || plan.spans.empty()) return cpu_rounding_bound(plan, m);
   constexpr double u = 1.0 / (1 << 24);
-  constexpr double kFloatMin = 1.1754943508222875e-38;
   const PlanRounding r = analyse_plan_rounding(plan, m, RoundingModel{u, 3 * kFloatMin, true});
   const double K = r.most_per_texel + std::ceil(6.0 * m * m / 256) + 8;
   const double summation = K * u / (1 - K * u) * (r.sum_abs + 2 * r.uncertain);

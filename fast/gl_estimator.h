@@ -10,6 +10,13 @@
 //
 // Agreement with the CPU twin: gl_deviation_bound() bounds |GL - CPU| for one box from the
 // float arithmetic of the shaders (derivation in gl_estimator.cpp); the test suite checks it.
+//
+// Boxes that float cannot evaluate. A face whose plane passes the box centre by less than float
+// keeps (a scaled plane below 3 FLT_MIN: a box so large against the mesh, or so thin, that a
+// face's distance from its centre underflows in box units) would give zeta = 0 in the shader
+// and lose hits worth up to the whole box, where double keeps them. Such a box is evaluated by
+// the CPU twin's code in double instead (gl_evaluates_in_float, cpu_fallbacks()): its value is
+// the CPU twin's, bit for bit, and its deviation bound is 0.
 #pragma once
 
 #include <memory>
@@ -47,6 +54,7 @@ class GlObvEstimator {
   // The estimator's GL context, for other drawing in the same process (tree_figure.h).
   const GlContext& context() const { return *context_; }
   size_t round_trips() const { return round_trips_; }  // since construction
+  size_t cpu_fallbacks() const { return cpu_fallbacks_; }  // boxes evaluated in double, since construction
 
  private:
   struct Gl;
@@ -58,10 +66,16 @@ class GlObvEstimator {
   std::unique_ptr<Gl> gl_;
   bool batching_ = true;
   size_t round_trips_ = 0;
+  size_t cpu_fallbacks_ = 0;
 };
 
 // An upper bound on |GL estimate - CPU twin estimate| for a box with this plan at resolution
 // m, in world volume units, from float32 rounding in the shaders (gl_estimator.cpp derives it).
 double gl_deviation_bound(const BoxPlan& plan, int m);
+
+// Whether the shaders can evaluate this plan (above): false when a face's scaled plane is
+// nonzero but below 3 FLT_MIN, the threshold under which analyse_plan_rounding counts its
+// pairs as uncertain in float.
+bool gl_evaluates_in_float(const BoxPlan& plan);
 
 }  // namespace vobb

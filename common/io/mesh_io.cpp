@@ -458,6 +458,18 @@ Status read_ply(const Reader& r, LoadedMesh* out) {
       if (is_face) polys.emplace_back(idx, ascii ? line : 0);
     }
   }
+  // Data beyond the records the header declares would otherwise be dropped without a word
+  // (a header that undercounts its faces shows up as a hole). ASCII: any further non-blank
+  // line. Binary: any further byte but a final line break, which some writers append.
+  if (ascii) {
+    if (lines.next_tokens(&t, false))
+      return r.fail_at(lines.number(), "more data after the records the header declares: '" +
+                                           std::string(t[0].substr(0, 32)) + "'");
+  } else {
+    const std::string_view rest = r.text().substr(r.text().size() - bin.remaining());
+    if (!rest.empty() && rest != "\n" && rest != "\r\n")
+      return r.fail(std::to_string(rest.size()) + " bytes of data after the records the header declares");
+  }
   for (size_t fi = 0; fi < polys.size(); ++fi) {
     Status s = r.add_polygon(polys[fi].first, polys[fi].second, fi, out);
     if (!s) return s;
@@ -475,6 +487,13 @@ Status read_stl_binary(const Reader& r, LoadedMesh* out) {
   if (d.size() < 84 + 50ull * n)
     return r.fail("truncated: binary STL promises " + std::to_string(n) + " triangles but holds " +
                   std::to_string((d.size() - 84) / 50));
+  // Whole 50-byte records beyond the declared count would be dropped without a word (a count
+  // that undercounts shows up as a hole). Fewer bytes than one record cannot hold a triangle:
+  // some writers pad the file, and those bytes are ignored.
+  const uint64_t extra = (d.size() - 84 - 50ull * n) / 50;
+  if (extra > 0)
+    return r.fail("binary STL holds " + std::to_string(extra) + " more triangle records after the " +
+                  std::to_string(n) + " its header declares");
   Mesh& m = out->mesh;
   m.vertices.reserve(3ull * n);
   for (uint32_t i = 0; i < n; ++i) {

@@ -60,7 +60,9 @@ std::vector<Obb> random_boxes(const Mesh& mesh, int n, uint64_t seed) {
 // check that the bound is informative, not vacuous.
 double expect_gl_matches_cpu(const Mesh& mesh, GlObvEstimator& gl, const std::vector<Obb>& boxes, int m) {
   const CpuObvEstimator cpu(mesh);
+  const size_t fallbacks = gl.cpu_fallbacks();
   const std::vector<double> g = gl.estimate(boxes, m), c = cpu.estimate(boxes, m);
+  EXPECT_EQ(gl.cpu_fallbacks(), fallbacks) << "ordinary boxes are evaluated by GL, not in double";
   std::vector<double> relative_bounds;
   for (size_t i = 0; i < boxes.size(); ++i) {
     const BoxPlan plan = gl.planner().plan(boxes[i], m);
@@ -97,6 +99,40 @@ TEST(GlEstimator, MatchesCpuTwinOnAnalyticMeshes) {
     VOBB_MAKE_GL(gl, a.mesh);
     const std::vector<Obb> boxes = random_boxes(a.mesh, 40, 7);
     for (int m : {1, 8, 32}) EXPECT_LT(expect_gl_matches_cpu(a.mesh, *gl, boxes, m), 1e-5) << a.name << " m " << m;
+  }
+}
+
+// Boxes beyond what float can evaluate (gl_estimator.h): the cube's faces pass the centre of a
+// box of half extent 1e38 at some 1e-38 box units, below FLT_MIN, where the shader's zeta
+// would be 0 (GL used to answer 0 for an OBV of 8e114). A box of aspect 1e120 (1e60 wide, 1e-60
+// thin) does the same along its wide axes. Each must be evaluated in double, giving the
+// CPU twin's value exactly, while a box of ordinary size in the same call goes to GL.
+TEST(GlEstimator, BoxesFloatCannotEvaluateGiveTheCpuTwinsValue) {
+  const Mesh mesh = analytic::cube().mesh;
+  VOBB_MAKE_GL(gl, mesh);
+  const CpuObvEstimator cpu(mesh);
+  Obb thin = aabox(Vec3(0.25, 0.5, 0.5), Vec3(1e60, 1e60, 1e-60));
+  thin.axes = orthonormalize({Vec3(1, 0.5, 0.25), Vec3(-0.5, 1, 0.125), Vec3::Zero()});
+  const std::vector<Obb> huge = {aabox(Vec3(0.5, 0.5, 0.5), Vec3(1e38, 1e38, 1e38)),
+                                 aabox(Vec3(0.5, 0.5, 0.5), Vec3(1e39, 2e39, 3e39)), thin};
+  for (int res : {1, 8, 23}) {
+    for (size_t i = 0; i < huge.size(); ++i)
+      ASSERT_FALSE(gl_evaluates_in_float(gl->planner().plan(huge[i], res))) << "box " << i;
+    std::vector<Obb> boxes = huge;
+    boxes.push_back(aabox(Vec3(0.5, 0.5, 0.5), Vec3(2, 2, 2)));  // an ordinary box, for GL
+    const size_t before = gl->cpu_fallbacks();
+    const std::vector<double> g = gl->estimate(boxes, res), c = cpu.estimate(boxes, res);
+    EXPECT_EQ(gl->cpu_fallbacks() - before, huge.size()) << res;
+    for (size_t i = 0; i < huge.size(); ++i) {
+      EXPECT_EQ(g[i], c[i]) << "box " << i << " m " << res;
+      EXPECT_EQ(gl_deviation_bound(gl->planner().plan(boxes[i], res), res), 0.0);
+    }
+    // The box of half extent 1e38 holds the unit cube: OBV = box volume - 1, which is the box
+    // volume in double; the CPU twin's plan keeps that to its rounding bound.
+    const BoxPlan plan0 = gl->planner().plan(huge[0], res);
+    EXPECT_NEAR(g[0], volume(huge[0]), resolution_bound(plan0, res) + cpu_rounding_bound(plan0, res) + 1) << res;
+    const BoxPlan plan3 = gl->planner().plan(boxes[3], res);
+    EXPECT_NEAR(g[3], 63.0, gl_deviation_bound(plan3, res) + cpu_rounding_bound(plan3, res)) << res;
   }
 }
 

@@ -83,6 +83,13 @@ for v in V:
 for f in F:
     ply += struct.pack("<B3i", 3, *f)
 files["truncated_binary.ply"] = ply[: len(ply) - 9]
+# Headers that undercount: the records beyond the count would be a hole if dropped.
+files["records_beyond_count.stl"] = stl[:80] + struct.pack("<I", 10) + stl[84:]
+files["records_beyond_count_binary.ply"] = ply.replace(b"element face 12", b"element face 10")
+files["records_beyond_count.ply"] = (
+    "ply\nformat ascii 1.0\nelement vertex 8\nproperty float x\nproperty float y\nproperty float z\n"
+    "element face 10\nproperty list uchar int vertex_indices\nend_header\n" +
+    "".join(" ".join(map(str, v)) + "\n" for v in V) + "".join("3 %d %d %d\n" % f for f in F))
 
 for name, content in files.items():
     with open(name, "wb") as fh:
