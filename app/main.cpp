@@ -291,11 +291,15 @@ int run_certify(const std::string& mesh_path, const std::string& tree_path, bool
       jl["upper_bound_holds"] = l.upper_bound_holds();
       jl["overlapping_boxes"] = l.overlapping_boxes;
       jl["omv_path"] = l.omv_path;
-      if (l.omv_path == "both") jl["paths_agree"] = l.paths_agree;
+      if (l.omv_path == "both") {
+        jl["paths_agree"] = l.paths_agree;
+        jl["omv_clip"] = vobb::to_double_nearest(l.omv_clip);  // omv is Nef's, the arbiter's
+      }
       jl["seconds"] = l.seconds;
       if (rational) {
         jl["omv_rational"] = l.omv.get_str();
         jl["sum_obv_rational"] = l.sum_obv.get_str();
+        if (l.omv_path == "both") jl["omv_clip_rational"] = l.omv_clip.get_str();
       }
       levels.push_back(jl);
     }

@@ -105,19 +105,22 @@ Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& op
       } else if (path == OmvPath::kNef) {
         lc.omv = need_nef().omv(boxes);
         lc.omv_path = "nef";
-      } else {
+      } else if (path == OmvPath::kClip) {
         lc.omv = clip.omv(boxes, lc.sum_obv);
         lc.omv_path = "clip";
-        if (path == OmvPath::kBoth) {
-          lc.paths_agree = need_nef().omv(boxes) == lc.omv;
-          lc.omv_path = "both";
-        }
+      } else {  // both: Nef is the arbiter, and a disagreement fails the certificate
+        lc.omv_clip = clip.omv(boxes, lc.sum_obv);
+        lc.omv = need_nef().omv(boxes);
+        lc.paths_agree = lc.omv == lc.omv_clip;
+        lc.omv_path = "both";
       }
       lc.seconds = seconds_since(tl) - nef_build_seconds;
-      char buf[200];
+      const std::string disagree =
+          lc.paths_agree ? "" : ", PATHS DISAGREE (Nef's OMV above; clipping's " + format_nearest(lc.omv_clip) + ")";
+      char buf[300];
       std::snprintf(buf, sizeof buf, "layer %d/%d: %zu boxes (%zu overlapping), OMV %s, sum OBV %s%s, %.2f s",
                     level, tree.depth, lc.boxes, lc.overlapping_boxes, format_nearest(lc.omv).c_str(),
-                    format_nearest(lc.sum_obv).c_str(), lc.paths_agree ? "" : ", PATHS DISAGREE", lc.seconds);
+                    format_nearest(lc.sum_obv).c_str(), disagree.c_str(), lc.seconds);
       say(buf);
     };
     try {

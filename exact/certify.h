@@ -18,7 +18,8 @@ enum class OmvPath {
   kAuto,  // OBV by clipping in each box's frame; OMV = sum OBV without overlaps, else Nef
   kClip,  // path (b) for every layer
   kNef,   // path (a) for every layer
-  kBoth,  // both, and a check that they are equal
+  kBoth,  // both, and a check that they are equal; Nef's OMV is reported (DESIGN §3: where
+          // two exact paths disagree, Nef is the arbiter), clipping's is kept beside it
 };
 
 struct LayerCertificate {
@@ -31,6 +32,7 @@ struct LayerCertificate {
   bool upper_bound_holds() const { return sum_obv >= omv; }
   std::string omv_path;        // "clip", "nef", "none" (no overlaps: OMV = sum OBV), "both"
   bool paths_agree = true;     // kBoth only: Nef's OMV == clipping's OMV
+  Rational omv_clip;           // kBoth only: clipping's OMV (omv holds Nef's, the arbiter's)
   // This layer's own work: its sums, overlap bounds and union. Not the boxes' OBV (computed
   // first, for all layers at once) nor the building of a thread's Nef(X).
   double seconds = 0.0;

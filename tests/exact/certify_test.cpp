@@ -36,6 +36,7 @@ void expect_bound_on_every_layer(const Mesh& m, int depth, OmvPath path) {
     EXPECT_TRUE(l.upper_bound_holds()) << "layer " << l.level;
     if (path == OmvPath::kBoth) {
       EXPECT_TRUE(l.paths_agree) << "layer " << l.level;
+      EXPECT_EQ(l.omv, l.omv_clip) << "layer " << l.level;  // omv is Nef's, omv_clip clipping's
     }
     EXPECT_GE(l.omv, 0);
     overlapping += l.overlapping_boxes;
