@@ -3,11 +3,24 @@
 #include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "common/status.h"
 
 namespace vobb {
 
+// The frame's rounding. With M = [h0 a0, h1 a1, h2 a2] taken exactly (the box as stored), L
+// the rounded inverse and w = p - c, the exact local coordinates are t = M^-1 w. Write
+// M = A H (A = [a0 a1 a2], H = diag h) and P = H L, so that L = H^-1 P, M^-1 = H^-1 A^-1 and
+//   h_k (t - L w)_k = (A^-1 (I - M L) w)_k,   A^-1 = P (I - E)^-1 with E = I - M L,
+// hence h_k |t_k - (L w)_k| <= ||P|| eps / (1 - eps) |w|_inf =: alpha |w|_inf, eps >= ||E||
+// (infinity norms), provided eps < 1. No condition number enters: the rows of L are those of
+// A^-1 scaled by 1 / h_k, each rounded at its own scale, so E stays near u even for a box of
+// aspect 1e-12. eps is E computed in double from the rounded M~ = fl(h_k a_k), plus that
+// computation's error and M - M~ (each product within u): entrywise at most
+// (gamma_4 + 2u)(|I| + |M~||L|); ||P|| from |h_k L_kj|, one rounding each. Every such sum is
+// itself computed in double, so the terms are doubled: erring wide only widens the margins.
+// Then local(p) = fl(L fl(w)) adds gamma_4 sum_j |L_kj||w_j| on axis k (local_error).
 BoxFrame box_frame(const Obb& box) {
   Eigen::Matrix3d m;
   for (int k = 0; k < 3; ++k) m.col(k) = box.half[k] * box.axes[k];
@@ -18,7 +31,34 @@ BoxFrame box_frame(const Obb& box) {
   f.center = box.center;
   f.volume_scale = std::abs(det);
   f.mirrored = det < 0;
+  f.half = box.half;
+  constexpr double u = 0x1p-53, gamma4 = 4 * u / (1 - 4 * u);
+  const Eigen::Matrix3d e = Eigen::Matrix3d::Identity() - m * f.to_local;
+  const Eigen::Matrix3d size = Eigen::Matrix3d::Identity() + m.cwiseAbs() * f.to_local.cwiseAbs();
+  double eps = 0, p_norm = 0;
+  for (int i = 0; i < 3; ++i) {
+    double row = 0, p_row = 0;
+    for (int j = 0; j < 3; ++j) {
+      row += std::abs(e(i, j)) + 2 * (gamma4 + 2 * u) * size(i, j);
+      p_row += std::abs(box.half[i] * f.to_local(i, j));
+    }
+    eps = std::max(eps, row);
+    p_norm = std::max(p_norm, p_row);
+  }
+  eps *= 2;
+  p_norm *= 1 + 8 * u;
+  f.inverse_error = eps < 0.5 && std::isfinite(p_norm) ? p_norm * eps / (1 - eps)
+                                                        : std::numeric_limits<double>::infinity();
   return f;
+}
+
+Vec3 BoxFrame::local_error(const Vec3& p) const {
+  constexpr double u = 0x1p-53, gamma4 = 4 * u / (1 - 4 * u);
+  const Vec3 w = (p - center).cwiseAbs() * (1 + u);  // |p - c| bounds |fl(p - c)| within u
+  const Vec3 rounding = (to_local.cwiseAbs() * w) * (2 * gamma4);
+  Vec3 out;
+  for (int k = 0; k < 3; ++k) out[k] = inverse_error * w.maxCoeff() / std::abs(half[k]) * (1 + 4 * u) + rounding[k];
+  return out;
 }
 
 namespace {
@@ -42,36 +82,53 @@ int clip(const Vec3* in, int n, Vec3* out, const Plane& plane) {
 // no_far_clip): t is clipped to the face's cone {zeta >= |u|, zeta >= |v|} (and zeta <= 1), and
 // the texels whose centres lie in the projected clipped polygon's bounds form the span.
 // A clipped vertex too close to the centre to project reliably gives the whole face.
-bool texel_span(const LocalTriangle& t, int face, int m, bool no_far_clip, TexelSpan* span) {
+// `slack` bounds how far (Euclidean, local units) the plan's vertices may lie from the exact
+// ones (BoxFrame::local_error), so that the spans cover the exact face too: every clipping
+// plane is moved out by it (by 2 slack for the cone planes, whose normals have length sqrt 2),
+// so an exact point x inside keeps its rounded image x~ (|x - x~| <= slack) inside; and since
+// |x_a / x_k - x~_a / x~_k| <= (|u| |e_k| + |e_a|) / x~_k <= 2 slack / x~_k for e = x - x~,
+// the projected bounds are widened by 2 slack / zeta_min, zeta_min the least depth of the
+// polygon's vertices (the least over the polygon, depth being linear along it).
+bool texel_span(const LocalTriangle& t, int face, int m, bool no_far_clip, double slack, TexelSpan* span) {
   const int k = face / 2, a = (k + 1) % 3, b = (k + 2) % 3;
   const double s = face % 2 == 0 ? 1.0 : -1.0;
+  const double g = 2 * slack;
   Vec3 buf0[16], buf1[16];  // a convex polygon gains at most one vertex per plane: 3 + 5 <= 16
   for (int c = 0; c < 3; ++c) buf0[c] = Vec3(s * t.p[c][k], t.p[c][a], t.p[c][b]);  // (zeta, u, v)
   int n = 3;
-  n = clip(buf0, n, buf1, [](const Vec3& p) { return p[0] - p[1]; });
-  n = clip(buf1, n, buf0, [](const Vec3& p) { return p[0] + p[1]; });
-  n = clip(buf0, n, buf1, [](const Vec3& p) { return p[0] - p[2]; });
-  n = clip(buf1, n, buf0, [](const Vec3& p) { return p[0] + p[2]; });
-  if (!no_far_clip) n = clip(buf0, n, buf1, [](const Vec3& p) { return 1 - p[0]; });
+  n = clip(buf0, n, buf1, [g](const Vec3& p) { return p[0] - p[1] + g; });
+  n = clip(buf1, n, buf0, [g](const Vec3& p) { return p[0] + p[1] + g; });
+  n = clip(buf0, n, buf1, [g](const Vec3& p) { return p[0] - p[2] + g; });
+  n = clip(buf1, n, buf0, [g](const Vec3& p) { return p[0] + p[2] + g; });
+  if (!no_far_clip) n = clip(buf0, n, buf1, [slack](const Vec3& p) { return 1 + slack - p[0]; });
   const Vec3* poly = no_far_clip ? buf0 : buf1;
   if (n == 0) return false;
   double scale = 1;
   for (int c = 0; c < 3; ++c) scale = std::max(scale, t.p[c].cwiseAbs().maxCoeff());
   // Interpolated coordinates carry absolute errors of a few eps * scale; a vertex with
   // zeta > 1e-6 scale projects with relative error < 1e-9, far inside the one-texel margin.
-  double ulo = 1, uhi = -1, vlo = 1, vhi = -1;
+  // Below 4 slack the exact face may reach the centre: the whole face.
+  double ulo = 1, uhi = -1, vlo = 1, vhi = -1, zeta_min = HUGE_VAL;
   bool whole = false;
   for (int c = 0; c < n; ++c) {
     const double zeta = poly[c][0];
-    if (!(zeta > 1e-6 * scale)) {
+    if (!(zeta > 1e-6 * scale) || !(zeta > 4 * slack)) {
       whole = true;
       break;
     }
+    zeta_min = std::min(zeta_min, zeta);
     const double u = std::clamp(poly[c][1] / zeta, -1.0, 1.0), v = std::clamp(poly[c][2] / zeta, -1.0, 1.0);
     ulo = std::min(ulo, u);
     uhi = std::max(uhi, u);
     vlo = std::min(vlo, v);
     vhi = std::max(vhi, v);
+  }
+  if (!whole && slack > 0) {
+    const double widen = 2 * slack / zeta_min * (1 + 1e-9);
+    ulo = std::max(-2.0, ulo - widen);  // the clamps keep the casts to int below defined
+    vlo = std::max(-2.0, vlo - widen);
+    uhi = std::min(2.0, uhi + widen);
+    vhi = std::min(2.0, vhi + widen);
   }
   span->face = face;
   if (whole) {
@@ -105,15 +162,26 @@ bool texel_span(const LocalTriangle& t, int face, int m, bool no_far_clip, Texel
 double resolution_bound(const BoxPlan& plan, int m) {
   if (plan.flat || plan.spans.empty()) return 0.0;
   std::vector<char> touched(6 * static_cast<size_t>(m) * m, 0);
-  size_t count = 0;
-  for (const TexelSpan& s : plan.spans)
+  size_t count = 0, pairs = 0, near_pairs = 0;
+  for (const TexelSpan& s : plan.spans) {
+    const bool near = plan.tris[s.tri].near_centre;
     for (int i = s.ci0; i <= s.ci1; ++i)
       for (int j = s.cj0; j <= s.cj1; ++j) {
         char& t = touched[(static_cast<size_t>(s.face) * m + i) * m + j];
         count += t == 0;
         t = 1;
+        ++pairs;
+        near_pairs += near;
       }
-  return plan.frame.volume_scale * 4.0 / (3.0 * m * m) * static_cast<double>(count);
+  }
+  // Pyramids per covered texel (header): one, or two where the centre's class may disagree
+  // with the plan's faces; plus 2 per (texel, face) pair of a face near the centre, whose
+  // hits the plan may get wrong, and 3e-6 per other pair for the depths of the plan's planes
+  // (plan()).
+  const double off_by = plan.centre_near_surface ? 2.0 : 1.0;
+  const double pyramids = static_cast<double>(count) * off_by + 2.0 * static_cast<double>(near_pairs) +
+                          3e-6 * static_cast<double>(pairs);
+  return plan.frame.volume_scale * 4.0 / (3.0 * m * m) * pyramids;
 }
 
 // ---- round-off of evaluating a plan -------------------------------------------------------
@@ -279,20 +347,28 @@ BoxPlan BoxPlanner::plan(const Obb& box, int m) const {
   // Without culling, spans also cover the faces' parts beyond the box, as a renderer that
   // draws the whole mesh per cubemap face would.
   const bool no_far_clip = plan.far_count || !culling_;
-  constexpr double kCullMargin = 1e-9;  // local units; culling only needs to be conservative
+  // Local units. Culling only needs to be conservative: a face is dropped only when its
+  // exact coordinates (within local_error of the plan's) miss the cube on some axis.
+  constexpr double kCullMargin = 1e-9;
   auto consider = [&](int32_t f) {
     LocalTriangle t;
+    Vec3 err = Vec3::Zero();  // per axis, the most any of the three vertices may be off
     for (int k = 0; k < 3; ++k) {
       t.id[k] = mesh_.faces[f][k];
-      t.p[k] = plan.frame.local(mesh_.vertices[t.id[k]]);
+      const Vec3& v = mesh_.vertices[t.id[k]];
+      t.p[k] = plan.frame.local(v);
+      err = err.cwiseMax(plan.frame.local_error(v));
     }
     if (!plan.far_count && culling_) {
       for (int axis = 0; axis < 3; ++axis) {
         const double lo = std::min({t.p[0][axis], t.p[1][axis], t.p[2][axis]});
         const double hi = std::max({t.p[0][axis], t.p[1][axis], t.p[2][axis]});
-        if (lo > 1 + kCullMargin || hi < -1 - kCullMargin) return;  // misses the cube
+        const double margin = std::max(kCullMargin, err[axis]);
+        if (lo > 1 + margin || hi < -1 - margin) return;  // misses the cube
       }
     }
+    // Every point of the exact face lies within `slack` of the plan's (barycentric weights).
+    const double slack = err.norm() * (1 + 1e-15);
     for (int k = 0; k < 3; ++k) {
       const int a = k, b = (k + 1) % 3;
       t.edge_cross[k] = t.id[a] < t.id[b] ? Vec3(t.p[a].cross(t.p[b])) : Vec3(-t.p[b].cross(t.p[a]));
@@ -300,16 +376,35 @@ BoxPlan BoxPlanner::plan(const Obb& box, int m) const {
     t.normal = (t.p[1] - t.p[0]).cross(t.p[2] - t.p[0]);
     if (plan.frame.mirrored) t.normal = -t.normal;
     t.plane = t.normal.dot(t.p[0]);
+    // The centre class is exact, the faces are the plan's. The plane the plan holds, normal .
+    // x = plane, passes within D = 16 u (|e1| |e2| / |n| + 1) max_k |p_k| of the face's
+    // corners, hence of its points: n . e1 is (n - e1 x e2) . e1 plus the rounding of e1, at
+    // most 7 u |e1|^2 |e2| (and as much for e2, with |e| <= 2 max |p|), and the plane's own
+    // value is off by 3 sqrt 3 u |n| |p0|. Along a ray, a plane displaced by D moves a hit at
+    // distance rho from the centre (the plane's) by zeta D / rho. So unless rho > 2^20 D, or
+    // the exact face may lie within `slack` of the centre (rho <= 2 slack with the margin), the
+    // plan's faces and the exact centre class may disagree: a texel the faces cover may then
+    // be off by two pyramids, and this face's hits by up to 2 each (near_centre,
+    // centre_near_surface). Otherwise each of its hits' depth is within 2^-20 relative, its
+    // value s (1 - zeta^3) within 3e-6 (resolution_bound).
+    if (!plan.far_count) {
+      const Vec3 e1 = t.p[1] - t.p[0], e2 = t.p[2] - t.p[0];
+      const double n = t.normal.norm();
+      const double far = std::max({t.p[0].norm(), t.p[1].norm(), t.p[2].norm()});
+      const double d = n > 0 ? 16 * 0x1p-53 * (e1.norm() * e2.norm() / n + 1) * far : HUGE_VAL;
+      t.near_centre = !(std::abs(t.plane) / n > (2 * slack + (0x1p20 + 1) * d) * (1 + 1e-12));
+    }
     const int32_t index = static_cast<int32_t>(plan.tris.size());
     bool used = false;
     for (int face = 0; face < 6; ++face) {
       TexelSpan span;
-      if (!texel_span(t, face, m, no_far_clip, &span)) continue;
+      if (!texel_span(t, face, m, no_far_clip, slack, &span)) continue;
       span.tri = index;
       plan.spans.push_back(span);
       used = true;
     }
     if (used) plan.tris.push_back(t);
+    if (used && t.near_centre) plan.centre_near_surface = true;
   };
   if (plan.far_count || !culling_) {
     for (size_t f = 0; f < mesh_.faces.size(); ++f) consider(static_cast<int32_t>(f));

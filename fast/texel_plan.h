@@ -41,6 +41,9 @@ struct LocalTriangle {
   // face, so a ray through a shared edge or a vertex is claimed exactly as a ray beside it.
   Vec3 normal;   // (p1 - p0) x (p2 - p0), outward for a solid (corrected for mirrored frames)
   double plane;  // normal . p0: along d the face's plane is at zeta = plane / (normal . d)
+  // The exact face, or this plane's rounding, may pass so near the centre that the plan's
+  // hits on it cannot be trusted (texel_plan.cpp; resolution_bound counts them whole).
+  bool near_centre = false;
 };
 
 // Texels [i0, i1] x [j0, j1] of cubemap face `face` whose centre rays may hit triangle `tri`,
@@ -60,6 +63,10 @@ struct BoxPlan {
   std::vector<LocalTriangle> tris;
   std::vector<TexelSpan> spans;
   bool flat = false;  // zero-volume box: OBV 0, nothing to draw
+  // A face may pass within the frame's rounding of the centre (texel_plan.cpp): the exact
+  // class of the centre and the plan's faces may disagree there, so a texel the faces cover
+  // may be off by two pyramids instead of one (resolution_bound).
+  bool centre_near_surface = false;
 };
 
 // One texel ray (direction d on cubemap face `face`) against one face, in double: whether it
@@ -103,11 +110,18 @@ inline bool texel_hit(const LocalTriangle& t, const Vec3& d, int face, bool far_
 // estimated and true outer fractions both lie in [0, 1], so it is off by at most its pyramid.
 // The bound falls as 1/m (boundary texels grow as m); the observed error falls as m^-2, since
 // the per-texel errors cancel (DESIGN §4).
-// "Exact OBV" here is that of the box and faces as the plan holds them: local coordinates
-// rounded to double, with errors of about u |v - c| / h_k on axis k. Neither this bound nor
-// cpu_rounding_bound covers that rounding (open: a review found a thin rotated box, aspect
-// 5.7e-4, into which a face reaches by less than it; the face is culled, both bounds are 0,
-// and the exact OBV is 3e-18 on a box of volume 1.2e-4).
+// "Exact OBV" is that of the box as stored (its doubles taken exactly) and the mesh. The plan
+// holds the faces in box-normalized coordinates rounded to double (BoxFrame::local_error,
+// about u |v - c| / h_k on axis k, up to 1e-10 and more in thin boxes far from the faces'
+// vertices): culling and the texel cones are widened by that error, so the counted texels
+// cover the exact faces too, and a face that reaches into the box by less than it is kept.
+// Where a face may pass within that error of the centre (near_centre, centre_near_surface),
+// the centre's exact class and the plan's faces may disagree: the bound counts two pyramids
+// per covered texel, and two more per texel such a face covers (its hits may be wrong either
+// way). Every other face's plane, as the plan holds it, puts each hit within 2^-20 of its
+// depth (texel_plan.cpp), worth 3e-6 pyramids per (texel, face) pair, which the bound adds. Evaluating the plan's doubles is bounded apart
+// (cpu_rounding_bound, gl_deviation_bound), and so is the volume scale's rounding
+// (validate/estimators.h).
 double resolution_bound(const BoxPlan& plan, int m);
 
 // Scale factor 2^-e bringing the largest |x_i| into [0.5, 1): exact in binary, so it keeps
@@ -150,7 +164,7 @@ PlanRounding analyse_plan_rounding(const BoxPlan& plan, int m, const RoundingMod
 // A rigorous bound on |CPU twin estimate - exact-arithmetic evaluation of the same plan| at
 // resolution m, in world volume units: the per-pair terms above in double, plus the recursive
 // summation over all terms and the final assembly (Higham's gamma_n). It says nothing about
-// the plan's own rounding (the box frame and local coordinates), which callers bound.
+// the plan's own rounding (the box frame and local coordinates), which resolution_bound covers.
 double cpu_rounding_bound(const BoxPlan& plan, int m);
 
 class BoxPlanner {

@@ -53,9 +53,9 @@ class EstimatorSet {
   // roundings scaling the axes, then the determinant's 5 per term, its sum of |terms| at most
   // sqrt(3) |det| for axes orthonormal to round-off: under 9 eps), the products with the
   // constant and the texel weight (2 eps), and the exact value's rounding to the nearest
-  // double (eps/2): under 12 eps, taken as 32 eps for margin. Not covered: the plan's rounding
-  // of the faces into the box's frame (texel_plan.h, resolution_bound), which on boxes thin
-  // against their distance to the faces can exceed all three terms.
+  // double (eps/2): under 12 eps, taken as 32 eps for margin. The plan's rounding of the
+  // faces into the box's frame is in resolution_bound (texel_plan.h), which widens its texel
+  // cones by it.
   double rigorous_bound(const Obb& box, int m) const;
   // The parts: resolution_bound, gl_deviation_bound (the bound on |GL - CPU twin|) and the
   // round-off term.

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <array>
 #include <map>
 
 #include "common/io/mesh_report.h"
@@ -14,6 +15,7 @@
 #include "fast/gl_estimator.h"
 #include "test_common.h"
 #include "validate/box_corpus.h"
+#include "validate/estimators.h"
 
 namespace vobb {
 namespace {
@@ -101,6 +103,61 @@ TEST(EstimatorAccuracy, AnalyticMeshesConvergeWithM) {
     }
     EXPECT_LT(median(rel[64]), median(rel[16])) << a.name;
   }
+}
+
+// The plan's own rounding (texel_plan.h). A review found thin boxes lying against a face of a
+// rotated cube, into which the face reaches by less than the rounding of the local
+// coordinates (about u |v - c| / h_min box units): the face was culled, both bounds were 0,
+// and the exact OBV was 2e-18 on a box of volume 1.2e-4 (against a round-off term of 8.7e-19),
+// and 4e-19 on one of volume 5e-13. Those boxes, as the review wrote them: every estimate must
+// lie within the rigorous bound, on both backends and at every m.
+TEST(EstimatorAccuracy, ThinBoxesAgainstAFaceStayWithinTheRigorousBound) {
+  const Vec3 a0(-0.8221300000911982, -0.511570111605987, -0.2497964848861659);
+  const Vec3 a1(-0.4326647158294003, 0.8466302197288976, -0.30986854425395105);
+  const Vec3 a2(0.3700047386538593, -0.14667410116730417, -0.9173784395877487);
+  Mesh cube;  // the cube [-1, 1]^3 in the frame (a2, a0, a1), its faces outward
+  for (int i = 0; i < 8; ++i)
+    cube.vertices.push_back((i & 1 ? 1 : -1) * a2 + (i & 2 ? 1 : -1) * a0 + (i & 4 ? 1 : -1) * a1);
+  for (const auto& q : {std::array<int32_t, 4>{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4}, {2, 6, 7, 3},
+                        {0, 2, 3, 1}, {4, 5, 7, 6}}) {
+    cube.faces.push_back({q[0], q[1], q[2]});
+    cube.faces.push_back({q[0], q[2], q[3]});
+  }
+  const struct {
+    Vec3 centre;
+    double thin;
+  } found[] = {
+      {{0.2550162032366137, 0.06512389725871584, -0.9974337767986817}, 0.0001705437121817394},
+      {{0.9132887639120676, -0.25147759077902765, -0.6813402486892141}, 0.00014672583113627726},
+      {{0.7055328873198455, 0.35460583464325646, -0.8621970457854268}, 6.974842986710948e-13},
+      {{0.5497074482787226, -0.23532724463281296, -0.8307250250171522}, 1.2654520027763984e-13},
+      {{0.3330992093261267, 0.07464661967511539, -0.9676491201896293}, 5.484320266453931e-12},
+  };
+  std::vector<Obb> boxes;
+  for (const auto& f : found) {
+    Obb b;
+    b.center = f.centre;
+    b.axes = {a0, a1, a2};
+    b.half = Vec3(0.3, 0.3, f.thin);
+    boxes.push_back(b);
+  }
+  const exact::ClipSolver exact(cube);
+  validate::EstimatorSet estimators(cube, true);
+  ASSERT_TRUE(estimators.has_gl()) << estimators.gl_status();
+  std::vector<double> truth;
+  for (const Obb& b : boxes) {
+    truth.push_back(to_double_nearest(exact.obv(b)));
+    EXPECT_GT(truth.back(), 0);  // the face reaches into every one of them
+  }
+  for (validate::Backend backend : {validate::Backend::kCpu, validate::Backend::kGl})
+    for (int m : {1, 4, 32}) {
+      std::vector<double> seconds;
+      const std::vector<double> est = estimators.estimate(backend, boxes, m, &seconds);
+      for (size_t i = 0; i < boxes.size(); ++i)
+        EXPECT_LE(std::abs(est[i] - truth[i]), estimators.rigorous_bound(boxes[i], m))
+            << validate::to_string(backend) << " m " << m << " box " << i << " exact " << truth[i]
+            << " estimate " << est[i];
+    }
 }
 
 }  // namespace
