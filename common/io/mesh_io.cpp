@@ -239,6 +239,9 @@ Status read_obj(const Reader& r, LoadedMesh* out) {
         if (!parse_int(v, &i) || i == 0)
           return r.fail_at(lines.number(), "bad vertex index '" + std::string(t[k].substr(0, 32)) + "'");
         // 1-based, negative counts back from the last vertex read so far.
+        if (i < 0 && static_cast<long long>(m.vertices.size()) + i < 0)
+          return r.fail_at(lines.number(), "relative vertex index " + std::to_string(i) + " reaches before the first vertex (" +
+                                               std::to_string(m.vertices.size()) + " read so far)");
         idx.push_back(i > 0 ? i - 1 : static_cast<long long>(m.vertices.size()) + i);
       }
       faces.push_back({idx, lines.number()});
@@ -416,6 +419,10 @@ Status read_ply(const Reader& r, LoadedMesh* out) {
       if (ascii && !lines.next_tokens(&t, false))
         return r.fail("truncated: " + std::to_string(i) + " of " + std::to_string(e.count) + " " + e.name + " records");
       const size_t line = lines.number();
+      // Binary data has no lines: its errors name the element's record instead.
+      auto at_record = [&](const std::string& why) {
+        return ascii ? r.fail_at(line, why) : r.fail(e.name + " record " + std::to_string(i) + ": " + why);
+      };
       for (size_t k = 0; k < e.props.size(); ++k) {
         const PlyProperty& prop = e.props[k];
         auto next_value = [&](PlyType type, double* v) -> Status {
@@ -434,7 +441,7 @@ Status read_ply(const Reader& r, LoadedMesh* out) {
           Status s = next_value(prop.count_type, &v);
           if (!s) return s;
           long long n;
-          if (!integral_value(v, &n) || n < 0) return r.fail_at(ascii ? line : 0, "bad list length");
+          if (!integral_value(v, &n) || n < 0) return at_record("bad list length");
           if (!ascii && static_cast<unsigned long long>(n) * ply_size(prop.type) > bin.remaining())
             return r.fail("truncated: binary data ends inside " + e.name + " record " + std::to_string(i));
           for (long long j = 0; j < n; ++j) {
@@ -442,7 +449,7 @@ Status read_ply(const Reader& r, LoadedMesh* out) {
             if (!s) return s;
             long long id;
             if (is_face && static_cast<int>(k) == iface) {
-              if (!integral_value(v, &id)) return r.fail_at(ascii ? line : 0, "vertex index is not an integer");
+              if (!integral_value(v, &id)) return at_record("vertex index is not an integer");
               idx.push_back(id);
             }
           }
@@ -685,6 +692,9 @@ Status load_mesh(const std::string& path, LoadedMesh* out) {
     };
     if (content.find('\0') != std::string::npos && ext != "ply" && ext != "stl")
       return hinted(Status::error(display + ": binary data in a text format"));
+    // Lines that end in CR alone (classic Mac OS) would read as one long line.
+    if (ext != "stl" && content.find('\n') == std::string::npos && content.find('\r') != std::string::npos)
+      return Status::error(display + ": lines end in CR alone (classic Mac OS); convert them to LF or CR LF");
     Reader r(display, content);
     out->format = ext;
     if (ext == "off") s = read_off(r, out);

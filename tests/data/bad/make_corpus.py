@@ -83,6 +83,11 @@ for v in V:
 for f in F:
     ply += struct.pack("<B3i", 3, *f)
 files["truncated_binary.ply"] = ply[: len(ply) - 9]
+files["cr_line_ends.off"] = off(V, F).replace("\n", "\r")
+files["relative_index_before_first.obj"] = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf -1 -2 -4\n"
+# A signed list length of -1 in the first face record (binary: no line to name).
+files["bad_list_length_binary.ply"] = ply.replace(b"property list uchar int", b"property list char int").replace(
+    struct.pack("<B3i", 3, *F[0]), struct.pack("<b3i", -1, *F[0]), 1)
 # Headers that undercount: the records beyond the count would be a hole if dropped.
 files["records_beyond_count.stl"] = stl[:80] + struct.pack("<I", 10) + stl[84:]
 files["records_beyond_count_binary.ply"] = ply.replace(b"element face 12", b"element face 10")
