@@ -120,10 +120,52 @@ ExactBoxContainment::ExactBoxContainment(const Obb& box) : frame_(box) {
   det_sign_ = sgn(frame_.det);
   abs_det_ = abs(frame_.det);
   abs_det_d_ = abs_det_.get_d();
+  if (det_sign_ == 0)
+    for (int k = 0; k < 3; ++k)
+      if (box.half[k] != 0 && !box.axes[k].isZero()) spans_[span_count_++] = k;
+}
+
+// A flat box is {c + sum over spanning axes k of t_k u_k : |t_k| <= 1}. With d = p - c:
+//  - no spanning axis: p == c;
+//  - one, u: d parallel to u (d x u = 0) and |d . u| <= u . u;
+//  - two, u and v, n = u x v: d in their plane (d . n = 0), and d = t_u u + t_v v with
+//    t_u (n . n) = (d x v) . n and t_v (n . n) = (u x d) . n, each at most n . n in magnitude;
+//  - three with det 0: linearly dependent axes, outside the precondition: nothing.
+bool ExactBoxContainment::contains_flat(const Vec3& p) const {
+  Rational d[3];
+  for (int i = 0; i < 3; ++i) d[i] = Rational(p[i]) - frame_.c[i];
+  // Explicit result type: Rational arithmetic builds expression templates that must not outlive
+  // their operands.
+  auto dot = [](const Rational* a, const Rational* b) -> Rational { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; };
+  auto cross = [](const Rational* a, const Rational* b, Rational* out) {
+    out[0] = a[1] * b[2] - a[2] * b[1];
+    out[1] = a[2] * b[0] - a[0] * b[2];
+    out[2] = a[0] * b[1] - a[1] * b[0];
+  };
+  if (span_count_ == 0) return d[0] == 0 && d[1] == 0 && d[2] == 0;
+  if (span_count_ == 1) {
+    const Rational* u = frame_.u[spans_[0]];
+    Rational x[3];
+    cross(d, u, x);
+    return x[0] == 0 && x[1] == 0 && x[2] == 0 && abs(dot(d, u)) <= dot(u, u);
+  }
+  if (span_count_ == 2) {
+    const Rational* u = frame_.u[spans_[0]];
+    const Rational* v = frame_.u[spans_[1]];
+    Rational n[3], x[3];
+    cross(u, v, n);
+    const Rational nn = dot(n, n);
+    if (nn == 0 || dot(d, n) != 0) return false;
+    cross(d, v, x);
+    if (abs(dot(x, n)) > nn) return false;
+    cross(u, d, x);
+    return abs(dot(x, n)) <= nn;
+  }
+  return false;
 }
 
 bool ExactBoxContainment::contains(const Vec3& p) const {
-  if (det_sign_ == 0) return false;
+  if (det_sign_ == 0) return contains_flat(p);
   // Filter: t_k det = (p - c) . w_k. In double, the difference p - c is off by eps|p - c|,
   // the stored w is off by 2 eps |w| (rounded from exact), the dot product adds 3 eps: the
   // result is off by at most 8 eps sum_i |p_i - c_i| |w_i|; the determinant shadow by 2 eps.

@@ -61,16 +61,23 @@ struct ExactBoxFrame {
 };
 
 // Exact point-in-box test against the certified solid (boundary counts as inside).
-// Build once per box, query per point. A box with zero volume contains no point.
+// Build once per box, query per point. A box with zero half extents is the closed
+// parallelepiped all the same (DESIGN §1): a rectangle, a segment or its centre point.
+// Precondition for that case: the axes of its nonzero extents are linearly independent (tree
+// files guarantee it: their axes are orthonormal within 1e-5); otherwise it contains nothing.
 class ExactBoxContainment {
  public:
   explicit ExactBoxContainment(const Obb& box);
   bool contains(const Vec3& p) const;
 
  private:
+  bool contains_flat(const Vec3& p) const;  // det == 0
+
   ExactBoxFrame frame_;
   Rational abs_det_;
   int det_sign_ = 0;
+  int spans_[3] = {-1, -1, -1};  // flat box: the axes with nonzero extent, in order
+  int span_count_ = 0;
   // Double shadows of the above for a filter.
   double wd_[3][3];
   double cd_[3];

@@ -109,9 +109,38 @@ TEST(ExactBoxContainment, BoundaryIsInsideAndOneUlpBeyondIsOutside) {
   EXPECT_FALSE(in_e.contains(Vec3(std::nextafter(1.5, 2.0), 2, 3)));
   EXPECT_FALSE(in_e.contains(Vec3(1, 2, std::nextafter(2.0, 0.0))));
   EXPECT_TRUE(inside.contains(b.center));
-  Obb flat = e;
-  flat.half[1] = 0;
-  EXPECT_FALSE(ExactBoxContainment(flat).contains(e.center));  // zero volume contains nothing
+}
+
+// A box with zero half extents is the closed parallelepiped all the same (DESIGN §1): a
+// rectangle, a segment or a point, boundary included, and nothing one ulp off it.
+TEST(ExactBoxContainment, FlatBoxesAreClosedRectanglesSegmentsAndPoints) {
+  Obb rect;
+  rect.center = Vec3(1, 2, 3);
+  rect.axes = {Vec3(0.6, 0.8, 0), Vec3(-0.8, 0.6, 0), Vec3(0, 0, 1)};
+  rect.half = Vec3(0.5, 0.25, 0);
+  const ExactBoxContainment in_rect(rect);
+  EXPECT_TRUE(in_rect.contains(rect.center));
+  EXPECT_TRUE(in_rect.contains(Vec3(1.15, 2.2, 3)));  // about c + 0.25 a0, in the plane z = 3
+  EXPECT_FALSE(in_rect.contains(Vec3(1.15, 2.2, std::nextafter(3.0, 4.0))));  // off the plane
+  EXPECT_FALSE(in_rect.contains(Vec3(1.6, 2.8, 3)));  // in the plane, about c + a0: beyond t = 1
+  Obb aligned = rect;  // axis-aligned, so that its edges are exact in double
+  aligned.axes = {Vec3::UnitX(), Vec3::UnitY(), Vec3::UnitZ()};
+  const ExactBoxContainment in_aligned(aligned);
+  EXPECT_TRUE(in_aligned.contains(Vec3(1.5, 2.25, 3)));  // a corner
+  EXPECT_FALSE(in_aligned.contains(Vec3(std::nextafter(1.5, 2.0), 2, 3)));
+  EXPECT_FALSE(in_aligned.contains(Vec3(1, std::nextafter(1.75, 0.0), 3)));
+  Obb seg = rect;
+  seg.half = Vec3(0, 0, 2);
+  const ExactBoxContainment in_seg(seg);
+  EXPECT_TRUE(in_seg.contains(Vec3(1, 2, 5)));   // an end
+  EXPECT_TRUE(in_seg.contains(Vec3(1, 2, 1.5)));
+  EXPECT_FALSE(in_seg.contains(Vec3(1, 2, std::nextafter(5.0, 6.0))));
+  EXPECT_FALSE(in_seg.contains(Vec3(std::nextafter(1.0, 2.0), 2, 4)));
+  Obb point = rect;
+  point.half = Vec3::Zero();
+  const ExactBoxContainment in_point(point);
+  EXPECT_TRUE(in_point.contains(rect.center));
+  EXPECT_FALSE(in_point.contains(Vec3(1, 2, std::nextafter(3.0, 4.0))));
 }
 
 // A box rotated by the 3-4-5 rotation about z: its axes (3/5, 4/5, 0) round in double, and the
