@@ -9,8 +9,12 @@ non-manifold edge; the faces meet only along it).
 spikes K: K closed thin tetrahedra (4 K faces), each from a random point on the unit sphere
 through the centre to the opposite side, so nearly every pair of spikes crosses near the centre:
 about 4 K^2 intersecting pairs of faces (crossing sheets, where counting them all is quadratic).
+rim-fan-cylinder K: a closed cylinder of radius 1 and height 1, K quads around, whose caps are
+written as K-gons; the reader fan-triangulates each from its first vertex, on the rim, into
+K - 2 long thin faces whose boxes each hold the side faces along an arc of the rim (a search
+that prunes faces sharing no vertex by their boxes alone is quadratic).
 Used by vobb-bench-self-intersections.
-Usage: fan_meshes.py double-cone|crowded-edge|spikes K OUT.off
+Usage: fan_meshes.py double-cone|crowded-edge|spikes|rim-fan-cylinder K OUT.off
 """
 import math
 import random
@@ -56,19 +60,29 @@ def spikes(k):
     return verts, faces
 
 
+def rim_fan_cylinder(k):
+    ring = [(math.cos(2 * math.pi * i / k), math.sin(2 * math.pi * i / k)) for i in range(k)]
+    verts = [(x, y, 0.0) for x, y in ring] + [(x, y, 1.0) for x, y in ring]
+    faces = [(i, (i + 1) % k, k + (i + 1) % k, k + i) for i in range(k)]
+    faces.append(tuple(reversed(range(k))))  # bottom, facing down
+    faces.append(tuple(range(k, 2 * k)))
+    return verts, faces
+
+
 def cross(p, q):
     return (p[1] * q[2] - p[2] * q[1], p[2] * q[0] - p[0] * q[2], p[0] * q[1] - p[1] * q[0])
 
 
 def main():
-    shapes = {"double-cone": double_cone, "crowded-edge": crowded_edge, "spikes": spikes}
+    shapes = {"double-cone": double_cone, "crowded-edge": crowded_edge, "spikes": spikes,
+              "rim-fan-cylinder": rim_fan_cylinder}
     if len(sys.argv) != 4 or sys.argv[1] not in shapes:
         sys.exit(__doc__)
     verts, faces = shapes[sys.argv[1]](int(sys.argv[2]))
     with open(sys.argv[3], "w") as f:
         f.write(f"OFF\n{len(verts)} {len(faces)} 0\n")
         f.writelines("%.17g %.17g %.17g\n" % v for v in verts)
-        f.writelines("3 %d %d %d\n" % t for t in faces)
+        f.writelines("%d %s\n" % (len(p), " ".join(map(str, p))) for p in faces)
 
 
 if __name__ == "__main__":

@@ -4,6 +4,8 @@
 #include <array>
 #include <cmath>
 
+#include <Eigen/Eigenvalues>
+
 #include "common/bvh.h"
 #include "common/exact_predicates.h"
 #include "common/status.h"
@@ -152,6 +154,14 @@ constexpr double kFilterFloor = 1e-300;
 // Fans of at most this many faces, and edges of at most this many, are searched pair by pair.
 constexpr int32_t kSmallFan = 24;
 constexpr size_t kSmallEdge = 8;
+// Nodes get a slab volume where their box is this many times wider (see add_slab_boxes).
+constexpr double kLooseBox = 4.0;
+// triangles_may_meet is used where no coordinate exceeds kPairFilterLimit (its projections
+// are cubic in the coordinates), slab volumes where the largest coordinate S lies in
+// [1 / kSlabLimit, kSlabLimit] (their projections are linear in S, and their covariances are
+// taken in units of S).
+constexpr double kPairFilterLimit = 0x1p300;
+constexpr double kSlabLimit = 0x1p500;
 
 int shared_vertices(const Face& F, const Face& G) {
   int n = 0;
@@ -202,6 +212,76 @@ class TriangleSeparator {
   Vec3 axis_[kAxes], abs_[kAxes];
   double lo_[kAxes], hi_[kAxes];
 };
+
+// Rejects pairs of triangles that certainly do not meet, before the exact test: the
+// separating axes of two triangles are their normals and the nine cross products of their
+// edges. As in TriangleSeparator, any vector is a valid axis, so only the projections'
+// rounding matters: each projection of a point with coordinates within S onto a computed axis
+// a is within gamma_3 |a|_1 S (gamma_3 = 3u / (1 - 3u)) of its exact value, plus a few times
+// 2^-1074 where products underflow, and adding the tolerance loses another u |a|_1 S or so;
+// a gap over kFilterSlack |a|_1 S plus the floor (against about 8u |a|_1 S) is a true gap.
+// The axes are quadratic in the coordinates and the projections cubic, so S must be at most
+// kPairFilterLimit = 2^300 for nothing to overflow (above it the caller skips this filter).
+// Where both of t's vertices on an edge lie in s's plane (the rim of a cap and a face of that
+// cap), s's normal cannot separate them, but an edge of t across that plane crossed with s's
+// edges can; such pairs, decided exactly, cost GMP arithmetic (the orientations are 0).
+bool triangles_may_meet(const Vec3* t, const Vec3* s, double S) {
+  const Vec3 et[3] = {t[1] - t[0], t[2] - t[1], t[0] - t[2]};
+  const Vec3 es[3] = {s[1] - s[0], s[2] - s[1], s[0] - s[2]};
+  auto separates = [&](const Vec3& a) {
+    const double t0 = a.dot(t[0]), t1 = a.dot(t[1]), t2 = a.dot(t[2]);
+    const double s0 = a.dot(s[0]), s1 = a.dot(s[1]), s2 = a.dot(s[2]);
+    const double tol = kFilterSlack * a.cwiseAbs().sum() * S + kFilterFloor;
+    return std::max({t0, t1, t2}) + tol < std::min({s0, s1, s2}) ||
+           std::max({s0, s1, s2}) + tol < std::min({t0, t1, t2});
+  };
+  if (separates(et[0].cross(et[1])) || separates(es[0].cross(es[1]))) return false;
+  for (const Vec3& e : et)
+    for (const Vec3& f : es)
+      if (separates(e.cross(f))) return false;
+  return true;
+}
+
+// A volume holding the faces below a tree node that follows their shape where a box cannot:
+// the points x with lo_k <= a_k . x <= hi_k for three axes a_k (the covariance axes of those
+// faces' vertices), a box [lo, hi] in slab coordinates y = A x (A has rows a_k). The faces of a fan around a vertex on a rim (a CAD cylinder's cap) are
+// long and thin, and each box of a few of them holds the rim faces of a whole arc; their slab
+// volumes are as thin as the faces.
+//
+// Why a triangle T whose slab coordinates miss [lo, hi] misses the faces. Every point x of a
+// face below the node is a convex combination of their vertices v, so A x is the same
+// combination of the A v, all in [lo, hi]; if x lay in T, A x would lie in [lo, hi] and in
+// the triangle A T, whose bounds would then overlap [lo, hi]. This needs no property of A:
+// the axes need not be orthonormal, nor even independent, so their rounding is harmless. Only
+// the rounding of slab coordinates matters:
+// - Each coordinate a_k . v is a sum of three products. Computed in doubles (in any order,
+//   with or without fused multiply-adds) it is within gamma_3 |a_k|_1 S of its exact value,
+//   gamma_3 = 3u / (1 - 3u), for any point v with coordinates within S, plus at most 3 * 2^-1074
+//   where products underflow. With |A|_1 the largest |a_k|_1, e = 3.01 u |A|_1 S + 1e-300
+//   bounds that error, for the vertices below the node and for T's corners alike.
+// - So the exact A v lie in the computed [lo, hi] widened by e, and the exact corners of A T
+//   within e of the computed ones (every coordinate): if the exact bounds overlap, the
+//   computed bounds overlap [lo, hi] widened by 2e.
+// [lo, hi] is widened by kFilterSlack |A|_1 S + kFilterFloor, over 700 times 2e (the axes are
+// unit vectors up to rounding, so |A|_1 is about sqrt(3); the widening uses the computed
+// |A|_1, not that).
+// These are the volume's three face normals as separating axes. A full separating-axis test
+// of T against the parallelepiped (T's normal and the cross products of edges as well)
+// pruned about 1% more nodes on a rim-fan cylinder with 10,000-gon caps, and cost more per
+// node than that saved.
+struct SlabBox {
+  Vec3 axis[3];         // a_k
+  double lo[3], hi[3];  // widened as above
+};
+
+// Conservative: false only where triangle t misses every face below the box's node.
+bool may_meet_slabs(const Vec3* t, const SlabBox& box) {
+  for (int k = 0; k < 3; ++k) {
+    const double p0 = box.axis[k].dot(t[0]), p1 = box.axis[k].dot(t[1]), p2 = box.axis[k].dot(t[2]);
+    if (std::max({p0, p1, p2}) < box.lo[k] || std::min({p0, p1, p2}) > box.hi[k]) return false;
+  }
+  return true;
+}
 
 // A box holding the directions from u into triangle (u, a, b): the great-circle arc from
 // the unit vector p towards a to q towards b. An arc of less than 120 degrees (1 + p.q >= 1/2)
@@ -300,7 +380,8 @@ size_t pairs_in_same_half_plane(const Mesh& mesh, int32_t lo, int32_t hi,
 // A box tree (an AabbTree) over some faces, one box each, whose nodes also know the vertices
 // that every face below them lists, so that a query can skip subtrees of faces that all list
 // one of the vertices it names, and the largest face index below them, so that a query for
-// the pairs (f, g > f) can skip subtrees of smaller faces.
+// the pairs (f, g > f) can skip subtrees of smaller faces. Nodes whose box is loose can also
+// get a slab volume (add_slab_boxes).
 class FaceTree {
  public:
   // boxes[i] is the box of face faces[i]; `faces` must outlive the tree.
@@ -325,13 +406,100 @@ class FaceTree {
     }
   }
 
+  // Gives the nodes whose box is loose a slab volume (SlabBox) holding their faces' vertices,
+  // for coordinates within S in magnitude. Costs O(n log n): each face's vertices are
+  // projected once for every such node above it. Meshes whose S lies outside
+  // [1 / kSlabLimit, kSlabLimit] get none.
+  void add_slab_boxes(const Mesh& mesh, double S) {
+    if (!(S >= 1.0 / kSlabLimit && S <= kSlabLimit)) return;
+    const std::vector<AabbTree::Node>& nodes = tree_.nodes();
+    // Covariances of the vertices, in units of S (so that squares neither overflow nor
+    // underflow), merged from the children: count, mean and scatter matrix.
+    struct Moments {
+      double n = 0;
+      Vec3 mean = Vec3::Zero();
+      Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+    };
+    const double inv = 1.0 / S;
+    std::vector<Moments> moments(nodes.size());
+    std::vector<int32_t> begin(nodes.size()), end(nodes.size());  // node's range of order()
+    for (size_t k = nodes.size(); k-- > 0;) {  // children before parents
+      const AabbTree::Node& n = nodes[k];
+      Moments& m = moments[k];
+      if (n.count > 0) {
+        begin[k] = n.first;
+        end[k] = n.first + n.count;
+        for (int32_t i = begin[k]; i < end[k]; ++i)
+          for (int32_t v : mesh.faces[face_at(i)]) m.mean += inv * mesh.vertices[v];
+        m.n = 3.0 * n.count;
+        m.mean /= m.n;
+        for (int32_t i = begin[k]; i < end[k]; ++i)
+          for (int32_t v : mesh.faces[face_at(i)]) {
+            const Vec3 d = inv * mesh.vertices[v] - m.mean;
+            m.scatter += d * d.transpose();
+          }
+      } else {
+        const Moments &l = moments[n.first], &r = moments[n.first + 1];
+        begin[k] = begin[n.first];
+        end[k] = end[n.first + 1];
+        const Vec3 d = r.mean - l.mean;
+        m.n = l.n + r.n;
+        m.mean = l.mean + d * (r.n / m.n);
+        m.scatter = l.scatter + r.scatter + (l.n * r.n / m.n) * d * d.transpose();
+      }
+    }
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen;
+    for (size_t k = 0; k < nodes.size(); ++k) {
+      // Only where the box is far looser than the slab volume can be: its middle extent over
+      // kLooseBox times the spread of the vertices along the middle axis (a uniform spread of
+      // length l has variance l^2 / 12). Elsewhere (most nodes of most meshes) the test would
+      // cost more than it saves. The middle eigenvalue is at least the smaller one of each
+      // 2 x 2 block on the diagonal (Courant-Fischer), which is cheaper to find and rules out
+      // most nodes first.
+      const Eigen::Matrix3d& C = moments[k].scatter;
+      Vec3 extent = inv * (nodes[k].bounds.hi - nodes[k].bounds.lo);
+      std::sort(extent.data(), extent.data() + 3);
+      // Loose: the spread along the middle axis is less than `spread`, that is, the middle
+      // eigenvalue of the scatter matrix (variance times count) less than `bound`.
+      const double spread = extent[1] / kLooseBox;
+      const double bound = spread * spread * moments[k].n / 12.0;
+      bool loose = true;
+      for (int i = 0; i < 3 && loose; ++i) {
+        const int j = (i + 1) % 3;
+        const double mean = 0.5 * (C(i, i) + C(j, j)), half = 0.5 * (C(i, i) - C(j, j));
+        loose = mean - std::sqrt(half * half + C(i, j) * C(i, j)) < bound;
+      }
+      if (!loose) continue;
+      eigen.computeDirect(C, Eigen::EigenvaluesOnly);
+      if (!(eigen.eigenvalues()[1] < bound)) continue;  // ascending: [1] is the middle one
+      eigen.computeDirect(C);
+      // Any axes are valid (see SlabBox); a failed or non-finite solve gets no slab volume.
+      if (eigen.info() != Eigen::Success || !eigen.eigenvectors().allFinite()) continue;
+      const Eigen::Matrix3d A = eigen.eigenvectors().transpose();  // rows a_k
+      Aabb slabs;  // [lo, hi]
+      for (int32_t i = begin[k]; i < end[k]; ++i)
+        for (int32_t v : mesh.faces[face_at(i)]) slabs.extend(Vec3(A * mesh.vertices[v]));
+      const double norm1 = A.cwiseAbs().rowwise().sum().maxCoeff();  // |A|_1
+      const double widen = kFilterSlack * norm1 * S + kFilterFloor;
+      SlabBox b;
+      for (int a = 0; a < 3; ++a) {
+        b.axis[a] = A.row(a).transpose();
+        b.lo[a] = slabs.lo[a] - widen;
+        b.hi[a] = slabs.hi[a] + widen;
+      }
+      extra_[k].slab = static_cast<int32_t>(slabs_.size());
+      slabs_.push_back(b);
+    }
+  }
+
   // Calls visit(g, box of g) for every face g > f below nodes that `accept` passes (called on
-  // node boxes; the caller tests the faces' own boxes in visit), skipping every subtree whose
-  // faces all list one of `skip` (entries < 0 are unused); counts the nodes it looks at in
-  // *steps.
-  template <typename Accept, typename Visit>
+  // node boxes; the caller tests the faces' own boxes in visit) and, where a node has a slab
+  // volume, `accept_slab` passes too, skipping every subtree whose faces all list one of
+  // `skip` (entries < 0 are unused); counts in *steps the nodes it looks at and the slab
+  // volumes it tests.
+  template <typename Accept, typename AcceptSlab, typename Visit>
   void query(int32_t f, const std::array<int32_t, 3>& skip, size_t* steps, Accept accept,
-             Visit visit) const {
+             AcceptSlab accept_slab, Visit visit) const {
     const std::vector<AabbTree::Node>& nodes = tree_.nodes();
     if (nodes.empty()) return;
     int32_t stack[64];  // median splits: depth <= 31, and one waiting sibling per level
@@ -346,6 +514,10 @@ class FaceTree {
       for (int32_t v : e.common)
         shares |= v >= 0 && (v == skip[0] || v == skip[1] || v == skip[2]);
       if (shares || e.last_face <= f || !accept(n.bounds)) continue;
+      if (e.slab >= 0) {
+        ++*steps;
+        if (!accept_slab(slabs_[e.slab])) continue;
+      }
       if (n.count > 0) {
         for (int32_t i = n.first; i < n.first + n.count; ++i) {
           ++*steps;
@@ -362,6 +534,7 @@ class FaceTree {
   struct Extra {
     std::array<int32_t, 3> common = {-1, -1, -1};  // vertices every face below lists; -1 unused
     int32_t last_face = -1;                         // the largest face index below
+    int32_t slab = -1;                              // index into slabs_, or -1 for none
   };
 
   static std::array<int32_t, 3> intersect(const std::array<int32_t, 3>& x,
@@ -377,6 +550,7 @@ class FaceTree {
   const std::vector<int32_t>& faces_;  // tree primitive i is faces_[i]
   AabbTree tree_;
   std::vector<Extra> extra_;           // per node of tree_
+  std::vector<SlabBox> slabs_;         // the slab volumes of some nodes (Extra::slab)
 };
 
 }  // namespace
@@ -511,7 +685,9 @@ SelfIntersectionSearch find_self_intersections(const Mesh& mesh, const std::vect
           if (x == static_cast<int32_t>(v)) x = -1;
         const Aabb& cone = cones[i];
         tree.query(
-            fan[i], skip, &out.filter_steps, [&](const Aabb& b) { return !done() && b.overlaps(cone); },
+            fan[i], skip, &out.filter_steps,
+            [&](const Aabb& b) { return !done() && b.overlaps(cone); },
+            [](const SlabBox&) { return true; },
             [&](int32_t g, const Aabb& box) {
               if (box.overlaps(cone) && shared_vertices(F, mesh.faces[g]) == 1) decide(fan[i], g);
             });
@@ -519,14 +695,16 @@ SelfIntersectionSearch find_self_intersections(const Mesh& mesh, const std::vect
     }
   }
 
-  // Sharing no vertex: the face tree, descended only into boxes that f's triangle may meet
-  // and pruned at subtrees whose faces all list a vertex of f.
+  // Sharing no vertex: the face tree, descended only into nodes whose box and slab volume
+  // f's triangle may both meet, and pruned at subtrees whose faces all list a vertex of f.
   {
     std::vector<Aabb> boxes(faces.size());
     for (size_t i = 0; i < faces.size(); ++i) boxes[i] = mesh.face_bounds(faces[i]);
-    const FaceTree tree(mesh, faces, std::move(boxes));
+    FaceTree tree(mesh, faces, std::move(boxes));
     const Aabb all = mesh.bounds();  // S for the separator: no coordinate exceeds it
     const double largest = std::max(max_abs(all.lo), max_abs(all.hi));
+    tree.add_slab_boxes(mesh, largest);
+    const bool test_pairs = largest <= kPairFilterLimit;
     for (int32_t f : faces) {
       if (done()) break;
       const Face& F = mesh.faces[f];
@@ -534,8 +712,16 @@ SelfIntersectionSearch find_self_intersections(const Mesh& mesh, const std::vect
       const TriangleSeparator sep(t, mesh.face_bounds(f), largest);
       tree.query(
           f, F, &out.filter_steps, [&](const Aabb& b) { return !done() && sep.may_meet(b); },
+          [&](const SlabBox& slab) { return may_meet_slabs(t, slab); },
           [&](int32_t g, const Aabb& box) {
-            if (shared_vertices(F, mesh.faces[g]) == 0 && sep.may_meet(box)) decide(f, g);
+            if (shared_vertices(F, mesh.faces[g]) != 0 || !sep.may_meet(box)) return;
+            const Face& G = mesh.faces[g];
+            const Vec3 s[3] = {mesh.vertices[G[0]], mesh.vertices[G[1]], mesh.vertices[G[2]]};
+            if (test_pairs) {
+              ++out.filter_steps;  // the triangle pair's test is a step of its own
+              if (!triangles_may_meet(t, s, largest)) return;
+            }
+            decide(f, g);
           });
     }
   }

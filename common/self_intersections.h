@@ -17,13 +17,22 @@
 //     found through boxes around each cone's arc on the unit sphere, skipping subtrees of
 //     faces that share an edge with the query as well;
 //   - none: a tree over the faces, descended only into boxes that the query triangle may meet
-//     (a separating-axis test) and pruned at subtrees whose faces all list one of the query's
-//     vertices.
+//     (a separating-axis test) and, where a node's box is much looser than its faces (long
+//     thin faces running diagonally), into a parallelepiped along their covariance axes that
+//     it may meet; pruned at subtrees whose faces all list one of the query's vertices; each
+//     pair left is tested in floating point (separating axes) before the exact test. (The
+//     parallelepipeds are skipped where the largest coordinate lies outside [2^-500, 2^500],
+//     the pair test where it exceeds 2^300.)
+//     So a cylinder whose caps are fans around a vertex on their rims (a CAD export, or the
+//     OFF reader's triangulation of a k-gon), where the box of each long thin cap face holds
+//     the side faces along an arc of the rim, costs about k log k, not k^2.
 // Meshes can still be made where the pairs that meet, or nearly meet, number n^2 (crossing
-// sheets); then the count costs that much. A caller that only needs to know that there are
-// many can stop the search once it has found `stop_at` pairs: the pairs that meet then cost
-// no more than that, while pairs that nearly meet (the filters pass them, the exact test says
-// no) cannot be cut short.
+// sheets, close parallel sheets); then the count costs that much. Nor is the last group's
+// cost bounded below n^2 in general: its boxes and parallelepipeds can both be loose, as
+// around a node that mixes long thin faces of many directions. A caller that only needs to
+// know that there are many can stop the search once it has found `stop_at` pairs: the pairs
+// that meet then cost no more than that, while pairs that nearly meet (the filters pass them,
+// the exact test says no) cannot be cut short.
 #pragma once
 
 #include <cstddef>
@@ -36,7 +45,8 @@ namespace vobb {
 struct SelfIntersectionSearch {
   size_t pairs = 0;         // pairs of faces that intersect
   size_t exact_tests = 0;   // pairs decided by exact predicates
-  size_t filter_steps = 0;  // boxes, tree nodes and cones looked at by the filters
+  size_t filter_steps = 0;  // boxes, tree nodes, parallelepipeds, cones and triangle pairs
+                            // looked at by the filters
   bool stopped = false;     // stop_at was reached: `pairs` (>= stop_at) is a lower bound
 };
 

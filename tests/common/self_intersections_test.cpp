@@ -212,6 +212,67 @@ Mesh fan_capped_cylinder(int k) {
   return m;
 }
 
+// A closed cylinder whose caps are fans around a vertex on their rims, as a CAD export or the
+// OFF reader's fan triangulation of a k-gon makes them: each cap is k - 2 long thin faces
+// (r0, rj, rj+1). Their boxes are as large as the cap, so each holds O(k) of the side faces
+// near the rim, which share no vertex with it.
+Mesh rim_fan_cylinder(int k) {
+  Mesh m;
+  for (int i = 0; i < k; ++i) {
+    const double a = 2 * M_PI * i / k;
+    m.vertices.push_back(Vec3(std::cos(a), std::sin(a), -1));  // bottom: 2 i
+    m.vertices.push_back(Vec3(std::cos(a), std::sin(a), 1));   // top: 2 i + 1
+  }
+  for (int32_t i = 0; i < k; ++i) {
+    const int32_t b0 = 2 * i, t0 = b0 + 1, b1 = 2 * ((i + 1) % k), t1 = b1 + 1;
+    m.faces.push_back({b0, b1, t1});
+    m.faces.push_back({b0, t1, t0});
+  }
+  for (int32_t j = 1; j + 1 < k; ++j) {
+    m.faces.push_back({0, 2 * (j + 1), 2 * j});  // bottom cap, facing down
+    m.faces.push_back({1, 2 * j + 1, 2 * (j + 1) + 1});
+  }
+  return m;
+}
+
+// Rim-fan cylinders with some top rim vertices moved: through the bottom cap (the faces around
+// them pierce its long thin faces), onto its plane inside it (they touch them), one ulp below
+// that plane (they cross them by one ulp, where the slab volumes' rounding decides) or onto a
+// bottom vertex (faces touch at a point that neither lists). Besides, small faces outside the
+// cylinder touch it at one bottom rim vertex each, a copy of it (so they share no vertex with
+// the faces there): the far corners of the cap's long thin faces, which the slab volumes must
+// hold. Most pairs that meet share no vertex, so the search's tree with its slab volumes must
+// pass them.
+TEST(FindSelfIntersections, AgreesWithEveryPairOnRimFanCylinders) {
+  std::mt19937 rng(19);
+  std::uniform_real_distribution<double> depth(0.0, 1.0), shrink(0.05, 0.95);
+  for (int trial = 0; trial < 12; ++trial) {
+    const int k = std::uniform_int_distribution<int>(40, 100)(rng);
+    Mesh m = rim_fan_cylinder(k);
+    std::uniform_int_distribution<int> rim(1, k - 1);
+    for (int touching = 0; touching < 8; ++touching) {
+      // Its other corners lie strictly below the bottom cap and outside the rim.
+      const Vec3 b = m.vertices[2 * rim(rng)];
+      const int32_t base = static_cast<int32_t>(m.vertices.size());
+      m.vertices.push_back(b);
+      m.vertices.push_back(Vec3(1.2 * b.x(), 1.2 * b.y(), -1.1));
+      m.vertices.push_back(Vec3(1.2 * b.x() - 0.1 * b.y(), 1.2 * b.y() + 0.1 * b.x(), -1.3));
+      m.faces.push_back({base, base + 1, base + 2});
+    }
+    for (int moved = 0; moved < 3; ++moved) {
+      Vec3& t = m.vertices[2 * rim(rng) + 1];
+      const double r = shrink(rng);
+      switch ((trial + moved) % 4) {
+        case 0: t = Vec3(r * t.x(), r * t.y(), -1.0 - depth(rng)); break;
+        case 1: t = Vec3(r * t.x(), r * t.y(), -1.0); break;
+        case 2: t = Vec3(r * t.x(), r * t.y(), std::nextafter(-1.0, -2.0)); break;
+        default: t = m.vertices[2 * rim(rng)]; break;
+      }
+    }
+    expect_agrees_with_every_pair(m, "trial " + std::to_string(trial));
+  }
+}
+
 // k faces on one edge, their third vertices on a circle around it: a non-manifold edge
 // whose faces pairwise meet only along the edge.
 Mesh crowded_edge(int k) {
@@ -226,7 +287,9 @@ Mesh crowded_edge(int k) {
 
 // The search's work, not its time (timings belong in bench/): doubling the faces around a
 // vertex or on an edge must not quadruple the filter steps and exact tests, as a search whose
-// candidates are all pairs of faces around a vertex would (every face's box holds the apex).
+// candidates are all pairs of faces around a vertex would (every face's box holds the apex),
+// or one that prunes the faces sharing no vertex by their boxes alone would on the rim-fan
+// cylinder (each box of a cap's faces holds the side faces along an arc of the rim).
 // Work proportional to n log2 n grows by 2 (log2 n + 1) / log2 n <= 2.2 from n >= 1,024 faces
 // to twice as many; k^2 grows by 4. The bound 3 lies between, with room on both sides.
 TEST(FindSelfIntersections, WorkAroundHighValenceVerticesGrowsLikeNLogN) {
@@ -235,7 +298,7 @@ TEST(FindSelfIntersections, WorkAroundHighValenceVerticesGrowsLikeNLogN) {
     Mesh (*make)(int);
   };
   for (const Shape& s : {Shape{"double cone", double_cone}, Shape{"fan-capped cylinder", fan_capped_cylinder},
-                         Shape{"crowded edge", crowded_edge}}) {
+                         Shape{"rim-fan cylinder", rim_fan_cylinder}, Shape{"crowded edge", crowded_edge}}) {
     size_t work[2];
     for (int i = 0; i < 2; ++i) {
       const Mesh m = s.make(1024 << i);
