@@ -44,6 +44,9 @@ std::string get_box(const Json& j, Obb* b) {
   for (const Vec3& a : b->axes)
     if (!a.allFinite()) return "non-finite box axes";
   if ((b->half.array() < 0).any()) return "negative half extent";
+  // A nonzero half extent below the least normal double (2^-1022): 1 / h may overflow in the
+  // box's frame (fast/cubemap.h). Zero is a flat box, and fine.
+  if ((b->half.array() > 0 && b->half.array() < 0x1p-1022).any()) return "subnormal half extent (below 2^-1022)";
   // DESIGN §7: axes may be only nearly orthonormal, and the solid is the exact parallelepiped.
   // "Nearly" is within 1e-5 in every dot product: axes written with 6 significant digits are
   // off by at most 5e-7 per component, 2e-6 in a dot product; anything further is not a box

@@ -34,8 +34,8 @@ double sum_texel_hits(const BoxPlan& plan, int m) {
       const double u = texel_center(i, m);
       for (int j = span.j0; j <= span.j1; ++j) {
         double value;
-        if (texel_hit(t, cubemap_direction(span.face, u, texel_center(j, m)), span.face, plan.far_count, &value))
-          sum += value;
+        const Texel x{span.face, i, j, m, cubemap_direction(span.face, u, texel_center(j, m))};
+        if (texel_hit(t, x, plan.far_count, &value)) sum += value;
       }
     }
   }

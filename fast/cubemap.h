@@ -21,7 +21,7 @@
 namespace vobb {
 
 struct BoxFrame {
-  Eigen::Matrix3d to_local;  // [h0 a0, h1 a1, h2 a2]^-1, rounded
+  Eigen::Matrix3d to_local;  // [h0 a0, h1 a1, h2 a2]^-1, rounded (as diag(1 / h) [a0 a1 a2]^-1)
   Vec3 center;
   double volume_scale = 0;   // |det[h0 a0, h1 a1, h2 a2]|: local volume 1 is this much world volume
   bool mirrored = false;     // det < 0: local orientation flips face signs
@@ -35,7 +35,9 @@ struct BoxFrame {
   Vec3 half = Vec3::Ones();  // the box's half extents
 };
 
-// Precondition: the box has nonzero volume.
+// Precondition: invertible axes and half extents of at least 2^-1022 (normal doubles; a box
+// with a zero half extent is flat, and one with a subnormal half extent is refused where boxes
+// are read, since 1 / h could overflow).
 BoxFrame box_frame(const Obb& box);
 
 // Face f's direction for face coordinates (u, v).

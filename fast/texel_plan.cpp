@@ -21,16 +21,29 @@ namespace vobb {
 // (gamma_4 + 2u)(|I| + |M~||L|); ||P|| from |h_k L_kj|, one rounding each. Every such sum is
 // itself computed in double, so the terms are doubled: erring wide only widens the margins.
 // Then local(p) = fl(L fl(w)) adds gamma_4 sum_j |L_kj||w_j| on axis k (local_error).
+// L is formed as H^-1 A^-1 (each row of A's inverse divided by its h_k), not by inverting M:
+// for a tiny box M's determinant, a product of three h, underflows (half extents 1e-108 give
+// 1e-324), while A^-1 and 1 / h_k stay normal. Where M~'s entries themselves may be
+// subnormal (products below 2^-1022, off by up to 2^-1075 rather than u), eps gets
+// 3 * 2^-1074 |L| more per row, |L| ~ 1 / h: at most 3 * 2^-52 for normal half extents.
+// (Subnormal half extents, whose inverse may overflow, are refused: box_frame's precondition,
+// checked where boxes are read.)
 BoxFrame box_frame(const Obb& box) {
-  Eigen::Matrix3d m;
-  for (int k = 0; k < 3; ++k) m.col(k) = box.half[k] * box.axes[k];
-  const double det = m.determinant();
-  VOBB_ASSERT(det != 0 && std::isfinite(det), "box_frame of a flat box");
+  Eigen::Matrix3d axes, m;
+  for (int k = 0; k < 3; ++k) {
+    axes.col(k) = box.axes[k];
+    m.col(k) = box.half[k] * box.axes[k];
+  }
+  const double det_axes = axes.determinant();
+  VOBB_ASSERT(det_axes != 0 && std::isfinite(det_axes) && (box.half.array() >= 0x1p-1022).all(),
+              "box_frame of a flat box, or of one with subnormal half extents");
   BoxFrame f;
-  f.to_local = m.inverse();
+  f.to_local = axes.inverse();
+  for (int k = 0; k < 3; ++k) f.to_local.row(k) /= box.half[k];
   f.center = box.center;
-  f.volume_scale = std::abs(det);
-  f.mirrored = det < 0;
+  // |det M| = h0 h1 h2 |det A|; it may underflow to 0 (the caller treats that box as flat).
+  f.volume_scale = box.half[0] * box.half[1] * box.half[2] * std::abs(det_axes);
+  f.mirrored = det_axes < 0;
   f.half = box.half;
   constexpr double u = 0x1p-53, gamma4 = 4 * u / (1 - 4 * u);
   const Eigen::Matrix3d e = Eigen::Matrix3d::Identity() - m * f.to_local;
@@ -42,6 +55,7 @@ BoxFrame box_frame(const Obb& box) {
       row += std::abs(e(i, j)) + 2 * (gamma4 + 2 * u) * size(i, j);
       p_row += std::abs(box.half[i] * f.to_local(i, j));
     }
+    for (int j = 0; j < 3; ++j) row += 0x1p-1074 * std::abs(f.to_local(i, j)) * 3;  // underflow of M~
     eps = std::max(eps, row);
     p_norm = std::max(p_norm, p_row);
   }
@@ -62,6 +76,28 @@ Vec3 BoxFrame::local_error(const Vec3& p) const {
 }
 
 namespace {
+
+// |a| x |b| componentwise: (|a_y| |b_z| + |a_z| |b_y|, ...), what bounds the rounding of a x b.
+Vec3 abs_cross(const Vec3& a, const Vec3& b) {
+  const Vec3 x = a.cwiseAbs(), y = b.cwiseAbs();
+  return Vec3(x[1] * y[2] + x[2] * y[1], x[2] * y[0] + x[0] * y[2], x[0] * y[1] + x[1] * y[0]);
+}
+
+// LocalTriangle::edge_tie for E = fl(+-(p x q)). For the double texel direction d (|d_i| <= 1)
+// and the exact one d*:
+//   |fl(d . E) - d* . E*| <= |fl(d . E) - d . E| + |(d - d*) . E| + |d* . (E - E*)|
+//     <= gamma_3 |E|_1 + 3u |E|_1 + gamma_2 ||p| x |q||_1:
+// a 3-term dot product (with or without fused multiply-adds); texel_center's division (at
+// most 2u, the quotient being below 2) and subtraction (u, the result below 1) on the two
+// varying components; and each component of the cross product, a difference of two products
+// (gamma_2 of their magnitudes, fused or not). 8u on both sums covers these and the rounding
+// of the bound itself; 2^-1070 covers underflow (products below 2^-1022 lose up to 2^-1075
+// each). An edge test inside it costs a rational evaluation; only rays within rounding of an
+// edge's plane fall there.
+double edge_tie(const Vec3& E, const Vec3& p, const Vec3& q) {
+  constexpr double u = 0x1p-53;
+  return 8 * u * (E.cwiseAbs().sum() + abs_cross(p, q).sum()) + 0x1p-1070;
+}
 
 // Sutherland-Hodgman: keep the part of a convex polygon where plane(p) >= 0.
 template <class Plane>
@@ -206,7 +242,10 @@ double resolution_bound(const BoxPlan& plan, int m) {
 //    the exact sign as long as r < 1/2 and zeta does not underflow; otherwise (a grazing ray,
 //    or a centre within underflow of the face's plane) the pair is uncertain.
 //  - An uncertain (texel, face) pair adds 2: each side's value lies in [-1, 1]. For the CPU
-//    twin an edge test within err(E) is settled exactly instead (resolve_edges_exactly).
+//    twin, whose edge tests are exact (cpu_edge_side), none is uncertain (exact_edges).
+//  - The reference's edge tests are exact (E* = p_a x p_b of the plan's p, LocalTriangle), so
+//    that it is a consistent ray cast; the evaluated crosses are E* rounded in double, whose
+//    error gamma_2 || |p_a| x |p_b| ||_1 err(E) includes.
 //  - A face whose plane is exactly 0 (through the centre) gives zeta = +-0 or, with nd = 0, no
 //    test at all, in every arithmetic: it never hits, and is skipped.
 // This bookkeeping itself runs in double on the plan's doubles. Against the float model its
@@ -215,20 +254,29 @@ double resolution_bound(const BoxPlan& plan, int m) {
 // division that IEEE rounds to 0.5u), which absorbs it.
 namespace {
 
-// edge_side for the exact texel direction (-1 + (2i+1)/m, -1 + (2j+1)/m on face `face`), in
-// rational arithmetic, with the same simulation-of-simplicity rule for an exact zero.
-int exact_edge_side(const Vec3& E, int face, int i, int j, int m) {
-  const int k = face / 2, a = (k + 1) % 3, b = (k + 2) % 3;
-  const Rational dot = Rational(face % 2 == 0 ? E[k] : -E[k]) +
-                       Rational(E[a]) * (Rational(2 * i + 1, m) - 1) +
-                       Rational(E[b]) * (Rational(2 * j + 1, m) - 1);
+}  // namespace
+
+int exact_edge_side(const LocalTriangle& t, int k, const Texel& x) {
+  const int a = k, b = (k + 1) % 3;
+  const bool canonical = t.id[a] < t.id[b];
+  const Vec3& p = canonical ? t.p[a] : t.p[b];
+  const Vec3& q = canonical ? t.p[b] : t.p[a];
+  // E* = +-(p x q), exactly: the same rationals for the two faces of an edge, negated.
+  Rational E[3];
+  for (int c = 0; c < 3; ++c) {
+    const int c1 = (c + 1) % 3, c2 = (c + 2) % 3;
+    E[c] = Rational(p[c1]) * Rational(q[c2]) - Rational(p[c2]) * Rational(q[c1]);
+    if (!canonical) E[c] = -E[c];
+  }
+  // m d* = (+-m, 2i + 1 - m, 2j + 1 - m) on the axes (k, a, b) of the cubemap face.
+  const int fk = x.face / 2, fa = (fk + 1) % 3, fb = (fk + 2) % 3;
+  const Rational dot = (x.face % 2 == 0 ? x.m : -x.m) * E[fk] + (2 * x.i + 1 - x.m) * E[fa] +
+                       (2 * x.j + 1 - x.m) * E[fb];
   if (sgn(dot) != 0) return sgn(dot);
-  for (int c : {a, b, k})
-    if (E[c] != 0) return E[c] > 0 ? 1 : -1;
+  for (int c : {fa, fb, fk})
+    if (sgn(E[c]) != 0) return sgn(E[c]);
   return 0;
 }
-
-}  // namespace
 
 PlanRounding analyse_plan_rounding(const BoxPlan& plan, int m, const RoundingModel& model) {
   PlanRounding out;
@@ -249,30 +297,38 @@ PlanRounding analyse_plan_rounding(const BoxPlan& plan, int m, const RoundingMod
     const bool plane_underflows = std::abs(t.plane * fn) < model.tiny;
     double fe[3];  // the power-of-two scale of each edge cross (the shader's)
     for (int e = 0; e < 3; ++e) fe[e] = pow2_normalizer(t.edge_cross[e][0], t.edge_cross[e][1], t.edge_cross[e][2]);
+    // The reference's edge tests use E* (exact), the evaluation edge_cross (E* rounded in
+    // double): |d* . (E - E*)| <= gamma_2 || |p| x |q| ||_1, plus underflow (see edge_tie), in
+    // the scaled units of `dot` below. Negligible against float's own error except at exact
+    // ties, which it turns into uncertain pairs.
+    double tie_term[3];
+    for (int e = 0; e < 3; ++e)
+      tie_term[e] = (2.01 * 0x1p-53 * abs_cross(t.p[e], t.p[(e + 1) % 3]).sum() + 0x1p-1070) * fe[e] * (1 + 1e-12);
     for (int i = span.i0; i <= span.i1; ++i) {
       for (int j = span.j0; j <= span.j1; ++j) {
-        const Vec3 d = cubemap_direction(span.face, texel_center(i, m), texel_center(j, m));
+        const Texel x{span.face, i, j, m, cubemap_direction(span.face, texel_center(i, m), texel_center(j, m))};
+        const Vec3& d = x.d;
         // Edge tests: definite sides must agree; any uncertain one makes the pair uncertain.
         int definite = 0;
         bool unsure = false, miss = false;
         for (int e = 0; e < 3 && !miss; ++e) {
-          const Vec3& E = t.edge_cross[e];
-          const double dot = d.dot(E) * fe[e];
-          const double err = 8 * u * (std::abs(E[a]) + std::abs(E[b])) * fe[e] +
-                             5 * u * d.cwiseAbs().dot(E.cwiseAbs()) * fe[e] +
-                             (model.scaled_inputs ? model.tiny : model.tiny * fe[e]);
-          int side = dot > 0 ? 1 : -1;
-          if (std::abs(dot) <= err) {
-            if (!model.resolve_edges_exactly) {
+          int side;
+          if (model.exact_edges) {
+            side = cpu_edge_side(t, e, x);
+            if (side == 0) miss = true;  // E* = 0: texel_hit reports no hit, as exactly
+          } else {
+            const Vec3& E = t.edge_cross[e];
+            const double dot = d.dot(E) * fe[e];
+            const double err = 8 * u * (std::abs(E[a]) + std::abs(E[b])) * fe[e] +
+                               5 * u * d.cwiseAbs().dot(E.cwiseAbs()) * fe[e] +
+                               (model.scaled_inputs ? model.tiny : model.tiny * fe[e]) + tie_term[e];
+            if (std::abs(dot) <= err) {
               unsure = true;
               continue;
             }
-            side = exact_edge_side(E, span.face, i, j, m);
-            if (side != edge_side(E, d, span.face)) {
-              unsure = true;
-              continue;
-            }
+            side = dot > 0 ? 1 : -1;
           }
+          if (miss) break;
           if (definite == 0) definite = side;
           else if (side != definite) miss = true;
         }
@@ -335,11 +391,18 @@ BoxPlanner::BoxPlanner(const Mesh& mesh) : mesh_(mesh), faces_(AabbTree::over_fa
 BoxPlan BoxPlanner::plan(const Obb& box, int m) const {
   VOBB_ASSERT(m >= 1, "cubemap resolution m >= 1");
   BoxPlan plan;
-  if (volume(box) == 0.0) {
+  // Zero volume, or a half extent too small for the frame (subnormal: 1 / h may overflow;
+  // box files refuse it): planned as flat, OBV 0, off by at most the box's volume, under
+  // 2^-1022 (2^242)^2 8 for boxes in the coordinate range (validate's bound adds it).
+  if (volume(box) == 0.0 || (box.half.array() < 0x1p-1022).any()) {
     plan.flat = true;
     return plan;
   }
   plan.frame = box_frame(box);
+  if (!(plan.frame.volume_scale > 0)) {  // underflows: the OBV is below 2^-1074 or so (flat)
+    plan.flat = true;
+    return plan;
+  }
   plan.where = locate_point(mesh_, faces_, box.center);
   plan.far_count = plan.where == Location::kOnSurface;
   plan.constant = plan.far_count || plan.where == Location::kOutside ? 8.0 : 0.0;
@@ -372,27 +435,39 @@ BoxPlan BoxPlanner::plan(const Obb& box, int m) const {
     for (int k = 0; k < 3; ++k) {
       const int a = k, b = (k + 1) % 3;
       t.edge_cross[k] = t.id[a] < t.id[b] ? Vec3(t.p[a].cross(t.p[b])) : Vec3(-t.p[b].cross(t.p[a]));
+      t.edge_tie[k] = edge_tie(t.edge_cross[k], t.p[a], t.p[b]);
     }
     t.normal = (t.p[1] - t.p[0]).cross(t.p[2] - t.p[0]);
     if (plan.frame.mirrored) t.normal = -t.normal;
     t.plane = t.normal.dot(t.p[0]);
-    // The centre class is exact, the faces are the plan's. The plane the plan holds, normal .
-    // x = plane, passes within D = 16 u (|e1| |e2| / |n| + 1) max_k |p_k| of the face's
-    // corners, hence of its points: n . e1 is (n - e1 x e2) . e1 plus the rounding of e1, at
-    // most 7 u |e1|^2 |e2| (and as much for e2, with |e| <= 2 max |p|), and the plane's own
-    // value is off by 3 sqrt 3 u |n| |p0|. Along a ray, a plane displaced by D moves a hit at
-    // distance rho from the centre (the plane's) by zeta D / rho. So unless rho > 2^20 D, or
-    // the exact face may lie within `slack` of the centre (rho <= 2 slack with the margin), the
-    // plan's faces and the exact centre class may disagree: a texel the faces cover may then
-    // be off by two pyramids, and this face's hits by up to 2 each (near_centre,
-    // centre_near_surface). Otherwise each of its hits' depth is within 2^-20 relative, its
-    // value s (1 - zeta^3) within 3e-6 (resolution_bound).
+    // The centre class is exact, the faces are the plan's, and the depths come from the plane
+    // the plan holds, n . x = plane with n = fl(e1 x e2), e_i = fl(p_i - p0) (mirrored: both
+    // negated, exactly). Every point x = p0 + s e1* + t e2* (s, t >= 0, s + t <= 1, e* exact) of
+    // the plan's face satisfies |n . x - plane| <= Delta, componentwise:
+    //   n . (x - p0) = (n - e1* x e2*) . (x - p0), with |n - e1* x e2*| <= 4.01 u |e1| x |e2|
+    //   (the cross's rounding, gamma_2, and the differences', u each) and |x - p0| <= max(|e1|,
+    //   |e2|) (1 + 2u); and |fl(n . p0) - n . p0| <= gamma_3 |n| . |p0|.
+    // Delta = 8u (|e1| x |e2|) . max(|e1|, |e2|) + 4u |n| . |p0|, the factors of about 2
+    // covering the rounding of Delta itself, plus 2^-1060 for underflow. Componentwise, so that
+    // the stretched axis of a thin box (local coordinates up to 1 / aspect) enters each term
+    // as it enters n and the plane themselves, not squared.
+    // Along a ray d the plan's hit is at plane / (n . d) and the face's at (plane + delta) /
+    // (n . d), |delta| <= Delta: relative error Delta / (|plane| - Delta). And the plan's face
+    // lies at least (|plane| - Delta) / |n| from the centre. So where
+    // |plane| > 2 slack |n| + (2^20 + 1) Delta, each hit's depth is within 2^-20 relative (its
+    // value s (1 - zeta^3) within 3e-6, resolution_bound) and the exact face (within `slack`
+    // of the plan's) stays over `slack` from the centre, on the side of it that the plan's
+    // face is. Elsewhere the plan's faces and the exact centre class may disagree: a texel the
+    // faces cover may be off by two pyramids, and this face's hits by up to 2 each
+    // (near_centre, centre_near_surface).
     if (!plan.far_count) {
+      constexpr double u = 0x1p-53;
       const Vec3 e1 = t.p[1] - t.p[0], e2 = t.p[2] - t.p[0];
-      const double n = t.normal.norm();
-      const double far = std::max({t.p[0].norm(), t.p[1].norm(), t.p[2].norm()});
-      const double d = n > 0 ? 16 * 0x1p-53 * (e1.norm() * e2.norm() / n + 1) * far : HUGE_VAL;
-      t.near_centre = !(std::abs(t.plane) / n > (2 * slack + (0x1p20 + 1) * d) * (1 + 1e-12));
+      const Vec3 spread = e1.cwiseAbs().cwiseMax(e2.cwiseAbs());
+      const double delta = 8 * u * abs_cross(e1, e2).dot(spread) +
+                           4 * u * t.normal.cwiseAbs().dot(t.p[0].cwiseAbs()) + 0x1p-1060;
+      t.near_centre =
+          !(std::abs(t.plane) > (2 * slack * t.normal.norm() + (0x1p20 + 1) * delta) * (1 + 1e-12));
     }
     const int32_t index = static_cast<int32_t>(plan.tris.size());
     bool used = false;

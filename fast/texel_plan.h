@@ -32,13 +32,20 @@ namespace vobb {
 struct LocalTriangle {
   Vec3 p[3];
   int32_t id[3];       // mesh vertex ids
-  Vec3 edge_cross[3];  // +-(p[k] x p[k+1]): a ray d passes edge k on the side sign(d . edge_cross[k])
-  // Computed in canonical order (lower vertex id first) and negated when needed, so the two
-  // faces that share an edge hold exact negatives whatever the compiler fuses. When
-  // d . edge_cross[k] is exactly 0 the side is decided by simulation of simplicity: the ray is
-  // taken as d + eps e_a + eps^2 e_b + eps^3 e_k (face axis k, a = k+1, b = k+2), whose sign is
-  // that of the first nonzero of E_a, E_b, E_k. That is one consistent perturbed ray for every
+  Vec3 edge_cross[3];  // fl(+-(p[k] x p[k+1])): a ray d passes edge k on the side of sign(d . E*)
+  // E* = +-(p[k] x p[k+1]) taken exactly (the p as the plan holds them). edge_cross is E*
+  // rounded, computed in canonical order (lower vertex id first) and negated when needed, so
+  // the two faces that share an edge hold exact negatives whatever the compiler fuses. Where
+  // d . E* is exactly 0 the side is decided by simulation of simplicity: the ray is taken as
+  // d + eps e_a + eps^2 e_b + eps^3 e_k (face axis k, a = k+1, b = k+2), whose sign is that of
+  // the first nonzero of E*_a, E*_b, E*_k. That is one consistent perturbed ray for every
   // face, so a ray through a shared edge or a vertex is claimed exactly as a ray beside it.
+  // The rounded crosses alone are not consistent around a vertex: the planes of the rounded
+  // crosses of the edges at a vertex v no longer meet on the ray through v, so a ray within
+  // rounding of v may be claimed by several of v's faces or by none (a texel's value then
+  // leaves [0, 1]). The CPU twin therefore decides every edge test within edge_tie[k] of 0
+  // exactly (cpu_edge_side).
+  double edge_tie[3];  // bounds |fl(d . edge_cross[k]) - d* . E*| over the texel directions
   Vec3 normal;   // (p1 - p0) x (p2 - p0), outward for a solid (corrected for mirrored frames)
   double plane;  // normal . p0: along d the face's plane is at zeta = plane / (normal . d)
   // The exact face, or this plane's rounding, may pass so near the centre that the plan's
@@ -62,32 +69,56 @@ struct BoxPlan {
   double constant = 0;     // local-volume constant of the formula above
   std::vector<LocalTriangle> tris;
   std::vector<TexelSpan> spans;
-  bool flat = false;  // zero-volume box: OBV 0, nothing to draw
+  bool flat = false;  // zero volume, or a subnormal half extent (texel_plan.cpp): OBV 0, nothing to draw
   // A face may pass within the frame's rounding of the centre (texel_plan.cpp): the exact
   // class of the centre and the plan's faces may disagree there, so a texel the faces cover
   // may be off by two pyramids instead of one (resolution_bound).
   bool centre_near_surface = false;
 };
 
-// One texel ray (direction d on cubemap face `face`) against one face, in double: whether it
-// hits, and the hit's value (above).
-// The side of edge cross E for texel direction d on cubemap face `face` (see LocalTriangle).
-inline int edge_side(const Vec3& E, const Vec3& d, int face) {
-  const double e = d.dot(E);
-  if (e != 0) return e > 0 ? 1 : -1;
-  const int k = face / 2;
-  for (int c : {(k + 1) % 3, (k + 2) % 3, k})
-    if (E[c] != 0) return E[c] > 0 ? 1 : -1;
-  return 0;  // a degenerate edge: no face of a solid has one
+// A texel of the cubemap: face `face`, column i and row j at resolution m. Its exact centre
+// direction d* has components +-1, -1 + (2i+1)/m and -1 + (2j+1)/m (cubemap.h); `d` is d*
+// rounded to double (cubemap_direction of texel_center).
+struct Texel {
+  int face, i, j, m;
+  Vec3 d;
+};
+
+// The side of edge k of t for the exact texel ray d* (see LocalTriangle): the sign of
+// d* . E*, in rational arithmetic, with simulation of simplicity for an exact 0; 0 when E* is
+// the zero vector (the edge's line passes through the centre, and so does the face's plane).
+int exact_edge_side(const LocalTriangle& t, int k, const Texel& x);
+
+// The CPU twin's edge test: that exact side, computed in double where the double is decisive.
+inline int cpu_edge_side(const LocalTriangle& t, int k, const Texel& x) {
+  const double e = x.d.dot(t.edge_cross[k]);
+  if (__builtin_expect(std::abs(e) > t.edge_tie[k], 1)) return e > 0 ? 1 : -1;
+  return exact_edge_side(t, k, x);  // rays within rounding of the edge's plane: rare
 }
 
-inline bool texel_hit(const LocalTriangle& t, const Vec3& d, int face, bool far_count, double* value) {
-  int side = 0;
-  for (int k = 0; k < 3; ++k) {
-    const int sk = edge_side(t.edge_cross[k], d, face);
-    if (sk == 0) return false;
-    if (k == 0) side = sk;
-    else if (sk != side) return false;
+// One texel ray against one face, in double (the CPU twin): whether it hits, and the hit's
+// value (above). The edge tests are exact (cpu_edge_side), so around every vertex and edge each
+// ray is claimed by the faces an exact ray cast would claim; the depth is in double.
+inline bool texel_hit(const LocalTriangle& t, const Texel& x, bool far_count, double* value) {
+  const Vec3& d = x.d;
+  const double e0 = d.dot(t.edge_cross[0]), e1 = d.dot(t.edge_cross[1]);
+  const bool clear01 = std::abs(e0) > t.edge_tie[0] && std::abs(e1) > t.edge_tie[1];
+  if (__builtin_expect(clear01, 1)) {
+    if ((e0 > 0) != (e1 > 0)) return false;  // the usual miss, decided by two edges
+    const double e2 = d.dot(t.edge_cross[2]);
+    if (__builtin_expect(std::abs(e2) > t.edge_tie[2], 1)) {
+      if ((e2 > 0) != (e0 > 0)) return false;
+    } else if (exact_edge_side(t, 2, x) != (e0 > 0 ? 1 : -1)) {
+      return false;
+    }
+  } else {  // a ray within rounding of edge 0's or 1's plane
+    int side = 0;
+    for (int k = 0; k < 3; ++k) {
+      const int sk = cpu_edge_side(t, k, x);
+      if (sk == 0) return false;
+      if (k == 0) side = sk;
+      else if (sk != side) return false;
+    }
   }
   const double nd = t.normal.dot(d);
   if (nd == 0) return false;  // the ray runs in the face's plane
@@ -108,20 +139,26 @@ inline bool texel_hit(const LocalTriangle& t, const Vec3& d, int face, bool far_
 // within the box). A texel whose cone the surface misses is entirely inside or outside the
 // solid, and the estimate integrates it exactly (exact pyramid weights); any other texel's
 // estimated and true outer fractions both lie in [0, 1], so it is off by at most its pyramid.
-// The bound falls as 1/m (boundary texels grow as m); the observed error falls as m^-2, since
-// the per-texel errors cancel (DESIGN §4).
+// (The estimated fraction lies in [0, 1] because the reference evaluation is a consistent ray
+// cast: its edge tests are exact, LocalTriangle.) This is a guarantee, not an estimate, and it
+// does not fall with m where the surface crosses the box: every texel whose ray crosses the
+// surface within the box counts, and their share of the 6 m^2 stays about the same (dino's
+// leaf boxes: median bound 0.82 of the box volume at m = 4, 0.70 at m = 256). The observed
+// error falls as m^-2, since the per-texel errors cancel (DESIGN §4); validate/ measures it.
 // "Exact OBV" is that of the box as stored (its doubles taken exactly) and the mesh. The plan
 // holds the faces in box-normalized coordinates rounded to double (BoxFrame::local_error,
 // about u |v - c| / h_k on axis k, up to 1e-10 and more in thin boxes far from the faces'
 // vertices): culling and the texel cones are widened by that error, so the counted texels
 // cover the exact faces too, and a face that reaches into the box by less than it is kept.
-// Where a face may pass within that error of the centre (near_centre, centre_near_surface),
-// the centre's exact class and the plan's faces may disagree: the bound counts two pyramids
-// per covered texel, and two more per texel such a face covers (its hits may be wrong either
-// way). Every other face's plane, as the plan holds it, puts each hit within 2^-20 of its
-// depth (texel_plan.cpp), worth 3e-6 pyramids per (texel, face) pair, which the bound adds. Evaluating the plan's doubles is bounded apart
-// (cpu_rounding_bound, gl_deviation_bound), and so is the volume scale's rounding
-// (validate/estimators.h).
+// Where a face may pass within that error of the centre, or its plane's rounding may move a
+// hit by over 2^-20 of its depth (near_centre, centre_near_surface; bounded componentwise, so
+// that a thin box's stretched local axis does not inflate it), the centre's exact class and
+// the plan's faces may disagree: the bound counts two pyramids per covered texel, and two
+// more per texel such a face covers (its hits may be wrong either way). Every other face's
+// plane, as the plan holds it, puts each hit within 2^-20 of its depth (texel_plan.cpp),
+// worth 3e-6 pyramids per (texel, face) pair, which the bound adds. Evaluating the plan's
+// doubles is bounded apart (cpu_rounding_bound, gl_deviation_bound), and so is the volume
+// scale's rounding (validate/estimators.h).
 double resolution_bound(const BoxPlan& plan, int m);
 
 // Scale factor 2^-e bringing the largest |x_i| into [0.5, 1): exact in binary, so it keeps
@@ -147,10 +184,8 @@ struct RoundingModel {
   // does, so its underflow cost is `tiny` in scaled units; the CPU twin does not, so its cost
   // is `tiny` in unscaled units).
   bool scaled_inputs;
-  // For the CPU twin, whose edge test is known (edge_side in double): an edge test within its
-  // error bound is decided in rational arithmetic and compared with the double one, so exact
-  // ties (rays through edges and vertices) count as uncertain only when double gets them wrong.
-  bool resolve_edges_exactly = false;
+  // For the CPU twin, whose edge tests are exact (cpu_edge_side): none is uncertain.
+  bool exact_edges = false;
 };
 struct PlanRounding {
   double value_errors = 0;  // sum over hits of the value's error, plus threshold ambiguities

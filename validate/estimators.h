@@ -49,11 +49,12 @@ class EstimatorSet {
   // twin the float bound is kept too: it bounds the same sums' round-off in float32, so it
   // covers the twin's double round-off of the texel sum (2^29 times smaller). The last term is
   // the round-off outside the texel sum, which both bounds leave out (it matters where they
-  // are 0, e.g. a box that meets no face): the volume scale |det[h0 a0, h1 a1, h2 a2]| (3
-  // roundings scaling the axes, then the determinant's 5 per term, its sum of |terms| at most
-  // sqrt(3) |det| for axes orthonormal to round-off: under 9 eps), the products with the
-  // constant and the texel weight (2 eps), and the exact value's rounding to the nearest
-  // double (eps/2): under 12 eps, taken as 32 eps for margin. The plan's rounding of the
+  // are 0, e.g. a box that meets no face): the volume scale h0 h1 h2 |det[a0 a1 a2]| (the
+  // determinant's 5 roundings per term, its sum of |terms| at most sqrt(3) |det| for axes
+  // orthonormal to round-off, then 3 products: under 9 eps), the products with the constant
+  // and the texel weight (2 eps), and the exact value's rounding to the nearest double
+  // (eps/2): under 12 eps, taken as 32 eps for margin; plus 2^-1068 where these underflow
+  // (each operation then loses up to 2^-1075 absolutely). The plan's rounding of the
   // faces into the box's frame is in resolution_bound (texel_plan.h), which widens its texel
   // cones by it.
   double rigorous_bound(const Obb& box, int m) const;

@@ -125,17 +125,22 @@ TEST(BoxFile, RefusesBoxesThatAreNotBoxes) {
   const std::string path = test::temp_path("bad_boxes.json");
   for (const char* box : {R"({"center":[0,0,0],"axes":[[1,0,0],[0,1,0],[0,1,0]],"half_extents":[1,1,1]})",
                           R"({"center":[0,0,0],"axes":[[2,0,0],[0,1,0],[0,0,1]],"half_extents":[1,1,1]})",
-                          R"({"center":[0,0,0],"axes":[[1,0,0],[0,1,0],[0,0,1]],"half_extents":[1e103,1,1]})"}) {
+                          R"({"center":[0,0,0],"axes":[[1,0,0],[0,1,0],[0,0,1]],"half_extents":[1e103,1,1]})",
+                          // subnormal: 1 / h overflows in the box's frame (fast/cubemap.h)
+                          R"({"center":[0,0,0],"axes":[[1,0,0],[0,1,0],[0,0,1]],"half_extents":[1e-310,1,1]})"}) {
     std::ofstream(path) << "{\"boxes\":[" << box << "]}";
     std::vector<Obb> boxes;
     const Status s = read_boxes(path, &boxes);
     EXPECT_FALSE(s) << box;
     EXPECT_NE(s.message().find("box 0"), std::string::npos) << s.message();
   }
-  // Axes as a 6-digit writer leaves them are still accepted.
-  std::ofstream(path) << R"({"boxes":[{"center":[0,0,0],"axes":[[0.6,0.8,0],[-0.8,0.6,0],[0,0,1]],"half_extents":[1,1,1]}]})";
+  // Axes as a 6-digit writer leaves them are still accepted, and so are flat boxes (a zero half
+  // extent) and tiny ones (the least normal double).
+  std::ofstream(path) << R"({"boxes":[{"center":[0,0,0],"axes":[[0.6,0.8,0],[-0.8,0.6,0],[0,0,1]],"half_extents":[1,1,1]},)"
+                      << R"({"center":[0,0,0],"axes":[[1,0,0],[0,1,0],[0,0,1]],"half_extents":[0,2.2250738585072014e-308,1]}]})";
   std::vector<Obb> boxes;
   EXPECT_TRUE(read_boxes(path, &boxes));
+  EXPECT_EQ(boxes.size(), 2u);
   std::remove(path.c_str());
 }
 

@@ -190,5 +190,39 @@ TEST(CpuEstimator, RaysThroughVerticesAreClaimedOnce) {
   for (int res : {1, 3, 9}) EXPECT_NEAR(est.estimate(b, res), est.estimate(turned, res), 1e-6 * volume(b)) << res;
 }
 
+// A bipyramid over a 48-gon whose apexes lie exactly on one texel ray, their rim vertices
+// generic (not dyadic): every edge cross at an apex is rounded, and the planes of the rounded
+// crosses no longer all contain the ray. Decided on the rounded crosses, each apex's ray was
+// claimed by about a quarter of its 48 faces, or by none (texel_plan.h, LocalTriangle). An
+// exact ray cast claims one face at each apex: the entry at depth 1/4, value -(1 - 1/64), and
+// the exit at 3/4, value 1 - 27/64. Counting the claims is exact. The sum of the values is off
+// by the plan's rounded planes, up to 3e-6 per hit (texel_plan.cpp, plan()), and by their
+// evaluation, which cpu_rounding_bound bounds for all of the plan's hits (in texel units).
+TEST(CpuEstimator, RaysThroughAVertexOfManyFacesAreClaimedOnce) {
+  const int res = 8, face = 0, ti = 5, tj = 2;  // texel direction (1, 0.375, -0.375), exact
+  const Vec3 d = cubemap_direction(face, texel_center(ti, res), texel_center(tj, res));
+  for (unsigned seed = 0; seed < 20; ++seed) {
+    const Mesh mesh = test::bipyramid_on_ray(d, 48, seed);
+    Obb box;
+    box.center = Vec3::Zero();
+    box.half = Vec3(1, 1, 1);  // local coordinates are the world's, exactly
+    const BoxPlan plan = BoxPlanner(mesh).plan(box, res);
+    ASSERT_EQ(plan.where, Location::kOutside);
+    const Texel x{face, ti, tj, res, d};
+    int entries = 0, exits = 0;
+    double sum = 0;
+    for (const LocalTriangle& t : plan.tris) {
+      double value;
+      if (!texel_hit(t, x, false, &value)) continue;
+      (value < 0 ? entries : exits) += 1;
+      sum += value;
+    }
+    EXPECT_EQ(entries, 1) << "seed " << seed;
+    EXPECT_EQ(exits, 1) << "seed " << seed;
+    const double tol = 2 * 3e-6 + cpu_rounding_bound(plan, res) / (plan.frame.volume_scale * 4.0 / (3.0 * res * res));
+    EXPECT_NEAR(sum, -(1 - 1.0 / 64) + (1 - 27.0 / 64), tol) << "seed " << seed;
+  }
+}
+
 }  // namespace
 }  // namespace vobb

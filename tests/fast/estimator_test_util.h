@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <random>
 
 #include "common/mesh.h"
 #include "common/obb.h"
@@ -20,6 +21,33 @@ inline double aligned_plan_round_off(const Mesh& mesh, double area, const Obb& b
   for (const Vec3& v : mesh.vertices) far = std::max(far, (v - box.center).norm());
   const double u = 0x1p-53;
   return area * std::sqrt(3.0) * 7 * u / (1 - 7 * u) * far;
+}
+
+// A convex bipyramid over a k-gon whose apexes lie exactly on the ray along d, at 1/4 and 3/4
+// of d (dyadic when d is), its rim around d / 2 with radius about 0.02 |d| and generic
+// (seeded, not dyadic) vertices, faces outward. A ray along d passes through both apexes,
+// each shared by k faces whose edge crosses are all rounded.
+inline Mesh bipyramid_on_ray(const Vec3& d, int k, unsigned seed) {
+  const Vec3 e1 = d.cross(Vec3(0, 0, 1)).normalized(), e2 = d.normalized().cross(e1);
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> jitter(0.0, 1.0);
+  Mesh mesh;
+  mesh.vertices.push_back(0.25 * d);
+  mesh.vertices.push_back(0.75 * d);
+  for (int i = 0; i < k; ++i) {
+    const double a = 2 * M_PI * (i + 0.8 * jitter(rng)) / k, r = 0.02 * d.norm() * (1 + 0.1 * jitter(rng));
+    mesh.vertices.push_back(0.5 * d + r * std::cos(a) * e1 + r * std::sin(a) * e2);
+  }
+  for (int32_t i = 0; i < k; ++i) {
+    const int32_t w0 = 2 + i, w1 = 2 + (i + 1) % k;
+    mesh.faces.push_back({0, w1, w0});
+    mesh.faces.push_back({1, w0, w1});
+  }
+  double vol = 0;  // six times the signed volume: positive when the faces point out
+  for (const Face& f : mesh.faces) vol += mesh.vertices[f[0]].dot(mesh.vertices[f[1]].cross(mesh.vertices[f[2]]));
+  if (vol < 0)
+    for (Face& f : mesh.faces) std::swap(f[1], f[2]);
+  return mesh;
 }
 
 }  // namespace vobb::test

@@ -12,6 +12,7 @@
 #include "common/io/mesh_report.h"
 #include "data/analytic_meshes.h"
 #include "exact/outer_volume.h"
+#include "fast/estimator_test_util.h"
 #include "fast/gl_estimator.h"
 #include "test_common.h"
 #include "validate/box_corpus.h"
@@ -158,6 +159,66 @@ TEST(EstimatorAccuracy, ThinBoxesAgainstAFaceStayWithinTheRigorousBound) {
             << validate::to_string(backend) << " m " << m << " box " << i << " exact " << truth[i]
             << " estimate " << est[i];
     }
+}
+
+// Rays through a vertex of many faces (texel_plan.h, LocalTriangle): bipyramids whose apexes
+// lie exactly on a texel ray of m = 8 and m = 24, with 48 faces at each. Decided on the rounded
+// edge crosses, such a ray was claimed by about a dozen faces at each apex, and the CPU twin's
+// estimate was off by several pyramids, where its own bound (resolution_bound, one pyramid per
+// texel the surface crosses, plus cpu_rounding_bound and the round-off term) allowed about
+// one. The CPU twin must lie within that bound, the GL estimator within its rigorous bound
+// (which adds its float deviation: every such tie is an uncertain pair there).
+TEST(EstimatorAccuracy, RaysThroughAVertexOfManyFacesStayWithinTheRigorousBound) {
+  const Vec3 d(1, 0.375, -0.375);  // texel (5, 2) of cubemap face +x at m = 8, (16, 7) at m = 24
+  Obb box;
+  box.center = Vec3::Zero();
+  box.half = Vec3(1, 1, 1);
+  for (unsigned seed = 0; seed < 6; ++seed) {
+    const Mesh mesh = test::bipyramid_on_ray(d, 48, seed);
+    const double truth = to_double_nearest(exact::ClipSolver(mesh).obv(box));
+    validate::EstimatorSet estimators(mesh, true);
+    ASSERT_TRUE(estimators.has_gl()) << estimators.gl_status();
+    for (validate::Backend backend : {validate::Backend::kCpu, validate::Backend::kGl})
+      for (int m : {8, 24}) {
+        std::vector<double> seconds;
+        const double est = estimators.estimate(backend, {box}, m, &seconds)[0];
+        const validate::EstimatorSet::Bounds b = estimators.bounds(box, m);
+        const double bound = backend == validate::Backend::kCpu
+                                 ? b.resolution + cpu_rounding_bound(BoxPlanner(mesh).plan(box, m), m) + b.roundoff
+                                 : b.rigorous();
+        EXPECT_LE(std::abs(est - truth), bound)
+            << validate::to_string(backend) << " m " << m << " seed " << seed << " exact " << truth
+            << " estimate " << est;
+      }
+  }
+}
+
+// Boxes so small that their volume is subnormal (half extents near 1e-108): the volume scale
+// |det[h0 a0, h1 a1, h2 a2]| then loses up to half a subnormal step (2^-1075) per operation
+// instead of a relative eps, so a bound made of relative terms (32 eps vol, 0 here) allowed
+// no error at all, while the estimate was off by several steps. The round-off term carries an
+// absolute allowance for underflow; every estimate must lie within the rigorous bound. The
+// boxes lie outside the solid, so the exact OBV is the box's volume, taken exactly.
+TEST(EstimatorAccuracy, BoxesOfSubnormalVolumeStayWithinTheRigorousBound) {
+  const Mesh cube = analytic::cube().mesh;
+  validate::EstimatorSet estimators(cube, true);
+  ASSERT_TRUE(estimators.has_gl()) << estimators.gl_status();
+  const exact::ClipSolver exact(cube);
+  for (double h : {3e-108, 1e-108, 4e-109, 1e-110}) {
+    Obb box;
+    box.center = Vec3(5, 5, 5);
+    box.axes = {Vec3(-0.8221300000911982, -0.511570111605987, -0.2497964848861659),
+                Vec3(-0.4326647158294003, 0.8466302197288976, -0.30986854425395105),
+                Vec3(0.3700047386538593, -0.14667410116730417, -0.9173784395877487)};
+    box.half = Vec3(h, 1.3 * h, 0.7 * h);
+    const double truth = to_double_nearest(exact.obv(box));
+    for (validate::Backend backend : {validate::Backend::kCpu, validate::Backend::kGl}) {
+      std::vector<double> seconds;
+      const double est = estimators.estimate(backend, {box}, 4, &seconds)[0];
+      EXPECT_LE(std::abs(est - truth), estimators.rigorous_bound(box, 4))
+          << validate::to_string(backend) << " h " << h << " exact " << truth << " estimate " << est;
+    }
+  }
 }
 
 }  // namespace
