@@ -182,6 +182,15 @@ Status read_off(const Reader& r, LoadedMesh* out) {
     for (int k = 0; k < 3; ++k)
       if (!parse_double(t[k], &p[k]))
         return r.fail_at(lines.number(), "not a number: '" + std::string(t[k].substr(0, 32)) + "'");
+    // Values after the coordinates are a normal, a colour or texture coordinates (the N, C
+    // and ST headers; some writers add them under a plain OFF header too): numbers, ignored.
+    // Anything else means the line is not what it seems.
+    for (size_t k = 3; k < t.size(); ++k) {
+      double ignored;
+      if (!parse_double(t[k], &ignored))
+        return r.fail_at(lines.number(), "unexpected '" + std::string(t[k].substr(0, 32)) +
+                                             "' after the vertex's coordinates");
+    }
     m.vertices.push_back(p);
   }
   std::vector<long long> idx;
@@ -197,6 +206,18 @@ Status read_off(const Reader& r, LoadedMesh* out) {
     for (long long k = 0; k < n; ++k)
       if (!parse_int(t[k + 1], &idx[k]))
         return r.fail_at(lines.number(), "bad vertex index '" + std::string(t[k + 1].substr(0, 32)) + "'");
+    // After the indices OFF allows a colour: a colormap index, RGB or RGBA, as integers or
+    // floats. More values, or words, mean the face size and the line disagree.
+    const size_t extra = t.size() - 1 - static_cast<size_t>(n);
+    if (extra > 4)
+      return r.fail_at(lines.number(), "face of " + std::to_string(n) + " indices is followed by " +
+                                           std::to_string(extra) + " values (a colour has at most 4)");
+    for (size_t k = 1 + static_cast<size_t>(n); k < t.size(); ++k) {
+      double ignored;
+      if (!parse_double(t[k], &ignored))
+        return r.fail_at(lines.number(), "unexpected '" + std::string(t[k].substr(0, 32)) +
+                                             "' after the face's indices");
+    }
     Status s = r.add_polygon(idx, lines.number(), static_cast<size_t>(i), out);
     if (!s) return s;
   }
@@ -520,33 +541,65 @@ Status read_stl_ascii(const Reader& r, LoadedMesh* out) {
   std::vector<std::string_view> t;
   Mesh& m = out->mesh;
   if (!lines.next_tokens(&t, false) || t[0] != "solid") return r.fail("not an STL file");
-  int corners = -1;  // -1 outside a facet, else vertices seen in the current loop
+  // The grammar, one keyword line each: facet normal nx ny nz / outer loop / vertex x y z
+  // (three times) / endloop / endfacet. A line out of that order, or with other tokens, is
+  // refused: read loosely it could drop or merge corners without a word.
+  enum class At { kSolid, kFacet, kLoop, kLoopEnd, kFacetEnd };
+  At at = At::kSolid;
+  int corners = 0;
   bool ended = false;
+  auto keyword_line = [&](const char* what, size_t tokens) -> Status {
+    if (t.size() != tokens)
+      return r.fail_at(lines.number(), "'" + std::string(what) + "' line with " + std::to_string(t.size()) +
+                                           " words, expected " + std::to_string(tokens));
+    return Status::ok();
+  };
   while (lines.next_tokens(&t, false)) {
     const std::string_view k = t[0];
+    Status s = Status::ok();
+    if (ended) {  // some writers put several solids in one file: read them all
+      if (k != "solid") return r.fail_at(lines.number(), "unexpected '" + std::string(k.substr(0, 32)) + "' after endsolid");
+      ended = false;
+      continue;
+    }
     if (k == "facet") {
-      if (corners >= 0) return r.fail_at(lines.number(), "facet inside a facet");
+      if (at != At::kSolid) return r.fail_at(lines.number(), "facet inside a facet");
+      if (t.size() < 2 || t[1] != "normal") return r.fail_at(lines.number(), "'facet' without 'normal'");
+      if (!(s = keyword_line("facet normal", 5))) return s;
+      at = At::kFacet;
+    } else if (k == "outer") {
+      if (at != At::kFacet) return r.fail_at(lines.number(), "'outer loop' outside a facet, or twice");
+      if (t.size() < 2 || t[1] != "loop") return r.fail_at(lines.number(), "'outer' without 'loop'");
+      if (!(s = keyword_line("outer loop", 2))) return s;
+      at = At::kLoop;
       corners = 0;
-    } else if (k == "outer" || k == "endloop") {
-      if (corners < 0) return r.fail_at(lines.number(), "'" + std::string(k) + "' outside a facet");
     } else if (k == "vertex") {
-      if (corners < 0) return r.fail_at(lines.number(), "vertex outside a facet");
+      if (at != At::kLoop) return r.fail_at(lines.number(), "vertex outside an outer loop");
       if (corners == 3) return r.fail_at(lines.number(), "facet with more than 3 vertices");
       if (t.size() < 4) return r.fail_at(lines.number(), "vertex needs 3 coordinates");
       Vec3 p;
       for (int c = 0; c < 3; ++c)
         if (!parse_double(t[c + 1], &p[c]))
           return r.fail_at(lines.number(), "not a number: '" + std::string(t[c + 1].substr(0, 32)) + "'");
+      if (t.size() > 4)
+        return r.fail_at(lines.number(), "unexpected '" + std::string(t[4].substr(0, 32)) + "' after the vertex's coordinates");
       m.vertices.push_back(p);
       ++corners;
-    } else if (k == "endfacet") {
+    } else if (k == "endloop") {
+      if (at != At::kLoop) return r.fail_at(lines.number(), "'endloop' outside an outer loop");
       if (corners != 3) return r.fail_at(lines.number(), "facet without exactly 3 vertices");
+      if (!(s = keyword_line("endloop", 1))) return s;
+      at = At::kLoopEnd;
+    } else if (k == "endfacet") {
+      if (at == At::kLoop) return r.fail_at(lines.number(), "'endfacet' before 'endloop'");
+      if (at != At::kLoopEnd) return r.fail_at(lines.number(), "'endfacet' without a facet and its outer loop");
+      if (!(s = keyword_line("endfacet", 1))) return s;
       const int32_t b = static_cast<int32_t>(m.vertices.size()) - 3;
       m.faces.push_back({b, b + 1, b + 2});
-      corners = -1;
+      at = At::kSolid;
     } else if (k == "endsolid") {
+      if (at != At::kSolid) return r.fail_at(lines.number(), "'endsolid' inside a facet");
       ended = true;
-      break;
     } else {
       return r.fail_at(lines.number(), "unexpected '" + std::string(k.substr(0, 32)) + "'");
     }

@@ -92,6 +92,24 @@ TEST(MeshIo, OffVariantsCommentsColoursAndPolygons) {
   std::remove(path.c_str());
 }
 
+// ASCII STL with several solids in one file (as some exporters write assemblies): every
+// solid's facets are read; keyword lines in the grammar's order with its words only.
+TEST(MeshIo, AsciiStlWithSeveralSolidsReadsThemAll) {
+  const std::string path = test::temp_path("two.stl");
+  auto facet = [](const char* a, const char* b, const char* c) {
+    return std::string("  facet normal 0 0 0\n    outer loop\n      vertex ") + a + "\n      vertex " + b +
+           "\n      vertex " + c + "\n    endloop\n  endfacet\n";
+  };
+  write_text(path, "solid a\n" + facet("0 0 0", "0 1 0", "1 0 0") + facet("0 0 0", "1 0 0", "0 0 1") +
+                       "endsolid a\nsolid b\n" + facet("0 0 0", "0 0 1", "0 1 0") +
+                       facet("1 0 0", "0 1 0", "0 0 1") + "endsolid b\n");
+  LoadedMesh lm;
+  const Status s = load_mesh(path, &lm);
+  ASSERT_TRUE(s) << s.message();
+  EXPECT_EQ(lm.mesh.faces.size(), 4u);  // was 2: the second solid was dropped
+  std::remove(path.c_str());
+}
+
 // A file saved under another format's extension: refused in one line that says what the file
 // looks like. Every native format written by save_mesh, read under every other extension
 // whose parser refuses it (binary STL has no magic, so it is never named).

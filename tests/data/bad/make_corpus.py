@@ -96,6 +96,23 @@ files["records_beyond_count.ply"] = (
     "element face 10\nproperty list uchar int vertex_indices\nend_header\n" +
     "".join(" ".join(map(str, v)) + "\n" for v in V) + "".join("3 %d %d %d\n" % f for f in F))
 
+# Words where OFF allows only numbers (a colour after a face's indices, a normal or colour
+# after a vertex's coordinates), and more values after the indices than a colour holds.
+files["junk_after_face_indices.off"] = off(V, F).replace("3 0 4 6\n", "3 0 4 6 abc\n", 1)
+files["junk_after_vertex.off"] = off(V, F).replace("\n1 0 0\n", "\n1 0 0 zz\n", 1)
+files["long_face_line.off"] = off(V, F).replace("3 0 4 6\n", "3 0 4 6 1 2 3 4 5\n", 1)
+# ASCII STL out of its grammar: a facet without its outer loop, words after a vertex's
+# coordinates, and text after endsolid.
+def stl_ascii(facets):
+    s = "solid cube\n"
+    for tri in facets:
+        s += "facet normal 0 0 0\nouter loop\n" + "".join("vertex %d %d %d\n" % V[i] for i in tri)
+        s += "endloop\nendfacet\n"
+    return s + "endsolid cube\n"
+files["facet_without_loop.stl"] = stl_ascii(F).replace("outer loop\n", "", 1).replace("endloop\n", "", 1)
+files["junk_after_vertex.stl"] = stl_ascii(F).replace("vertex 0 0 0\n", "vertex 0 0 0 7\n", 1)
+files["text_after_endsolid.stl"] = stl_ascii(F) + "facet normal 0 0 0\n"
+
 for name, content in files.items():
     with open(name, "wb") as fh:
         fh.write(content.encode() if isinstance(content, str) else content)
