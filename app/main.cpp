@@ -33,6 +33,7 @@
 #include "fast/variational_builder.h"
 #include "vobb/config.h"
 #include "app/validate_command.h"
+#include "validate/estimators.h"
 #include "app/collide_command.h"
 #include "common/stopwatch.h"
 
@@ -371,6 +372,17 @@ int run_obv(const std::string& mesh_path, const std::string& boxes_path, const s
     int m;
     std::vector<double> obv, seconds;
   };
+  // A rigorous bound on each estimate's error against the exact OBV (validate/estimators.h):
+  // the CPU twin's own, or GL's with its float deviation.
+  auto bounds_of = [&](const Run& r) {
+    const vobb::validate::EstimatorSet source(mesh.mesh, false);
+    std::vector<double> out(n);
+    for (size_t i = 0; i < n; ++i) {
+      const vobb::validate::EstimatorSet::Bounds b = source.bounds(boxes[i], r.m);
+      out[i] = r.backend == "cpu" ? b.cpu_rigorous() : b.rigorous();
+    }
+    return out;
+  };
   std::vector<Run> runs;
   if (want_cpu) {
     const vobb::CpuObvEstimator cpu(mesh.mesh);
@@ -391,38 +403,50 @@ int run_obv(const std::string& mesh_path, const std::string& boxes_path, const s
       r.seconds.assign(n, n ? seconds_since(t0) / n : 0.0);
       runs.push_back(std::move(r));
     }
+  std::vector<std::vector<double>> bound;
+  for (const Run& r : runs) bound.push_back(bounds_of(r));
   std::vector<double> exact_value(n, 0.0), exact_seconds(n, 0.0);
+  std::vector<std::string> exact_rational(n);
   if (want_exact) {
     const vobb::exact::ClipSolver exact(mesh.mesh);
     for (size_t i = 0; i < n; ++i) {
       const auto t0 = std::chrono::steady_clock::now();
-      exact_value[i] = vobb::to_double_nearest(exact.obv(boxes[i]));
+      const vobb::Rational v = exact.obv(boxes[i]);
       exact_seconds[i] = seconds_since(t0);
+      exact_value[i] = vobb::to_double_nearest(v);
+      exact_rational[i] = v.get_str();
     }
   }
 
   nlohmann::ordered_json out = nlohmann::ordered_json::array();
-  if (!json) std::printf("%5s %8s %5s %24s %24s %12s %10s\n", "box", "backend", "m", "OBV", "exact", "rel.error", "seconds");
+  if (!json)
+    std::printf("%5s %8s %5s %24s %24s %12s %12s %10s\n", "box", "backend", "m", "OBV", "exact", "rel.error", "bound",
+                "seconds");
   for (size_t i = 0; i < n; ++i) {
     nlohmann::ordered_json jb;
     jb["index"] = i;
     jb["box_volume"] = vobb::volume(boxes[i]);
     if (want_exact) {
       jb["exact"] = exact_value[i];
+      jb["exact_rational"] = exact_rational[i];
       jb["exact_seconds"] = exact_seconds[i];
     }
     nlohmann::ordered_json est = nlohmann::ordered_json::array();
-    for (const Run& r : runs) {
-      est.push_back({{"backend", r.backend}, {"m", r.m}, {"obv", r.obv[i]}, {"seconds", r.seconds[i]}});
+    for (size_t k = 0; k < runs.size(); ++k) {
+      const Run& r = runs[k];
+      est.push_back({{"backend", r.backend}, {"m", r.m}, {"obv", r.obv[i]}, {"bound", bound[k][i]},
+                     {"seconds", r.seconds[i]}});
       if (json) continue;
       char rel[32] = "-", ex[40] = "-";
       if (want_exact && exact_value[i] != 0)
         std::snprintf(rel, sizeof rel, "%.3e", std::abs(r.obv[i] - exact_value[i]) / exact_value[i]);
       if (want_exact) std::snprintf(ex, sizeof ex, "%.17g", exact_value[i]);
-      std::printf("%5zu %8s %5d %24.17g %24s %12s %10.6f\n", i, r.backend.c_str(), r.m, r.obv[i], ex, rel, r.seconds[i]);
+      std::printf("%5zu %8s %5d %24.17g %24s %12s %12.3e %10.6f\n", i, r.backend.c_str(), r.m, r.obv[i], ex, rel,
+                  bound[k][i], r.seconds[i]);
     }
     if (!json && runs.empty())
-      std::printf("%5zu %8s %5s %24.17g %24s %12s %10.6f\n", i, "exact", "-", exact_value[i], "-", "-", exact_seconds[i]);
+      std::printf("%5zu %8s %5s %24.17g %24s %12s %12s %10.6f\n", i, "exact", "-", exact_value[i], "-", "-", "-",
+                  exact_seconds[i]);
     jb["estimates"] = est;
     out.push_back(jb);
   }

@@ -56,7 +56,7 @@ EstimatorSet::Bounds EstimatorSet::bounds(const Obb& box, int m) const {
   // A box with a subnormal half extent is planned as flat (texel_plan.cpp): OBV 0 for at most
   // its volume (check_request refuses such boxes; the bound stays true without it).
   const bool subnormal = (box.half.array() > 0 && box.half.array() < 0x1p-1022).any();
-  return {resolution_bound(plan, m), gl_deviation_bound(plan, m),
+  return {resolution_bound(plan, m), gl_deviation_bound(plan, m), cpu_rounding_bound(plan, m),
           (subnormal ? volume(box) : 0.0) + 32 * kEps * volume(box) + 0x1p-1068};
 }
 

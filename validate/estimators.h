@@ -58,11 +58,14 @@ class EstimatorSet {
   // faces into the box's frame is in resolution_bound (texel_plan.h), which widens its texel
   // cones by it.
   double rigorous_bound(const Obb& box, int m) const;
-  // The parts: resolution_bound, gl_deviation_bound (the bound on |GL - CPU twin|) and the
-  // round-off term.
+  // The parts: resolution_bound, gl_deviation_bound (the bound on |GL - CPU twin|),
+  // cpu_rounding_bound (on |CPU twin - exact evaluation of the plan|) and the round-off term.
+  // rigorous() holds for either backend; cpu_rigorous() is the tighter one for the CPU twin
+  // alone (its double round-off instead of the float deviation).
   struct Bounds {
-    double resolution = 0, deviation = 0, roundoff = 0;
+    double resolution = 0, deviation = 0, cpu_rounding = 0, roundoff = 0;
     double rigorous() const { return resolution + deviation + roundoff; }
+    double cpu_rigorous() const { return resolution + cpu_rounding + roundoff; }
   };
   Bounds bounds(const Obb& box, int m) const;
   // The suite's front door for one estimate: refuses, in one line, what the estimators take

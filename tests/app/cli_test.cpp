@@ -11,6 +11,9 @@
 #include <fstream>
 #include <sstream>
 
+#include <nlohmann/json.hpp>
+
+#include "common/exact_predicates.h"
 #include "common/tree_io.h"
 #include "test_common.h"
 
@@ -246,6 +249,16 @@ TEST(Cli, BuildExportAndInfoOnAnAnalyticMesh) {
     for (const char* key : {"\"index\"", "\"box_volume\"", "\"exact\"", "\"estimates\"", "\"backend\": \"cpu\"",
                             "\"backend\": \"gl\"", "\"m\": 8", "\"obv\"", "\"seconds\"", "\"renderer\""})
       EXPECT_NE(r.out.find(key), std::string::npos) << key << r.out;
+    // The exact OBV as a rational too, whose nearest double is "exact"; and every estimate
+    // within its rigorous bound of it.
+    const nlohmann::json doc = nlohmann::json::parse(r.out);
+    for (const auto& box : doc["boxes"]) {
+      const Rational q(box["exact_rational"].get<std::string>());
+      EXPECT_EQ(to_double_nearest(q), box["exact"].get<double>());
+      ASSERT_EQ(box["estimates"].size(), 4u);  // cpu and gl at m = 4 and 8
+      for (const auto& e : box["estimates"])
+        EXPECT_LE(std::abs(e["obv"].get<double>() - box["exact"].get<double>()), e["bound"].get<double>()) << e;
+    }
     // Without a GL context: gl is refused in one line, auto falls back to the CPU twin and warns.
     ::setenv("VOBB_GL", "off", 1);
     r = vobb_cli("obv " + mesh + " --boxes " + boxes + " --backend gl");
