@@ -2,6 +2,7 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <random>
 
@@ -48,6 +49,23 @@ inline Mesh bipyramid_on_ray(const Vec3& d, int k, unsigned seed) {
   if (vol < 0)
     for (Face& f : mesh.faces) std::swap(f[1], f[2]);
   return mesh;
+}
+
+// The review's generic rotation (three orthonormal axes to round-off) and the cube [-1, 1]^3
+// in the frame (a2, a0, a1), its faces outward: a mesh none of whose faces is axis-aligned.
+inline const Vec3 kTurnedA0(-0.8221300000911982, -0.511570111605987, -0.2497964848861659);
+inline const Vec3 kTurnedA1(-0.4326647158294003, 0.8466302197288976, -0.30986854425395105);
+inline const Vec3 kTurnedA2(0.3700047386538593, -0.14667410116730417, -0.9173784395877487);
+inline Mesh turned_cube() {
+  Mesh cube;
+  for (int i = 0; i < 8; ++i)
+    cube.vertices.push_back((i & 1 ? 1 : -1) * kTurnedA2 + (i & 2 ? 1 : -1) * kTurnedA0 + (i & 4 ? 1 : -1) * kTurnedA1);
+  for (const auto& q : {std::array<int32_t, 4>{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4}, {2, 6, 7, 3},
+                        {0, 2, 3, 1}, {4, 5, 7, 6}}) {
+    cube.faces.push_back({q[0], q[1], q[2]});
+    cube.faces.push_back({q[0], q[2], q[3]});
+  }
+  return cube;
 }
 
 }  // namespace vobb::test

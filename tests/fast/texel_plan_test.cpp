@@ -2,26 +2,13 @@
 
 #include <gtest/gtest.h>
 
-#include <array>
 #include <cmath>
 
 #include "common/obb.h"
+#include "fast/estimator_test_util.h"
 
 namespace vobb {
 namespace {
-
-// The cube [-1, 1]^3 in a generic rotated frame (a2, a0, a1), faces outward.
-Mesh rotated_cube(const Vec3& a0, const Vec3& a1, const Vec3& a2) {
-  Mesh cube;
-  for (int i = 0; i < 8; ++i)
-    cube.vertices.push_back((i & 1 ? 1 : -1) * a2 + (i & 2 ? 1 : -1) * a0 + (i & 4 ? 1 : -1) * a1);
-  for (const auto& q : {std::array<int32_t, 4>{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4}, {2, 6, 7, 3},
-                        {0, 2, 3, 1}, {4, 5, 7, 6}}) {
-    cube.faces.push_back({q[0], q[1], q[2]});
-    cube.faces.push_back({q[0], q[2], q[3]});
-  }
-  return cube;
-}
 
 // Thin boxes tilted by 0.3 rad against a face of a rotated cube, their centres half their
 // thin extent from its plane, at aspects 1e-3, 1e-4 and 1e-6. In box units the face passes
@@ -34,10 +21,8 @@ Mesh rotated_cube(const Vec3& a0, const Vec3& a1, const Vec3& a2) {
 // from the centre and the componentwise bound is 1.6e-6 of that: such a box is flagged, and
 // its bound doubled, rightly within the 2^-20 rule.)
 TEST(TexelPlan, ThinBoxesDoNotTakeFarFacesAsNearTheCentre) {
-  const Vec3 a0(-0.8221300000911982, -0.511570111605987, -0.2497964848861659);
-  const Vec3 a1(-0.4326647158294003, 0.8466302197288976, -0.30986854425395105);
-  const Vec3 a2(0.3700047386538593, -0.14667410116730417, -0.9173784395877487);
-  const Mesh cube = rotated_cube(a0, a1, a2);
+  const Vec3 &a0 = test::kTurnedA0, &a1 = test::kTurnedA1, &a2 = test::kTurnedA2;
+  const Mesh cube = test::turned_cube();
   const BoxPlanner planner(cube);
   // The face x = 1 of the cube's frame has outward normal a2. The boxes' thin axis is a2
   // turned by 0.3 rad towards a0.

@@ -113,17 +113,8 @@ TEST(EstimatorAccuracy, AnalyticMeshesConvergeWithM) {
 // and 4e-19 on one of volume 5e-13. Those boxes, as the review wrote them: every estimate must
 // lie within the rigorous bound, on both backends and at every m.
 TEST(EstimatorAccuracy, ThinBoxesAgainstAFaceStayWithinTheRigorousBound) {
-  const Vec3 a0(-0.8221300000911982, -0.511570111605987, -0.2497964848861659);
-  const Vec3 a1(-0.4326647158294003, 0.8466302197288976, -0.30986854425395105);
-  const Vec3 a2(0.3700047386538593, -0.14667410116730417, -0.9173784395877487);
-  Mesh cube;  // the cube [-1, 1]^3 in the frame (a2, a0, a1), its faces outward
-  for (int i = 0; i < 8; ++i)
-    cube.vertices.push_back((i & 1 ? 1 : -1) * a2 + (i & 2 ? 1 : -1) * a0 + (i & 4 ? 1 : -1) * a1);
-  for (const auto& q : {std::array<int32_t, 4>{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4}, {2, 6, 7, 3},
-                        {0, 2, 3, 1}, {4, 5, 7, 6}}) {
-    cube.faces.push_back({q[0], q[1], q[2]});
-    cube.faces.push_back({q[0], q[2], q[3]});
-  }
+  const Vec3 &a0 = test::kTurnedA0, &a1 = test::kTurnedA1, &a2 = test::kTurnedA2;
+  const Mesh cube = test::turned_cube();
   const struct {
     Vec3 centre;
     double thin;
@@ -205,9 +196,7 @@ TEST(EstimatorAccuracy, BoxesOfSubnormalVolumeStayWithinTheRigorousBound) {
   for (double h : {3e-108, 1e-108, 4e-109, 1e-110}) {
     Obb box;
     box.center = Vec3(5, 5, 5);
-    box.axes = {Vec3(-0.8221300000911982, -0.511570111605987, -0.2497964848861659),
-                Vec3(-0.4326647158294003, 0.8466302197288976, -0.30986854425395105),
-                Vec3(0.3700047386538593, -0.14667410116730417, -0.9173784395877487)};
+    box.axes = {test::kTurnedA0, test::kTurnedA1, test::kTurnedA2};
     box.half = Vec3(h, 1.3 * h, 0.7 * h);
     const double truth = to_double_nearest(exact.obv(box));
     for (validate::Backend backend : {validate::Backend::kCpu, validate::Backend::kGl}) {
