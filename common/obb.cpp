@@ -1,5 +1,7 @@
 #include "common/obb.h"
+#include "common/solidity.h"
 #include "common/status.h"
+#include "common/text_util.h"
 
 #include <cmath>
 #include <limits>
@@ -15,6 +17,29 @@ const double kFilterFloor = std::ldexp(1.0, -600);
 double volume(const Obb& box) {
   const double det = box.axes[0].dot(box.axes[1].cross(box.axes[2]));
   return 8.0 * box.half[0] * box.half[1] * box.half[2] * std::abs(det);
+}
+
+std::string box_defect(const Obb& b) {
+  if (!b.center.allFinite() || !b.half.allFinite()) return "non-finite box values";
+  for (const Vec3& a : b.axes)
+    if (!a.allFinite()) return "non-finite box axes";
+  if ((b.half.array() < 0).any()) return "negative half extent";
+  // 1 / h may overflow in the box's frame (fast/cubemap.h).
+  if ((b.half.array() > 0 && b.half.array() < 0x1p-1022).any()) return "subnormal half extent (below 2^-1022)";
+  for (int i = 0; i < 3; ++i)
+    for (int k = i; k < 3; ++k) {
+      const double dev = std::abs(b.axes[i].dot(b.axes[k]) - (i == k ? 1.0 : 0.0));
+      if (!(dev <= 1e-5))
+        return "axes are not orthonormal (a" + std::to_string(i) + " . a" + std::to_string(k) + " is off by " +
+               format_double(dev) + ")";
+    }
+  // The same range as mesh coordinates (solidity.h), with room for a box around such a mesh.
+  for (int j = 0; j < 3; ++j) {
+    const double reach = std::abs(b.center[j]) + b.half[0] * std::abs(b.axes[0][j]) +
+                         b.half[1] * std::abs(b.axes[1][j]) + b.half[2] * std::abs(b.axes[2][j]);
+    if (!(reach <= 2 * kMaxCoordinate)) return "extends beyond +-2^241 (about 3.5e72)";
+  }
+  return "";
 }
 
 std::array<Vec3, 8> corners(const Obb& box) {

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <array>
+#include <string>
 #include <vector>
 
 #include "common/exact_predicates.h"
@@ -22,6 +23,13 @@ struct Obb {
 
 // Volume of the parallelepiped, 8 h0 h1 h2 |det[a0 a1 a2]|, in double.
 double volume(const Obb& box);
+
+// What makes a box unfit for vobb's estimators and files, in words ("" when it is fit):
+// non-finite numbers, a negative or subnormal half extent (below 2^-1022; zero is a flat box
+// and fine), axes further from orthonormal than 1e-5 in some dot product (DESIGN §7: axes
+// written with 6 significant digits are off by 2e-6 at most), or a box reaching beyond twice
+// the mesh coordinate range (2^241). Box files and the validation suite refuse such boxes.
+std::string box_defect(const Obb& box);
 
 // The 8 corners: corner i is c + sum_k s_k h_k a_k with s_k = +1 when bit k of i is set,
 // else -1.

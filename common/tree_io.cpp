@@ -40,31 +40,7 @@ std::string get_box(const Json& j, Obb* b) {
   if (!j.contains("axes") || !j["axes"].is_array() || j["axes"].size() != 3) return "bad or missing 'axes'";
   for (int k = 0; k < 3; ++k)
     if (!get_vec(j["axes"][k], &b->axes[k])) return "bad or missing 'axes'";
-  if (!b->center.allFinite() || !b->half.allFinite()) return "non-finite box values";
-  for (const Vec3& a : b->axes)
-    if (!a.allFinite()) return "non-finite box axes";
-  if ((b->half.array() < 0).any()) return "negative half extent";
-  // A nonzero half extent below the least normal double (2^-1022): 1 / h may overflow in the
-  // box's frame (fast/cubemap.h). Zero is a flat box, and fine.
-  if ((b->half.array() > 0 && b->half.array() < 0x1p-1022).any()) return "subnormal half extent (below 2^-1022)";
-  // DESIGN §7: axes may be only nearly orthonormal, and the solid is the exact parallelepiped.
-  // "Nearly" is within 1e-5 in every dot product: axes written with 6 significant digits are
-  // off by at most 5e-7 per component, 2e-6 in a dot product; anything further is not a box
-  // frame but a shear or a scale, which no writer of OBBs means.
-  for (int i = 0; i < 3; ++i)
-    for (int k = i; k < 3; ++k) {
-      const double dev = std::abs(b->axes[i].dot(b->axes[k]) - (i == k ? 1.0 : 0.0));
-      if (!(dev <= 1e-5))
-        return "axes are not orthonormal (a" + std::to_string(i) + " . a" + std::to_string(k) + " is off by " +
-               format_double(dev) + ")";
-    }
-  // The same range as mesh coordinates (solidity.h), with room for a box around such a mesh.
-  for (int j = 0; j < 3; ++j) {
-    const double reach = std::abs(b->center[j]) + b->half[0] * std::abs(b->axes[0][j]) +
-                         b->half[1] * std::abs(b->axes[1][j]) + b->half[2] * std::abs(b->axes[2][j]);
-    if (!(reach <= 2 * kMaxCoordinate)) return "extends beyond +-2^241 (about 3.5e72)";
-  }
-  return "";
+  return box_defect(*b);
 }
 
 bool get_int(const Json& j, const char* key, long long* out) {

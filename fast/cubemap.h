@@ -33,11 +33,11 @@ struct BoxFrame {
   Vec3 local_error(const Vec3& p) const;
   double inverse_error = 0;  // alpha of box_frame: h_k |t_k - (to_local (p - c))_k| <= alpha |p - c|_inf
   Vec3 half = Vec3::Ones();  // the box's half extents
+  bool valid = true;         // false: axes double cannot invert, or a subnormal half extent
 };
 
-// Precondition: invertible axes and half extents of at least 2^-1022 (normal doubles; a box
-// with a zero half extent is flat, and one with a subnormal half extent is refused where boxes
-// are read, since 1 / h could overflow).
+// The frame of a box of nonzero volume. Axes that double cannot invert, or a half extent below
+// 2^-1022 (1 / h could overflow), give valid = false (box files refuse such boxes: box_defect).
 BoxFrame box_frame(const Obb& box);
 
 // Face f's direction for face coordinates (u, v).

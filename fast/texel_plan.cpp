@@ -25,9 +25,10 @@ namespace vobb {
 // for a tiny box M's determinant, a product of three h, underflows (half extents 1e-108 give
 // 1e-324), while A^-1 and 1 / h_k stay normal. Where M~'s entries themselves may be
 // subnormal (products below 2^-1022, off by up to 2^-1075 rather than u), eps gets
-// 3 * 2^-1074 |L| more per row, |L| ~ 1 / h: at most 3 * 2^-52 for normal half extents.
-// (Subnormal half extents, whose inverse may overflow, are refused: box_frame's precondition,
-// checked where boxes are read.)
+// 3 * 2^-1074 |L_ij| for the entries of row i; the entries of other rows that a subnormal
+// column of M~ meets add at most about 2.6u more, which the 12u identity term absorbs
+// (|L| ~ 1 / h: at most 3 * 2^-52 for normal half extents). Axes that double cannot invert
+// and subnormal half extents (whose inverse may overflow) give an invalid frame.
 BoxFrame box_frame(const Obb& box) {
   Eigen::Matrix3d axes, m;
   for (int k = 0; k < 3; ++k) {
@@ -35,11 +36,17 @@ BoxFrame box_frame(const Obb& box) {
     m.col(k) = box.half[k] * box.axes[k];
   }
   const double det_axes = axes.determinant();
-  VOBB_ASSERT(det_axes != 0 && std::isfinite(det_axes) && (box.half.array() >= 0x1p-1022).all(),
-              "box_frame of a flat box, or of one with subnormal half extents");
   BoxFrame f;
+  if (!(det_axes != 0 && std::isfinite(det_axes) && (box.half.array() >= 0x1p-1022).all())) {
+    f.valid = false;  // axes that double cannot invert (box_defect refuses such boxes)
+    return f;
+  }
   f.to_local = axes.inverse();
   for (int k = 0; k < 3; ++k) f.to_local.row(k) /= box.half[k];
+  if (!f.to_local.allFinite()) {
+    f.valid = false;
+    return f;
+  }
   f.center = box.center;
   // |det M| = h0 h1 h2 |det A|; it may underflow to 0 (the caller treats that box as flat).
   f.volume_scale = box.half[0] * box.half[1] * box.half[2] * std::abs(det_axes);
@@ -196,6 +203,7 @@ bool texel_span(const LocalTriangle& t, int face, int m, bool no_far_clip, doubl
 }  // namespace
 
 double resolution_bound(const BoxPlan& plan, int m) {
+  if (plan.unresolved) return plan.frame.volume_scale * 4.0;  // half the box: the OBV is in [0, vol]
   if (plan.flat || plan.spans.empty()) return 0.0;
   std::vector<char> touched(6 * static_cast<size_t>(m) * m, 0);
   size_t count = 0, pairs = 0, near_pairs = 0;
@@ -258,6 +266,7 @@ namespace {
 
 int exact_edge_side(const LocalTriangle& t, int k, const Texel& x) {
   const int a = k, b = (k + 1) % 3;
+  VOBB_ASSERT(t.p[a].allFinite() && t.p[b].allFinite(), "plan() keeps only finite faces");
   const bool canonical = t.id[a] < t.id[b];
   const Vec3& p = canonical ? t.p[a] : t.p[b];
   const Vec3& q = canonical ? t.p[b] : t.p[a];
@@ -391,18 +400,27 @@ BoxPlanner::BoxPlanner(const Mesh& mesh) : mesh_(mesh), faces_(AabbTree::over_fa
 BoxPlan BoxPlanner::plan(const Obb& box, int m) const {
   VOBB_ASSERT(m >= 1, "cubemap resolution m >= 1");
   BoxPlan plan;
-  // Zero volume, or a half extent too small for the frame (subnormal: 1 / h may overflow;
-  // box files refuse it): planned as flat, OBV 0, off by at most the box's volume, under
-  // 2^-1022 (2^242)^2 8 for boxes in the coordinate range (validate's bound adds it).
-  if (volume(box) == 0.0 || (box.half.array() < 0x1p-1022).any()) {
+  if (volume(box) == 0.0) {  // a flat box (or one whose volume underflows): OBV 0
     plan.flat = true;
     return plan;
   }
   plan.frame = box_frame(box);
-  if (!(plan.frame.volume_scale > 0)) {  // underflows: the OBV is below 2^-1074 or so (flat)
+  if (plan.frame.valid && !(plan.frame.volume_scale > 0)) {  // underflows: OBV below 2^-1074 or so
     plan.flat = true;
     return plan;
   }
+  // A box whose view of the mesh the plan's doubles cannot hold (see BoxPlan::unresolved).
+  auto unresolve = [&plan, &box]() {
+    plan.unresolved = true;
+    plan.constant = 4.0;
+    plan.tris.clear();
+    plan.spans.clear();
+    plan.centre_near_surface = false;
+    if (!(plan.frame.volume_scale > 0) || !std::isfinite(plan.frame.volume_scale))
+      plan.frame.volume_scale = volume(box) / 8;  // invalid frame: volume() is the scale
+    return plan;
+  };
+  if (!plan.frame.valid) return unresolve();
   plan.where = locate_point(mesh_, faces_, box.center);
   plan.far_count = plan.where == Location::kOnSurface;
   plan.constant = plan.far_count || plan.where == Location::kOutside ? 8.0 : 0.0;
@@ -422,6 +440,10 @@ BoxPlan BoxPlanner::plan(const Obb& box, int m) const {
       t.p[k] = plan.frame.local(v);
       err = err.cwiseMax(plan.frame.local_error(v));
     }
+    if (!(t.p[0].allFinite() && t.p[1].allFinite() && t.p[2].allFinite() && err.allFinite())) {
+      plan.unresolved = true;  // local coordinates or their error bound overflow
+      return;
+    }
     if (!plan.far_count && culling_) {
       for (int axis = 0; axis < 3; ++axis) {
         const double lo = std::min({t.p[0][axis], t.p[1][axis], t.p[2][axis]});
@@ -430,6 +452,13 @@ BoxPlan BoxPlanner::plan(const Obb& box, int m) const {
         if (lo > 1 + margin || hi < -1 - margin) return;  // misses the cube
       }
     }
+    // Kept faces must lie within 2^300 box units, so that crosses (2^601), normals (2^603),
+    // planes (2^905) and the error terms built from them stay finite.
+    for (int k = 0; k < 3; ++k)
+      if (!(t.p[k].cwiseAbs().maxCoeff() <= 0x1p300)) {
+        plan.unresolved = true;
+        return;
+      }
     // Every point of the exact face lies within `slack` of the plan's (barycentric weights).
     const double slack = err.norm() * (1 + 1e-15);
     for (int k = 0; k < 3; ++k) {
@@ -448,7 +477,9 @@ BoxPlan BoxPlanner::plan(const Obb& box, int m) const {
     //   (the cross's rounding, gamma_2, and the differences', u each) and |x - p0| <= max(|e1|,
     //   |e2|) (1 + 2u); and |fl(n . p0) - n . p0| <= gamma_3 |n| . |p0|.
     // Delta = 8u (|e1| x |e2|) . max(|e1|, |e2|) + 4u |n| . |p0|, the factors of about 2
-    // covering the rounding of Delta itself, plus 2^-1060 for underflow. Componentwise, so that
+    // covering the rounding of Delta itself, plus underflow: each product that underflows
+    // loses up to 2^-1075, two per component of n (times |x - p0| <= spread) and three in the
+    // plane, so 2^-1072 (sum spread + sum |p0| + 1) covers them. Componentwise, so that
     // the stretched axis of a thin box (local coordinates up to 1 / aspect) enters each term
     // as it enters n and the plane themselves, not squared.
     // Along a ray d the plan's hit is at plane / (n . d) and the face's at (plane + delta) /
@@ -465,7 +496,8 @@ BoxPlan BoxPlanner::plan(const Obb& box, int m) const {
       const Vec3 e1 = t.p[1] - t.p[0], e2 = t.p[2] - t.p[0];
       const Vec3 spread = e1.cwiseAbs().cwiseMax(e2.cwiseAbs());
       const double delta = 8 * u * abs_cross(e1, e2).dot(spread) +
-                           4 * u * t.normal.cwiseAbs().dot(t.p[0].cwiseAbs()) + 0x1p-1060;
+                           4 * u * t.normal.cwiseAbs().dot(t.p[0].cwiseAbs()) +
+                           0x1p-1072 * (spread.sum() + t.p[0].cwiseAbs().sum() + 1);
       t.near_centre =
           !(std::abs(t.plane) > (2 * slack * t.normal.norm() + (0x1p20 + 1) * delta) * (1 + 1e-12));
     }
@@ -498,6 +530,7 @@ BoxPlan BoxPlanner::plan(const Obb& box, int m) const {
     std::sort(ids.begin(), ids.end());
     for (int32_t f : ids) consider(f);
   }
+  if (plan.unresolved) return unresolve();
   return plan;
 }
 

@@ -69,11 +69,17 @@ struct BoxPlan {
   double constant = 0;     // local-volume constant of the formula above
   std::vector<LocalTriangle> tris;
   std::vector<TexelSpan> spans;
-  bool flat = false;  // zero volume, or a subnormal half extent (texel_plan.cpp): OBV 0, nothing to draw
+  bool flat = false;  // zero volume, or a scale that underflows (texel_plan.cpp): OBV 0, nothing to draw
   // A face may pass within the frame's rounding of the centre (texel_plan.cpp): the exact
   // class of the centre and the plan's faces may disagree there, so a texel the faces cover
   // may be off by two pyramids instead of one (resolution_bound).
   bool centre_near_surface = false;
+  // The box's view of the mesh does not fit the plan's doubles: axes that double cannot
+  // invert, or a face the box keeps lying beyond 2^300 box units (a half extent 1e-306 beside
+  // a mesh of size 1), where local coordinates, crosses or planes would overflow. Nothing is
+  // drawn; the estimate is half the box's volume (constant 4) and resolution_bound the other
+  // half, which holds whatever the OBV. No box of a real tree comes near this.
+  bool unresolved = false;
 };
 
 // A texel of the cubemap: face `face`, column i and row j at resolution m. Its exact centre

@@ -53,11 +53,8 @@ EstimatorSet::Bounds EstimatorSet::bounds(const Obb& box, int m) const {
   // volume scale or the products with it are subnormal, each of their roughly 20 operations
   // may lose half a subnormal step (2^-1075) instead of a relative eps, and a volume that
   // underflows to 0 (a flat plan) was below a few steps.
-  // A box with a subnormal half extent is planned as flat (texel_plan.cpp): OBV 0 for at most
-  // its volume (check_request refuses such boxes; the bound stays true without it).
-  const bool subnormal = (box.half.array() > 0 && box.half.array() < 0x1p-1022).any();
   return {resolution_bound(plan, m), gl_deviation_bound(plan, m), cpu_rounding_bound(plan, m),
-          (subnormal ? volume(box) : 0.0) + 32 * kEps * volume(box) + 0x1p-1068};
+          32 * kEps * volume(box) + 0x1p-1068};
 }
 
 double EstimatorSet::rigorous_bound(const Obb& box, int m) const { return bounds(box, m).rigorous(); }
@@ -68,12 +65,8 @@ Status EstimatorSet::check_request(Backend backend, const Obb& box, int m) const
   if (backend == Backend::kGl && m > gl_->max_m())
     return Status::error("cubemap resolution m = " + std::to_string(m) + " refused: beyond the GL limit " +
                          std::to_string(gl_->max_m()) + " of renderer " + gl_->renderer());
-  bool finite = box.center.allFinite() && box.half.allFinite();
-  for (const Vec3& a : box.axes) finite = finite && a.allFinite();
-  if (!finite) return Status::error("box refused: non-finite centre, axis or half extent");
-  if ((box.half.array() < 0).any()) return Status::error("box refused: negative half extent");
-  if ((box.half.array() > 0 && box.half.array() < 0x1p-1022).any())
-    return Status::error("box refused: subnormal half extent (below 2^-1022)");
+  const std::string defect = box_defect(box);
+  if (!defect.empty()) return Status::error("box refused: " + defect);
   return Status::ok();
 }
 

@@ -69,8 +69,9 @@ class EstimatorSet {
   };
   Bounds bounds(const Obb& box, int m) const;
   // The suite's front door for one estimate: refuses, in one line, what the estimators take
-  // as a programmer error (m < 1, m beyond the GL limit, a box with non-finite numbers or
-  // negative half extents) instead of aborting.
+  // as a programmer error (m < 1, m beyond the GL limit) and every box that box files refuse
+  // (box_defect, common/obb.h: non-finite, negative or subnormal half extents, axes not
+  // orthonormal, out of range) instead of aborting or estimating nonsense.
   Status check_request(Backend backend, const Obb& box, int m) const;
   // Where the centre of the box lies (the plan's exact classification).
   Location centre_location(const Obb& box) const;

@@ -208,5 +208,41 @@ TEST(EstimatorAccuracy, BoxesOfSubnormalVolumeStayWithinTheRigorousBound) {
   }
 }
 
+// Boxes whose view of the mesh doubles cannot hold (texel_plan.h, BoxPlan::unresolved), found
+// by a review: a half extent of 1e-306 beside faces a unit away puts them 1e306 box units out,
+// where local coordinates overflow (the CPU twin then crashed in GMP on an infinite cross,
+// or dropped every face, estimate 0 against an exact 2e-306 with a bound of 6e-320), and axes
+// whose determinant double rounds to 0 although the box has volume (box_frame aborted). Each
+// gets half its volume, with the other half as its bound, on both backends; the suite's front
+// door refuses the last (its axes are not orthonormal).
+TEST(EstimatorAccuracy, BoxesTheDoublesCannotPlanStayWithinTheRigorousBound) {
+  const Mesh cube = analytic::cube(400.0, Vec3(-200, -200, -200)).mesh;
+  validate::EstimatorSet estimators(cube, true);
+  ASSERT_TRUE(estimators.has_gl()) << estimators.gl_status();
+  const exact::ClipSolver exact(cube);
+  std::vector<Obb> boxes(3);
+  boxes[0].center = Vec3(0, 0, 200);  // on the top face
+  boxes[1].center = Vec3(0, 0, 199.5);
+  boxes[0].half = boxes[1].half = Vec3(1e-306, 1, 1);
+  boxes[2].center = Vec3(0, 0, 199.5);
+  boxes[2].half = Vec3(1, 1, 1);
+  boxes[2].axes = {Vec3(0, 0.20000000000000001, -0.20000000000000001),
+                   Vec3(-0.30000000000000004, 0.20000000000000001, 0),
+                   Vec3(-0.30000000000000004, 0.40000000000000008, -0.20000000000000001)};
+  ASSERT_GT(volume(boxes[2]), 0);
+  EXPECT_FALSE(estimators.check_request(validate::Backend::kCpu, boxes[2], 4));
+  const BoxPlanner planner(cube);
+  for (size_t i = 0; i < boxes.size(); ++i) {
+    EXPECT_TRUE(planner.plan(boxes[i], 4).unresolved) << "box " << i;
+    const double truth = to_double_nearest(exact.obv(boxes[i]));
+    for (validate::Backend backend : {validate::Backend::kCpu, validate::Backend::kGl}) {
+      std::vector<double> seconds;
+      const double est = estimators.estimate(backend, {boxes[i]}, 4, &seconds)[0];
+      EXPECT_LE(std::abs(est - truth), estimators.rigorous_bound(boxes[i], 4))
+          << validate::to_string(backend) << " box " << i << " exact " << truth << " estimate " << est;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace vobb
