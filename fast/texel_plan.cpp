@@ -48,8 +48,9 @@ BoxFrame box_frame(const Obb& box) {
     return f;
   }
   f.center = box.center;
-  // |det M| = h0 h1 h2 |det A|; it may underflow to 0 (the caller treats that box as flat).
-  f.volume_scale = box.half[0] * box.half[1] * box.half[2] * std::abs(det_axes);
+  // |det M| = h0 h1 h2 |det A|, without partial products that underflow (volume(), obb.h); it
+  // may still underflow to 0 as a whole (the caller treats that box as flat).
+  f.volume_scale = volume(box) / 8;
   f.mirrored = det_axes < 0;
   f.half = box.half;
   constexpr double u = 0x1p-53, gamma4 = 4 * u / (1 - 4 * u);

@@ -54,10 +54,23 @@ EstimatorSet::Bounds EstimatorSet::bounds(const Obb& box, int m) const {
   // may lose half a subnormal step (2^-1075) instead of a relative eps, and a volume that
   // underflows to 0 (a flat plan) was below a few steps.
   return {resolution_bound(plan, m), gl_deviation_bound(plan, m), cpu_rounding_bound(plan, m),
-          32 * kEps * volume(box) + 0x1p-1068};
+          32 * kEps * volume(box) + 0x1p-1068, plan.unresolved};
 }
 
 double EstimatorSet::rigorous_bound(const Obb& box, int m) const { return bounds(box, m).rigorous(); }
+
+double EstimatorSet::bound(Backend backend, const Obb& box, int m, bool* unresolved) const {
+  const BoxPlan plan = planner_.plan(box, m);
+  if (unresolved) *unresolved = plan.unresolved;
+  constexpr double kEps = std::numeric_limits<double>::epsilon();
+  Bounds b;
+  b.resolution = resolution_bound(plan, m);
+  b.roundoff = 32 * kEps * volume(box) + 0x1p-1068;
+  b.cpu_rounding = cpu_rounding_bound(plan, m);
+  if (backend == Backend::kCpu) return b.cpu_rigorous();
+  b.deviation = gl_deviation_bound(plan, m);
+  return b.rigorous();
+}
 
 Status EstimatorSet::check_request(Backend backend, const Obb& box, int m) const {
   if (m < 1) return Status::error("cubemap resolution m = " + std::to_string(m) + " refused: m must be at least 1");
@@ -70,6 +83,9 @@ Status EstimatorSet::check_request(Backend backend, const Obb& box, int m) const
   return Status::ok();
 }
 
-Location EstimatorSet::centre_location(const Obb& box) const { return planner_.plan(box, 1).where; }
+Location EstimatorSet::centre_location(const Obb& box) const {
+  // Located directly: a flat or unresolved plan does not locate the centre.
+  return locate_point(planner_.mesh(), planner_.face_tree(), box.center);
+}
 
 }  // namespace vobb::validate

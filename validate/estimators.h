@@ -7,6 +7,7 @@
 // never sets it. It receives the estimate, the box and m, and returns the value the suite sees.
 #pragma once
 
+#include <algorithm>
 #include <functional>
 #include <memory>
 #include <string>
@@ -45,7 +46,8 @@ class EstimatorSet {
                                std::vector<double>* seconds);
 
   // A rigorous bound on |estimate - exact OBV| for one box at resolution m, for either backend:
-  // resolution_bound (texel_plan.h) plus gl_deviation_bound plus 32 eps vol(O). For the CPU
+  // resolution_bound (texel_plan.h) plus gl_deviation_bound (or cpu_rounding_bound where GL
+  // runs the twin's code) plus 32 eps vol(O) + 2^-1068. For the CPU
   // twin the float bound is kept too: it bounds the same sums' round-off in float32, so it
   // covers the twin's double round-off of the texel sum (2^29 times smaller). The last term is
   // the round-off outside the texel sum, which both bounds leave out (it matters where they
@@ -64,10 +66,16 @@ class EstimatorSet {
   // alone (its double round-off instead of the float deviation).
   struct Bounds {
     double resolution = 0, deviation = 0, cpu_rounding = 0, roundoff = 0;
-    double rigorous() const { return resolution + deviation + roundoff; }
+    bool unresolved = false;  // the plan could not hold the box (BoxPlan::unresolved)
+    // deviation bounds |GL - CPU twin| and includes cpu_rounding; where GL runs the twin's own
+    // code (gl_evaluates_in_float false) it is 0, and the twin's round-off is what remains.
+    double rigorous() const { return resolution + std::max(deviation, cpu_rounding) + roundoff; }
     double cpu_rigorous() const { return resolution + cpu_rounding + roundoff; }
   };
   Bounds bounds(const Obb& box, int m) const;
+  // The bound for one backend's estimate (rigorous() for GL, cpu_rigorous() for the CPU
+  // twin), computing only the round-off part that backend needs; `unresolved` as above.
+  double bound(Backend backend, const Obb& box, int m, bool* unresolved = nullptr) const;
   // The suite's front door for one estimate: refuses, in one line, what the estimators take
   // as a programmer error (m < 1, m beyond the GL limit) and every box that box files refuse
   // (box_defect, common/obb.h: non-finite, negative or subnormal half extents, axes not

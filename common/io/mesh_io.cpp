@@ -558,6 +558,8 @@ Status read_stl_ascii(const Reader& r, LoadedMesh* out) {
     const std::string_view k = t[0];
     Status s = Status::ok();
     if (ended) {  // some writers put several solids in one file: read them all
+      // A DOS end-of-file mark (Ctrl-Z) or NUL padding after the last solid is not content.
+      if (t.size() == 1 && k.find_first_not_of(std::string_view("\x1a\0", 2)) == std::string_view::npos) continue;
       if (k != "solid") return r.fail_at(lines.number(), "unexpected '" + std::string(k.substr(0, 32)) + "' after endsolid");
       ended = false;
       continue;
@@ -566,6 +568,15 @@ Status read_stl_ascii(const Reader& r, LoadedMesh* out) {
       if (at != At::kSolid) return r.fail_at(lines.number(), "facet inside a facet");
       if (t.size() < 2 || t[1] != "normal") return r.fail_at(lines.number(), "'facet' without 'normal'");
       if (!(s = keyword_line("facet normal", 5))) return s;
+      // The normal is ignored, but must be numbers: nan, inf and MSVC's 1.#IND / 1.#QNAN, which
+      // some exporters write for degenerate facets, count as numbers here.
+      for (int c = 2; c < 5; ++c) {
+        double ignored;
+        std::string_view w = t[c];
+        if (!w.empty() && (w[0] == '-' || w[0] == '+')) w.remove_prefix(1);
+        if (!parse_double(t[c], &ignored) && w.substr(0, 3) != "1.#")
+          return r.fail_at(lines.number(), "not a number: '" + std::string(t[c].substr(0, 32)) + "'");
+      }
       at = At::kFacet;
     } else if (k == "outer") {
       if (at != At::kFacet) return r.fail_at(lines.number(), "'outer loop' outside a facet, or twice");

@@ -100,13 +100,26 @@ TEST(MeshIo, AsciiStlWithSeveralSolidsReadsThemAll) {
     return std::string("  facet normal 0 0 0\n    outer loop\n      vertex ") + a + "\n      vertex " + b +
            "\n      vertex " + c + "\n    endloop\n  endfacet\n";
   };
-  write_text(path, "solid a\n" + facet("0 0 0", "0 1 0", "1 0 0") + facet("0 0 0", "1 0 0", "0 0 1") +
-                       "endsolid a\nsolid b\n" + facet("0 0 0", "0 0 1", "0 1 0") +
-                       facet("1 0 0", "0 1 0", "0 0 1") + "endsolid b\n");
+  const std::string two = "solid a\n" + facet("0 0 0", "0 1 0", "1 0 0") + facet("0 0 0", "1 0 0", "0 0 1") +
+                          "endsolid a\nsolid b\n" + facet("0 0 0", "0 0 1", "0 1 0") +
+                          facet("1 0 0", "0 1 0", "0 0 1") + "endsolid b\n";
+  write_text(path, two);
   LoadedMesh lm;
-  const Status s = load_mesh(path, &lm);
+  Status s = load_mesh(path, &lm);
   ASSERT_TRUE(s) << s.message();
   EXPECT_EQ(lm.mesh.faces.size(), 4u);  // was 2: the second solid was dropped
+  // After the last solid a DOS end-of-file mark or NUL padding is not content; normals that
+  // exporters write for degenerate facets (nan, MSVC's -1.#IND) are numbers.
+  for (const std::string& tail : {std::string("\x1a"), std::string(16, '\0')}) {
+    write_text(path, two + tail);
+    s = load_mesh(path, &lm);
+    EXPECT_TRUE(s) << s.message();
+  }
+  std::string odd_normals = two;
+  odd_normals.replace(odd_normals.find("normal 0 0 0"), 12, "normal nan -nan -1.#IND");
+  write_text(path, odd_normals);
+  s = load_mesh(path, &lm);
+  EXPECT_TRUE(s) << s.message();
   std::remove(path.c_str());
 }
 

@@ -112,6 +112,7 @@ def stl_ascii(facets):
 files["facet_without_loop.stl"] = stl_ascii(F).replace("outer loop\n", "", 1).replace("endloop\n", "", 1)
 files["junk_after_vertex.stl"] = stl_ascii(F).replace("vertex 0 0 0\n", "vertex 0 0 0 7\n", 1)
 files["text_after_endsolid.stl"] = stl_ascii(F) + "facet normal 0 0 0\n"
+files["facet_normal_words.stl"] = stl_ascii(F).replace("facet normal 0 0 0\n", "facet normal a b c\n", 1)
 
 for name, content in files.items():
     with open(name, "wb") as fh:
