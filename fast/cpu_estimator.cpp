@@ -30,12 +30,26 @@ double sum_texel_hits(const BoxPlan& plan, int m) {
   double sum = 0;
   for (const TexelSpan& span : plan.spans) {
     const LocalTriangle& t = plan.tris[span.tri];
+    // d = (s, u, v) on the face's axes (k, a, b): each dot is (s E_k + u E_a) + v E_b, the
+    // first part once per row. That is a 3-term dot product in one fixed order, which is
+    // what texel_hit_dots needs; the hits are those of texel_hit.
+    const int k = span.face / 2, a = (k + 1) % 3, b = (k + 2) % 3;
+    const double s = span.face % 2 == 0 ? 1.0 : -1.0;
+    Texel x{span.face, 0, 0, m, Vec3::Zero()};
     for (int i = span.i0; i <= span.i1; ++i) {
       const double u = texel_center(i, m);
+      double row[4];
+      for (int c = 0; c < 3; ++c) row[c] = s * t.edge_cross[c][k] + u * t.edge_cross[c][a];
+      row[3] = s * t.normal[k] + u * t.normal[a];
+      x.i = i;
       for (int j = span.j0; j <= span.j1; ++j) {
+        const double v = texel_center(j, m);
+        const double e[3] = {row[0] + v * t.edge_cross[0][b], row[1] + v * t.edge_cross[1][b],
+                             row[2] + v * t.edge_cross[2][b]};
+        const double nd = row[3] + v * t.normal[b];
+        x.j = j;
         double value;
-        const Texel x{span.face, i, j, m, cubemap_direction(span.face, u, texel_center(j, m))};
-        if (texel_hit(t, x, plan.far_count, &value)) sum += value;
+        if (texel_hit_dots(t, x, e, nd, plan.far_count, &value)) sum += value;
       }
     }
   }

@@ -441,10 +441,6 @@ BoxPlan BoxPlanner::plan(const Obb& box, int m) const {
       t.p[k] = plan.frame.local(v);
       err = err.cwiseMax(plan.frame.local_error(v));
     }
-    if (!(t.p[0].allFinite() && t.p[1].allFinite() && t.p[2].allFinite() && err.allFinite())) {
-      plan.unresolved = true;  // local coordinates or their error bound overflow
-      return;
-    }
     if (!plan.far_count && culling_) {
       for (int axis = 0; axis < 3; ++axis) {
         const double lo = std::min({t.p[0][axis], t.p[1][axis], t.p[2][axis]});
@@ -453,15 +449,18 @@ BoxPlan BoxPlanner::plan(const Obb& box, int m) const {
         if (lo > 1 + margin || hi < -1 - margin) return;  // misses the cube
       }
     }
-    // Kept faces must lie within 2^300 box units, so that crosses (2^601), normals (2^603),
-    // planes (2^905) and the error terms built from them stay finite.
-    for (int k = 0; k < 3; ++k)
-      if (!(t.p[k].cwiseAbs().maxCoeff() <= 0x1p300)) {
-        plan.unresolved = true;
-        return;
-      }
     // Every point of the exact face lies within `slack` of the plan's (barycentric weights).
     const double slack = err.norm() * (1 + 1e-15);
+    // Kept faces must lie within 2^300 box units, so that crosses (2^601), normals (2^603),
+    // planes (2^905) and the error terms built from them stay finite, and their error bound
+    // must be finite. (Culling is sound with overflowed coordinates: an infinite coordinate
+    // stands for one beyond 2^1024 box units, and an infinite error keeps the face.)
+    const double far = std::max({t.p[0].cwiseAbs().maxCoeff(), t.p[1].cwiseAbs().maxCoeff(),
+                                 t.p[2].cwiseAbs().maxCoeff()});
+    if (!(far <= 0x1p300) || !(slack < HUGE_VAL)) {
+      plan.unresolved = true;
+      return;
+    }
     for (int k = 0; k < 3; ++k) {
       const int a = k, b = (k + 1) % 3;
       t.edge_cross[k] = t.id[a] < t.id[b] ? Vec3(t.p[a].cross(t.p[b])) : Vec3(-t.p[b].cross(t.p[a]));

@@ -103,30 +103,29 @@ inline int cpu_edge_side(const LocalTriangle& t, int k, const Texel& x) {
 }
 
 // One texel ray against one face, in double (the CPU twin): whether it hits, and the hit's
-// value (above). The edge tests are exact (cpu_edge_side), so around every vertex and edge each
-// ray is claimed by the faces an exact ray cast would claim; the depth is in double.
-inline bool texel_hit(const LocalTriangle& t, const Texel& x, bool far_count, double* value) {
-  const Vec3& d = x.d;
-  const double e0 = d.dot(t.edge_cross[0]), e1 = d.dot(t.edge_cross[1]);
-  const bool clear01 = std::abs(e0) > t.edge_tie[0] && std::abs(e1) > t.edge_tie[1];
+// value (above), given the ray's three edge dots e[k] = d . edge_cross[k] and nd = d . normal,
+// each computed as a 3-term dot product in any order (what edge_tie and the rounding analysis
+// allow). The edge tests are exact (cpu_edge_side), so around every vertex and edge each ray
+// is claimed by the faces an exact ray cast would claim; the depth is in double.
+inline bool texel_hit_dots(const LocalTriangle& t, const Texel& x, const double* e, double nd, bool far_count,
+                           double* value) {
+  const bool clear01 = std::abs(e[0]) > t.edge_tie[0] && std::abs(e[1]) > t.edge_tie[1];
   if (__builtin_expect(clear01, 1)) {
-    if ((e0 > 0) != (e1 > 0)) return false;  // the usual miss, decided by two edges
-    const double e2 = d.dot(t.edge_cross[2]);
-    if (__builtin_expect(std::abs(e2) > t.edge_tie[2], 1)) {
-      if ((e2 > 0) != (e0 > 0)) return false;
-    } else if (exact_edge_side(t, 2, x) != (e0 > 0 ? 1 : -1)) {
+    if ((e[0] > 0) != (e[1] > 0)) return false;  // the usual miss, decided by two edges
+    if (__builtin_expect(std::abs(e[2]) > t.edge_tie[2], 1)) {
+      if ((e[2] > 0) != (e[0] > 0)) return false;
+    } else if (exact_edge_side(t, 2, x) != (e[0] > 0 ? 1 : -1)) {
       return false;
     }
   } else {  // a ray within rounding of edge 0's or 1's plane
     int side = 0;
     for (int k = 0; k < 3; ++k) {
-      const int sk = cpu_edge_side(t, k, x);
+      const int sk = std::abs(e[k]) > t.edge_tie[k] ? (e[k] > 0 ? 1 : -1) : exact_edge_side(t, k, x);
       if (sk == 0) return false;
       if (k == 0) side = sk;
       else if (sk != side) return false;
     }
   }
-  const double nd = t.normal.dot(d);
   if (nd == 0) return false;  // the ray runs in the face's plane
   const double zeta = t.plane / nd;
   if (!(zeta > 0)) return false;  // behind the centre, or at it
@@ -138,6 +137,12 @@ inline bool texel_hit(const LocalTriangle& t, const Texel& x, bool far_count, do
     *value = zeta < 1 ? -s * zeta * zeta * zeta : -s;
   }
   return true;
+}
+
+// The same for one texel, computing the dots.
+inline bool texel_hit(const LocalTriangle& t, const Texel& x, bool far_count, double* value) {
+  const double e[3] = {x.d.dot(t.edge_cross[0]), x.d.dot(t.edge_cross[1]), x.d.dot(t.edge_cross[2])};
+  return texel_hit_dots(t, x, e, t.normal.dot(x.d), far_count, value);
 }
 
 // A rigorous a-priori bound on |estimate - exact OBV| for this plan at resolution m, in world
