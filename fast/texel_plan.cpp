@@ -433,6 +433,7 @@ BoxPlan BoxPlanner::plan(const Obb& box, int m) const {
   // exact coordinates (within local_error of the plan's) miss the cube on some axis.
   constexpr double kCullMargin = 1e-9;
   auto consider = [&](int32_t f) {
+    if (plan.unresolved) return;  // the plan is dropped anyway (unresolve below)
     LocalTriangle t;
     Vec3 err = Vec3::Zero();  // per axis, the most any of the three vertices may be off
     for (int k = 0; k < 3; ++k) {
@@ -466,7 +467,8 @@ BoxPlan BoxPlanner::plan(const Obb& box, int m) const {
       t.edge_cross[k] = t.id[a] < t.id[b] ? Vec3(t.p[a].cross(t.p[b])) : Vec3(-t.p[b].cross(t.p[a]));
       t.edge_tie[k] = edge_tie(t.edge_cross[k], t.p[a], t.p[b]);
     }
-    t.normal = (t.p[1] - t.p[0]).cross(t.p[2] - t.p[0]);
+    const Vec3 e1 = t.p[1] - t.p[0], e2 = t.p[2] - t.p[0];
+    t.normal = e1.cross(e2);
     if (plan.frame.mirrored) t.normal = -t.normal;
     t.plane = t.normal.dot(t.p[0]);
     // The centre class is exact, the faces are the plan's, and the depths come from the plane
@@ -493,7 +495,6 @@ BoxPlan BoxPlanner::plan(const Obb& box, int m) const {
     // (near_centre, centre_near_surface).
     if (!plan.far_count) {
       constexpr double u = 0x1p-53;
-      const Vec3 e1 = t.p[1] - t.p[0], e2 = t.p[2] - t.p[0];
       const Vec3 spread = e1.cwiseAbs().cwiseMax(e2.cwiseAbs());
       const double delta = 8 * u * abs_cross(e1, e2).dot(spread) +
                            4 * u * t.normal.cwiseAbs().dot(t.p[0].cwiseAbs()) +

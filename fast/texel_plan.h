@@ -96,10 +96,13 @@ struct Texel {
 int exact_edge_side(const LocalTriangle& t, int k, const Texel& x);
 
 // The CPU twin's edge test: that exact side, computed in double where the double is decisive.
-inline int cpu_edge_side(const LocalTriangle& t, int k, const Texel& x) {
-  const double e = x.d.dot(t.edge_cross[k]);
+// `e` is d . edge_cross[k] computed as a 3-term dot product in any order (edge_tie allows it).
+inline int edge_side_of_dot(const LocalTriangle& t, int k, double e, const Texel& x) {
   if (__builtin_expect(std::abs(e) > t.edge_tie[k], 1)) return e > 0 ? 1 : -1;
   return exact_edge_side(t, k, x);  // rays within rounding of the edge's plane: rare
+}
+inline int cpu_edge_side(const LocalTriangle& t, int k, const Texel& x) {
+  return edge_side_of_dot(t, k, x.d.dot(t.edge_cross[k]), x);
 }
 
 // One texel ray against one face, in double (the CPU twin): whether it hits, and the hit's
@@ -112,15 +115,11 @@ inline bool texel_hit_dots(const LocalTriangle& t, const Texel& x, const double*
   const bool clear01 = std::abs(e[0]) > t.edge_tie[0] && std::abs(e[1]) > t.edge_tie[1];
   if (__builtin_expect(clear01, 1)) {
     if ((e[0] > 0) != (e[1] > 0)) return false;  // the usual miss, decided by two edges
-    if (__builtin_expect(std::abs(e[2]) > t.edge_tie[2], 1)) {
-      if ((e[2] > 0) != (e[0] > 0)) return false;
-    } else if (exact_edge_side(t, 2, x) != (e[0] > 0 ? 1 : -1)) {
-      return false;
-    }
+    if (edge_side_of_dot(t, 2, e[2], x) != (e[0] > 0 ? 1 : -1)) return false;
   } else {  // a ray within rounding of edge 0's or 1's plane
     int side = 0;
     for (int k = 0; k < 3; ++k) {
-      const int sk = std::abs(e[k]) > t.edge_tie[k] ? (e[k] > 0 ? 1 : -1) : exact_edge_side(t, k, x);
+      const int sk = edge_side_of_dot(t, k, e[k], x);
       if (sk == 0) return false;
       if (k == 0) side = sk;
       else if (sk != side) return false;

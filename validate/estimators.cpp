@@ -46,15 +46,22 @@ std::vector<double> EstimatorSet::estimate(Backend backend, const std::vector<Ob
   return out;
 }
 
+namespace {
+
+// The round-off term (header): 32 eps of the volume, plus 2^-1068 for underflow: where the
+// volume scale or the products with it are subnormal, each of their roughly 20 operations may
+// lose half a subnormal step (2^-1075) instead of a relative eps, and a volume that underflows
+// to 0 (a flat plan) was below a few steps.
+double roundoff_term(const Obb& box) {
+  return 32 * std::numeric_limits<double>::epsilon() * volume(box) + 0x1p-1068;
+}
+
+}  // namespace
+
 EstimatorSet::Bounds EstimatorSet::bounds(const Obb& box, int m) const {
   const BoxPlan plan = planner_.plan(box, m);
-  constexpr double kEps = std::numeric_limits<double>::epsilon();
-  // The round-off term (header): 32 eps of the volume, plus 2^-1068 for underflow: where the
-  // volume scale or the products with it are subnormal, each of their roughly 20 operations
-  // may lose half a subnormal step (2^-1075) instead of a relative eps, and a volume that
-  // underflows to 0 (a flat plan) was below a few steps.
-  return {resolution_bound(plan, m), gl_deviation_bound(plan, m), cpu_rounding_bound(plan, m),
-          32 * kEps * volume(box) + 0x1p-1068, plan.unresolved};
+  return {resolution_bound(plan, m), gl_deviation_bound(plan, m), cpu_rounding_bound(plan, m), roundoff_term(box),
+          plan.unresolved};
 }
 
 double EstimatorSet::rigorous_bound(const Obb& box, int m) const { return bounds(box, m).rigorous(); }
@@ -62,13 +69,17 @@ double EstimatorSet::rigorous_bound(const Obb& box, int m) const { return bounds
 double EstimatorSet::bound(Backend backend, const Obb& box, int m, bool* unresolved) const {
   const BoxPlan plan = planner_.plan(box, m);
   if (unresolved) *unresolved = plan.unresolved;
-  constexpr double kEps = std::numeric_limits<double>::epsilon();
   Bounds b;
   b.resolution = resolution_bound(plan, m);
-  b.roundoff = 32 * kEps * volume(box) + 0x1p-1068;
-  b.cpu_rounding = cpu_rounding_bound(plan, m);
-  if (backend == Backend::kCpu) return b.cpu_rigorous();
+  b.roundoff = roundoff_term(box);
+  if (backend == Backend::kCpu) {
+    b.cpu_rounding = cpu_rounding_bound(plan, m);
+    return b.cpu_rigorous();
+  }
+  // gl_deviation_bound includes the twin's round-off, except where GL runs the twin's code
+  // and it is 0 (Bounds::rigorous).
   b.deviation = gl_deviation_bound(plan, m);
+  if (b.deviation == 0) b.cpu_rounding = cpu_rounding_bound(plan, m);
   return b.rigorous();
 }
 

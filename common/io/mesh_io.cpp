@@ -56,6 +56,16 @@ bool parse_double(std::string_view tok, double* out) {
   return res.ec == std::errc() && res.ptr == end;
 }
 
+// The first of tokens[from..] that is not a number (tokens.size() if none): OFF lets numbers
+// (normals, colours, texture coordinates) follow a vertex's coordinates and a face's indices.
+size_t first_word(const std::vector<std::string_view>& tokens, size_t from) {
+  for (size_t k = from; k < tokens.size(); ++k) {
+    double ignored;
+    if (!parse_double(tokens[k], &ignored)) return k;
+  }
+  return tokens.size();
+}
+
 bool parse_int(std::string_view tok, long long* out) {
   if (!tok.empty() && tok[0] == '+') tok.remove_prefix(1);
   const char* end = tok.data() + tok.size();
@@ -185,12 +195,9 @@ Status read_off(const Reader& r, LoadedMesh* out) {
     // Values after the coordinates are a normal, a colour or texture coordinates (the N, C
     // and ST headers; some writers add them under a plain OFF header too): numbers, ignored.
     // Anything else means the line is not what it seems.
-    for (size_t k = 3; k < t.size(); ++k) {
-      double ignored;
-      if (!parse_double(t[k], &ignored))
-        return r.fail_at(lines.number(), "unexpected '" + std::string(t[k].substr(0, 32)) +
-                                             "' after the vertex's coordinates");
-    }
+    if (const size_t k = first_word(t, 3); k < t.size())
+      return r.fail_at(lines.number(), "unexpected '" + std::string(t[k].substr(0, 32)) +
+                                           "' after the vertex's coordinates");
     m.vertices.push_back(p);
   }
   std::vector<long long> idx;
@@ -212,12 +219,9 @@ Status read_off(const Reader& r, LoadedMesh* out) {
     if (extra > 4)
       return r.fail_at(lines.number(), "face of " + std::to_string(n) + " indices is followed by " +
                                            std::to_string(extra) + " values (a colour has at most 4)");
-    for (size_t k = 1 + static_cast<size_t>(n); k < t.size(); ++k) {
-      double ignored;
-      if (!parse_double(t[k], &ignored))
-        return r.fail_at(lines.number(), "unexpected '" + std::string(t[k].substr(0, 32)) +
-                                             "' after the face's indices");
-    }
+    if (const size_t k = first_word(t, 1 + static_cast<size_t>(n)); k < t.size())
+      return r.fail_at(lines.number(), "unexpected '" + std::string(t[k].substr(0, 32)) +
+                                           "' after the face's indices");
     Status s = r.add_polygon(idx, lines.number(), static_cast<size_t>(i), out);
     if (!s) return s;
   }
@@ -544,7 +548,7 @@ Status read_stl_ascii(const Reader& r, LoadedMesh* out) {
   // The grammar, one keyword line each: facet normal nx ny nz / outer loop / vertex x y z
   // (three times) / endloop / endfacet. A line out of that order, or with other tokens, is
   // refused: read loosely it could drop or merge corners without a word.
-  enum class At { kSolid, kFacet, kLoop, kLoopEnd, kFacetEnd };
+  enum class At { kSolid, kFacet, kLoop, kLoopEnd };
   At at = At::kSolid;
   int corners = 0;
   bool ended = false;
