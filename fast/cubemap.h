@@ -21,8 +21,8 @@
 namespace vobb {
 
 struct BoxFrame {
-  Eigen::Matrix3d to_local;  // [h0 a0, h1 a1, h2 a2]^-1, rounded (as diag(1 / h) [a0 a1 a2]^-1)
-  Vec3 center;
+  Eigen::Matrix3d to_local = Eigen::Matrix3d::Zero();  // [h0 a0, h1 a1, h2 a2]^-1, rounded (as diag(1 / h) [a0 a1 a2]^-1)
+  Vec3 center = Vec3::Zero();
   double volume_scale = 0;   // |det[h0 a0, h1 a1, h2 a2]|: local volume 1 is this much world volume
   bool mirrored = false;     // det < 0: local orientation flips face signs
   Vec3 local(const Vec3& p) const { return to_local * (p - center); }

@@ -117,8 +117,9 @@ std::vector<double> GlObvEstimator::estimate(const std::vector<Obb>& boxes, int 
   }
   std::vector<double> out(boxes.size(), 0.0);
   g.out = &out;
+  BoxPlan plan;  // reused from box to box: its vectors keep their capacity
   for (size_t b = 0; b < boxes.size(); ++b) {
-    const BoxPlan plan = planner_.plan(boxes[b], m);
+    planner_.plan(boxes[b], m, &plan);
     if (plan.flat) continue;  // OBV 0
     if (!gl_evaluates_in_float(plan)) {  // the CPU twin's expression, in double (header)
       ++cpu_fallbacks_;

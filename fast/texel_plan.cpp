@@ -3,6 +3,7 @@
 #include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 #include "common/status.h"
@@ -399,16 +400,31 @@ double cpu_rounding_bound(const BoxPlan& plan, int m) {
 BoxPlanner::BoxPlanner(const Mesh& mesh) : mesh_(mesh), faces_(AabbTree::over_faces(mesh)) {}
 
 BoxPlan BoxPlanner::plan(const Obb& box, int m) const {
-  VOBB_ASSERT(m >= 1, "cubemap resolution m >= 1");
   BoxPlan plan;
+  this->plan(box, m, &plan);
+  return plan;
+}
+
+void BoxPlanner::plan(const Obb& box, int m, BoxPlan* out) const {
+  VOBB_ASSERT(m >= 1, "cubemap resolution m >= 1");
+  BoxPlan& plan = *out;
+  {  // every field as a new BoxPlan has it, but the vectors' capacity
+    std::vector<LocalTriangle> tris = std::move(plan.tris);
+    std::vector<TexelSpan> spans = std::move(plan.spans);
+    tris.clear();
+    spans.clear();
+    plan = BoxPlan{};
+    plan.tris = std::move(tris);
+    plan.spans = std::move(spans);
+  }
   if (volume(box) == 0.0) {  // a flat box (or one whose volume underflows): OBV 0
     plan.flat = true;
-    return plan;
+    return;
   }
   plan.frame = box_frame(box);
   if (plan.frame.valid && !(plan.frame.volume_scale > 0)) {  // underflows: OBV below 2^-1074 or so
     plan.flat = true;
-    return plan;
+    return;
   }
   // A box whose view of the mesh the plan's doubles cannot hold (see BoxPlan::unresolved).
   auto unresolve = [&plan, &box]() {
@@ -419,9 +435,11 @@ BoxPlan BoxPlanner::plan(const Obb& box, int m) const {
     plan.centre_near_surface = false;
     if (!(plan.frame.volume_scale > 0) || !std::isfinite(plan.frame.volume_scale))
       plan.frame.volume_scale = volume(box) / 8;  // invalid frame: volume() is the scale
-    return plan;
   };
-  if (!plan.frame.valid) return unresolve();
+  if (!plan.frame.valid) {
+    unresolve();
+    return;
+  }
   plan.where = locate_point(mesh_, faces_, box.center);
   plan.far_count = plan.where == Location::kOnSurface;
   plan.constant = plan.far_count || plan.where == Location::kOutside ? 8.0 : 0.0;
@@ -526,13 +544,23 @@ BoxPlan BoxPlanner::plan(const Obb& box, int m) const {
     world.lo -= pad;
     world.hi += pad;
     // Faces in mesh order, as without culling: the same plan, the same float blend order.
-    std::vector<int32_t> ids;
+    thread_local std::vector<int32_t> ids;  // scratch, kept for its capacity
+    ids.clear();
     faces_.for_each_overlap(world, [&](int32_t f) { ids.push_back(f); });
-    std::sort(ids.begin(), ids.end());
-    for (int32_t f : ids) consider(f);
+    const size_t n_faces = mesh_.faces.size();
+    if (ids.size() * 256 < n_faces) {  // few: sorting costs less than a pass over all faces
+      std::sort(ids.begin(), ids.end());
+      for (int32_t f : ids) consider(f);
+    } else {  // many (a box over much of the mesh): a bit per face, read in order
+      thread_local std::vector<uint64_t> bits;
+      bits.assign((n_faces + 63) / 64, 0);
+      for (int32_t f : ids) bits[static_cast<size_t>(f) >> 6] |= uint64_t{1} << (f & 63);
+      for (size_t w = 0; w < bits.size(); ++w)
+        for (uint64_t word = bits[w]; word != 0; word &= word - 1)
+          consider(static_cast<int32_t>(64 * w + static_cast<size_t>(__builtin_ctzll(word))));
+    }
   }
-  if (plan.unresolved) return unresolve();
-  return plan;
+  if (plan.unresolved) unresolve();
 }
 
 }  // namespace vobb

@@ -218,6 +218,9 @@ class BoxPlanner {
   explicit BoxPlanner(const Mesh& mesh);  // keeps a reference
   // Precondition: m >= 1.
   BoxPlan plan(const Obb& box, int m) const;
+  // The same plan, written into *out, whose vectors keep their capacity: a caller that plans
+  // many boxes in turn (the CPU twin, per thread) allocates only when a plan outgrows the last.
+  void plan(const Obb& box, int m, BoxPlan* out) const;
   // For the culling ablation: consider every face for every box.
   void set_culling(bool on) { culling_ = on; }
   bool culling() const { return culling_; }

@@ -2,7 +2,13 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <map>
+#include <random>
+#include <tuple>
+#include <vector>
 
 #include "common/obb.h"
 #include "fast/estimator_test_util.h"
@@ -47,5 +53,151 @@ TEST(TexelPlan, ThinBoxesDoNotTakeFarFacesAsNearTheCentre) {
   }
 }
 
+// A plan written into a BoxPlan that held other plans equals a fresh one, field by field:
+// the CPU twin and the GL estimator plan every box into one reused BoxPlan (for its vectors'
+// capacity), so anything a plan left behind would change the next box's value. The boxes
+// take each path of plan(): the whole mesh (many faces, read in order through a bit per
+// face), a box at a rim vertex (few faces, sorted), a flat box, a thin box whose faces lie
+// beyond 2^300 box units (unresolved), a box of many faces again.
+TEST(TexelPlan, APlanReusedAfterOthersEqualsAFreshOne) {
+  const Vec3 d(4.0, 1.2, 0.8);
+  const Mesh mesh = test::bipyramid_on_ray(d, 2000, 7);
+  const BoxPlanner planner(mesh);
+  auto aligned = [](const Vec3& c, const Vec3& h) {
+    Obb b;
+    b.center = c;
+    b.axes = {Vec3::UnitX(), Vec3::UnitY(), Vec3::UnitZ()};
+    b.half = h;
+    return b;
+  };
+  const Obb whole = aligned(0.5 * d, Vec3::Constant(0.5 * d.norm()));
+  const Obb rim = aligned(mesh.vertices[2], Vec3::Constant(1e-4));
+  const Obb flat = aligned(0.5 * d, Vec3(0.1, 0.1, 0.0));
+  const Obb thin = aligned(0.5 * d, Vec3(1e-300, 1, 1));
+  const Obb middle = aligned(0.5 * d, Vec3::Constant(0.03 * d.norm()));  // cuts the rim
+  BoxPlan reused;
+  int seen_unresolved = 0, seen_flat = 0;
+  for (const Obb& box : {whole, rim, flat, thin, middle, rim, whole, thin, middle}) {
+    for (int m : {4, 32}) {
+      planner.plan(box, m, &reused);
+      const BoxPlan fresh = planner.plan(box, m);
+      seen_unresolved += fresh.unresolved;
+      seen_flat += fresh.flat;
+      EXPECT_EQ(reused.frame.to_local, fresh.frame.to_local);
+      EXPECT_EQ(reused.frame.center, fresh.frame.center);
+      EXPECT_EQ(reused.frame.volume_scale, fresh.frame.volume_scale);
+      EXPECT_EQ(reused.frame.mirrored, fresh.frame.mirrored);
+      EXPECT_EQ(reused.frame.inverse_error, fresh.frame.inverse_error);
+      EXPECT_EQ(reused.frame.half, fresh.frame.half);
+      EXPECT_EQ(reused.frame.valid, fresh.frame.valid);
+      EXPECT_EQ(reused.where, fresh.where);
+      EXPECT_EQ(reused.far_count, fresh.far_count);
+      EXPECT_EQ(reused.constant, fresh.constant);
+      EXPECT_EQ(reused.flat, fresh.flat);
+      EXPECT_EQ(reused.centre_near_surface, fresh.centre_near_surface);
+      EXPECT_EQ(reused.unresolved, fresh.unresolved);
+      ASSERT_EQ(reused.tris.size(), fresh.tris.size());
+      for (size_t i = 0; i < fresh.tris.size(); ++i) {
+        const LocalTriangle &a = reused.tris[i], &b = fresh.tris[i];
+        for (int k = 0; k < 3; ++k) {
+          EXPECT_EQ(a.p[k], b.p[k]);
+          EXPECT_EQ(a.id[k], b.id[k]);
+          EXPECT_EQ(a.edge_cross[k], b.edge_cross[k]);
+          EXPECT_EQ(a.edge_tie[k], b.edge_tie[k]);
+        }
+        EXPECT_EQ(a.normal, b.normal);
+        EXPECT_EQ(a.plane, b.plane);
+        EXPECT_EQ(a.near_centre, b.near_centre);
+      }
+      ASSERT_EQ(reused.spans.size(), fresh.spans.size());
+      for (size_t i = 0; i < fresh.spans.size(); ++i) {
+        const TexelSpan &a = reused.spans[i], &b = fresh.spans[i];
+        EXPECT_EQ(std::make_tuple(a.tri, a.face, a.i0, a.i1, a.j0, a.j1, a.ci0, a.ci1, a.cj0, a.cj1),
+                  std::make_tuple(b.tri, b.face, b.i0, b.i1, b.j0, b.j1, b.ci0, b.ci1, b.cj0, b.cj1));
+      }
+    }
+  }
+  // Each path was taken (2 resolutions x 2 boxes of each kind).
+  EXPECT_EQ(seen_unresolved, 4);
+  EXPECT_EQ(seen_flat, 2);
+}
+
+// The cube [-1, 1]^3 with each side cut into an n x n grid of squares, two faces each,
+// outward: 12 n^2 small faces, so that a small box meets only a few of them. The faces are
+// shuffled, so that mesh order is not the order in which a spatial search finds them.
+Mesh grid_cube(int n) {
+  Mesh mesh;
+  std::map<std::array<int, 3>, int32_t> index;
+  auto vertex = [&](std::array<int, 3> g) {
+    auto [it, added] = index.emplace(g, static_cast<int32_t>(mesh.vertices.size()));
+    if (added) mesh.vertices.push_back(Vec3(g[0], g[1], g[2]) * (2.0 / n) - Vec3::Ones());
+    return it->second;
+  };
+  for (int axis = 0; axis < 3; ++axis) {
+    const int a = (axis + 1) % 3, b = (axis + 2) % 3;
+    for (int side : {0, n}) {
+      for (int i = 0; i < n; ++i) {
+        for (int j = 0; j < n; ++j) {
+          auto at = [&](int di, int dj) {
+            std::array<int, 3> g{};
+            g[axis] = side;
+            g[a] = i + di;
+            g[b] = j + dj;
+            return vertex(g);
+          };
+          // (a, b, axis) is right-handed: counter-clockwise about +axis on the far side.
+          const int32_t v00 = at(0, 0), v10 = at(1, 0), v11 = at(1, 1), v01 = at(0, 1);
+          if (side == n) {
+            mesh.faces.push_back({v00, v10, v11});
+            mesh.faces.push_back({v00, v11, v01});
+          } else {
+            mesh.faces.push_back({v00, v11, v10});
+            mesh.faces.push_back({v00, v01, v11});
+          }
+        }
+      }
+    }
+  }
+  std::mt19937 rng(5);
+  std::shuffle(mesh.faces.begin(), mesh.faces.end(), rng);
+  return mesh;
+}
+
+// With culling the plan holds its faces in mesh order, as without culling (the CPU twin sums
+// the faces' hits in that order, and GL blends them in it): the culled plan's faces are the
+// unculled plan's in the same order, less those culled. Checked where the faces found are many
+// (a box over the whole cube or a corner of it: read through a bit per face) and where they are
+// few (a box on one side, under 1/256 of the faces: sorted).
+TEST(TexelPlan, CulledPlansKeepTheFacesInMeshOrder) {
+  const Mesh mesh = grid_cube(20);  // 4,800 faces, squares of side 0.1
+  ASSERT_EQ(mesh.faces.size(), 4800u);
+  const BoxPlanner culled(mesh);
+  BoxPlanner all(mesh);
+  all.set_culling(false);
+  auto ids = [](const BoxPlan& plan) {
+    std::vector<std::array<int32_t, 3>> out;
+    for (const LocalTriangle& t : plan.tris) out.push_back({t.id[0], t.id[1], t.id[2]});
+    return out;
+  };
+  Obb box;
+  box.axes = orthonormalize({Vec3(1, 0.2, 0.1), Vec3(-0.2, 1, 0.05), Vec3(0, 0, 1)});
+  for (const auto& [center, half, least, most] :
+       {std::make_tuple(Vec3(0.0, 0.0, 0.0), 2.0, size_t{4800}, size_t{4800}),  // the whole cube
+        std::make_tuple(Vec3(0.9, 0.9, 0.9), 0.3, size_t{100}, size_t{4800}),   // a corner
+        std::make_tuple(Vec3(0.99, 0.03, 0.02), 0.04, size_t{2}, size_t{18})}) {  // on one side
+    box.center = center;
+    box.half = Vec3::Constant(half);
+    const auto some = ids(culled.plan(box, 16)), every = ids(all.plan(box, 16));
+    ASSERT_GE(some.size(), least) << "half " << half;
+    ASSERT_LE(some.size(), most) << "half " << half;
+    if (least == mesh.faces.size()) EXPECT_EQ(some, every);
+    size_t at = 0;  // `some` must be a subsequence of `every`
+    for (const auto& f : some) {
+      while (at < every.size() && every[at] != f) ++at;
+      ASSERT_LT(at, every.size()) << "a face out of mesh order, half " << half;
+      ++at;
+    }
+  }
+}
 }  // namespace
 }  // namespace vobb
