@@ -1,6 +1,8 @@
 #include "common/point_in_solid.h"
 
+#include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "common/exact_predicates.h"
 #include "common/status.h"
@@ -40,6 +42,29 @@ Hit segment_vs_triangle(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3&
   return Hit::kNone;
 }
 
+// Whether the segment p -> q may meet the closed box: conservative (true whenever it does).
+// The box is widened by 2^-30 of the largest coordinate or extent involved, far above the few
+// roundings of the slab parameters (each within a few u relative, i.e. a few u times that
+// scale in position); the parameter interval is widened by 2^-30 too.
+bool segment_may_meet(const Vec3& p, const Vec3& q, const Aabb& box) {
+  const double scale = std::max({p.cwiseAbs().maxCoeff(), q.cwiseAbs().maxCoeff(), box.lo.cwiseAbs().maxCoeff(),
+                                 box.hi.cwiseAbs().maxCoeff()});
+  const double pad = 0x1p-30 * scale;
+  double t0 = 0, t1 = 1;
+  for (int k = 0; k < 3; ++k) {
+    const double lo = box.lo[k] - pad, hi = box.hi[k] + pad, d = q[k] - p[k];
+    if (d == 0) {  // parallel to the slab: inside it or not at all
+      if (p[k] < lo || p[k] > hi) return false;
+      continue;
+    }
+    double a = (lo - p[k]) / d, b = (hi - p[k]) / d;
+    if (a > b) std::swap(a, b);
+    t0 = std::max(t0, a);
+    t1 = std::min(t1, b);
+  }
+  return !(t0 > t1 + 0x1p-30);  // NaN (an empty box) keeps the box
+}
+
 }  // namespace
 
 Location locate_point(const Mesh& mesh, const AabbTree& faces, const Vec3& p) {
@@ -50,12 +75,14 @@ Location locate_point(const Mesh& mesh, const AabbTree& faces, const Vec3& p) {
   Vec3 dir(0.5773502691896258, 0.3437184391289216, 0.7404171463391124);
   for (int attempt = 0; attempt < 64; ++attempt) {
     const Vec3 q = p + reach * dir;
-    Aabb seg;
-    seg.extend(p);
-    seg.extend(q);
     int crossings = 0;
     bool degenerate = false, on_face = false;
-    faces.for_each_overlap(seg, [&](int32_t f) {
+    // Only faces whose box the segment may meet are tested: a face it misses cannot be
+    // crossed or touched, and the parity over the others is the answer (any segment gives the
+    // same exact answer; a plane merely containing q or the segment no longer forces a retry
+    // when its face is far away). The segment's own bounding box would accept most of the
+    // mesh for a long diagonal segment; the slab test accepts only the boxes along it.
+    faces.for_each_accepted([&](const Aabb& box) { return segment_may_meet(p, q, box); }, [&](int32_t f) {
       if (degenerate || on_face) return;
       switch (segment_vs_triangle(p, q, mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2))) {
         case Hit::kProper: ++crossings; break;

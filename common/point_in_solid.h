@@ -1,6 +1,6 @@
 // Exact point classification against a solid: inside, outside, or on its surface.
 //
-// A segment from the point to a far point is tested against every face whose box it meets,
+// A segment from the point to a far point is tested against every face whose box it may meet,
 // with exact predicates; the parity of proper crossings decides. When the segment touches an
 // edge or a vertex, or runs in a face's plane, another far point is tried (a fixed sequence,
 // so the answer is deterministic). Precondition: the mesh is a solid.
