@@ -1,17 +1,33 @@
 // Formats other than OFF/OBJ/PLY/STL, through Debian's assimp. Its `ai_real` is float, so
 // coordinates arrive rounded to float32; the caller is told (`single_precision`).
+//
+// Assimp's importers are not hardened against malformed files: a few dozen damaged bytes make
+// some of them (AC3D, ASE, NFF, RAW, X, COLLADA, SMD in assimp 5.2) fail an assertion, crash or
+// loop forever. So the import runs in a child process (fork), under a CPU-time limit and the
+// address-space cap below, with its stdout and stderr sent to /dev/null; the mesh comes back
+// through a pipe. A crash or a loop then ends in a one-line refusal instead of taking vobb down.
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
 #include <assimp/Importer.hpp>
 
+#include <fcntl.h>
+#include <poll.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <new>
 
+#include "common/io/assimp_reader.h"
 #include "common/io/mesh_io.h"
 
 namespace vobb {
@@ -53,9 +69,8 @@ class AddressSpaceCap {
   double allowance_ = 0;
 };
 
-}  // namespace
 
-Status load_with_assimp(const std::string& path, const std::string& display, LoadedMesh* out) {
+Status import_here(const std::string& path, const std::string& display, LoadedMesh* out) {
   Assimp::Importer importer;
   const aiScene* scene = nullptr;
   std::string why;
@@ -100,6 +115,169 @@ Status load_with_assimp(const std::string& path, const std::string& display, Loa
   if (m.faces.empty()) return Status::error(display + ": no triangles in the scene");
   const size_t dot = path.find_last_of('.');
   out->format = dot == std::string::npos ? "assimp" : path.substr(dot + 1);
+  out->single_precision = true;
+  return Status::ok();
+}
+
+
+// ---- the child's report, through the pipe ----
+// 'E' then the one-line message; or 'M', the vertex and face counts (uint64), the vertices
+// (3 doubles each; float32 values, so exact) and the faces (3 int32 each).
+template <typename T>
+void put(std::string* s, const T& v) {
+  s->append(reinterpret_cast<const char*>(&v), sizeof v);
+}
+
+std::string encode(const Status& s, const LoadedMesh& m) {
+  if (!s) return "E" + s.message();
+  std::string out = "M";
+  put(&out, static_cast<uint64_t>(m.mesh.vertices.size()));
+  put(&out, static_cast<uint64_t>(m.mesh.faces.size()));
+  for (const Vec3& v : m.mesh.vertices)
+    for (int i = 0; i < 3; ++i) put(&out, v[i]);
+  for (const Face& f : m.mesh.faces)
+    for (int i = 0; i < 3; ++i) put(&out, f[i]);
+  out += m.format;
+  return out;
+}
+
+bool decode(const std::string& in, const std::string& display, Status* s, LoadedMesh* m) {
+  if (in.empty()) return false;
+  if (in[0] == 'E') {
+    *s = Status::error(in.substr(1));
+    return true;
+  }
+  if (in[0] != 'M' || in.size() < 17) return false;
+  uint64_t nv, nf;
+  std::memcpy(&nv, in.data() + 1, 8);
+  std::memcpy(&nf, in.data() + 9, 8);
+  const size_t need = 17 + nv * 24 + nf * 12;
+  if (nv > in.size() / 24 || nf > in.size() / 12 || in.size() < need) return false;
+  m->mesh.vertices.resize(nv);
+  m->mesh.faces.resize(nf);
+  const char* p = in.data() + 17;
+  for (Vec3& v : m->mesh.vertices)
+    for (int i = 0; i < 3; ++i, p += 8) std::memcpy(&v[i], p, 8);
+  for (Face& f : m->mesh.faces)
+    for (int i = 0; i < 3; ++i, p += 4) std::memcpy(&f[i], p, 4);
+  m->format = in.substr(need);
+  m->single_precision = true;
+  for (const Face& f : m->mesh.faces)
+    for (int32_t i : f)
+      if (i < 0 || static_cast<uint64_t>(i) >= nv) return false;
+  *s = Status::ok();
+  (void)display;
+  return true;
+}
+
+bool write_all(int fd, const std::string& s) {
+  size_t done = 0;
+  while (done < s.size()) {
+    const ssize_t n = ::write(fd, s.data() + done, s.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return false;
+    done += static_cast<size_t>(n);
+  }
+  return true;
+}
+
+[[noreturn]] void run_child(int fd, const std::string& path, const std::string& display, double cpu_seconds) {
+  // No core files from a crashing importer, and no output from it either.
+  struct rlimit no_core {0, 0};
+  ::setrlimit(RLIMIT_CORE, &no_core);
+  const rlim_t cpu = static_cast<rlim_t>(std::ceil(cpu_seconds));
+  struct rlimit cpu_limit {cpu, cpu + 1};  // SIGXCPU at the soft limit, SIGKILL a second later
+  ::setrlimit(RLIMIT_CPU, &cpu_limit);
+  const int null = ::open("/dev/null", O_WRONLY);
+  if (null >= 0) {
+    ::dup2(null, 1);
+    ::dup2(null, 2);
+  }
+  LoadedMesh m;
+  Status s;
+  try {
+    s = import_here(path, display, &m);
+  } catch (const std::exception& e) {
+    s = Status::error(display + ": cannot read: assimp failed: " + e.what());
+  }
+  _exit(write_all(fd, encode(s, m)) ? 0 : 1);
+}
+
+}  // namespace
+
+double assimp_cpu_seconds(uint64_t file_bytes) {
+  return 20.0 + 2.0 * static_cast<double>(file_bytes) / (1 << 20);
+}
+
+Status load_with_assimp(const std::string& path, const std::string& display, LoadedMesh* out,
+                        double cpu_seconds) {
+  if (cpu_seconds <= 0) {
+    struct stat st;
+    if (::stat(path.c_str(), &st) != 0) return Status::error(display + ": cannot open: " + std::strerror(errno));
+    cpu_seconds = assimp_cpu_seconds(static_cast<uint64_t>(st.st_size));
+  }
+  int fds[2];
+  if (::pipe2(fds, O_CLOEXEC) != 0)
+    return Status::error(display + ": cannot start the importer: " + std::strerror(errno));
+  std::fflush(nullptr);  // nothing buffered is written twice
+  const pid_t pid = ::fork();
+  if (pid < 0) {
+    const int err = errno;
+    ::close(fds[0]);
+    ::close(fds[1]);
+    return Status::error(display + ": cannot start the importer: " + std::strerror(err));
+  }
+  if (pid == 0) {
+    ::close(fds[0]);
+    run_child(fds[1], path, display, cpu_seconds);
+  }
+  ::close(fds[1]);
+  // The CPU limit ends a loop; a child that sleeps (it should not) is killed after twice that
+  // in wall time plus 10 s.
+  const auto deadline = std::chrono::steady_clock::now() +
+                        std::chrono::milliseconds(static_cast<int64_t>(1000 * (2 * cpu_seconds + 10)));
+  std::string got;
+  bool timed_out = false;
+  char buf[1 << 16];
+  for (;;) {
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+    if (left.count() <= 0) {
+      timed_out = true;
+      ::kill(pid, SIGKILL);
+      break;
+    }
+    struct pollfd p {fds[0], POLLIN, 0};
+    const int r = ::poll(&p, 1, static_cast<int>(std::min<int64_t>(left.count(), 1000)));
+    if (r < 0 && errno == EINTR) continue;
+    if (r <= 0) continue;
+    const ssize_t n = ::read(fds[0], buf, sizeof buf);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) break;
+    got.append(buf, static_cast<size_t>(n));
+  }
+  ::close(fds[0]);
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  char limit[32];
+  std::snprintf(limit, sizeof limit, "%.0f", cpu_seconds);
+  if (timed_out || (WIFSIGNALED(status) && (WTERMSIG(status) == SIGXCPU || WTERMSIG(status) == SIGKILL)))
+    return Status::error(display + ": cannot read: assimp did not finish within " + limit +
+                         " s of CPU time (a damaged file can make it loop)");
+  if (WIFSIGNALED(status)) {
+    const int sig = WTERMSIG(status);
+    const char* name = ::sigabbrev_np(sig);
+    return Status::error(display + ": cannot read: assimp's importer crashed on this file (signal " +
+                         std::to_string(sig) + (name ? std::string(", SIG") + name : std::string()) +
+                         "); the file is damaged or uses what assimp cannot read");
+  }
+  Status s;
+  LoadedMesh m;
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0 || !decode(got, display, &s, &m))
+    return Status::error(display + ": cannot read: assimp's importer ended without a result");
+  if (!s) return s;
+  out->mesh = std::move(m.mesh);
+  out->format = m.format;
   out->single_precision = true;
   return Status::ok();
 }

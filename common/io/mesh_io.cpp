@@ -15,13 +15,11 @@
 #include <unordered_map>
 
 #include "common/atomic_file.h"
+#include "common/io/assimp_reader.h"
 #include "common/text_util.h"
 #include "vobb/config.h"
 
 namespace vobb {
-
-// Implemented in assimp_reader.cpp when the build has assimp.
-Status load_with_assimp(const std::string& path, const std::string& display, LoadedMesh* out);
 
 namespace {
 

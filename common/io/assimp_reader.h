@@ -1,0 +1,26 @@
+// Reading a mesh through assimp (the formats vobb does not parse itself). load_mesh() calls
+// this; it is declared here for the tests of its limits.
+//
+// The import runs in a child process, so that an importer that crashes or loops on a damaged
+// file cannot take the caller with it: a crash, a loop past `cpu_seconds` of CPU time, or
+// running out of the memory allowance each ends in a failed Status with a one-line message
+// "<file>: cannot read: <reason>". Output of assimp's own goes to /dev/null.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "common/io/mesh_io.h"
+#include "common/status.h"
+
+namespace vobb {
+
+// The default CPU-time limit for a file of this size: 20 s plus 2 s per MiB. Assimp's text
+// importers read tens of MiB per second, so a well-formed file stays far below it.
+double assimp_cpu_seconds(uint64_t file_bytes);
+
+// `cpu_seconds` <= 0: assimp_cpu_seconds() of the file's size.
+Status load_with_assimp(const std::string& path, const std::string& display, LoadedMesh* out,
+                        double cpu_seconds = 0);
+
+}  // namespace vobb
