@@ -1,13 +1,32 @@
 #include "common/text_util.h"
 
+#include <sys/stat.h>
+
 #include <cctype>
+#include <cerrno>
 #include <charconv>
+#include <cstring>
+#include <fstream>
 
 namespace vobb {
 
 std::string basename_of(const std::string& path) {
   const size_t slash = path.find_last_of('/');
   return slash == std::string::npos ? path : path.substr(slash + 1);
+}
+
+Status read_regular_file(const std::string& path, const std::string& display, const std::string& what,
+                         std::string* content) {
+  struct stat st;
+  if (::stat(path.c_str(), &st) != 0) return Status::error(display + ": cannot open: " + std::strerror(errno));
+  if (S_ISDIR(st.st_mode)) return Status::error(display + ": is a directory, not a " + what);
+  if (!S_ISREG(st.st_mode)) return Status::error(display + ": not a regular file");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return Status::error(display + ": cannot open: " + std::strerror(errno));
+  content->resize(static_cast<size_t>(st.st_size));
+  in.read(content->data(), static_cast<std::streamsize>(content->size()));
+  if (static_cast<size_t>(in.gcount()) != content->size()) return Status::error(display + ": read error");
+  return Status::ok();
 }
 
 std::string extension_of(const std::string& path) {

@@ -1,10 +1,11 @@
 // Small text helpers shared by the readers and writers: file-name parts for one-line error
-// messages, and the shortest round-trip form of a double.
+// messages, reading a whole input file, and the shortest round-trip form of a double.
 #pragma once
 
 #include <string>
 
 #include "common/mesh.h"
+#include "common/status.h"
 
 namespace vobb {
 
@@ -12,6 +13,14 @@ namespace vobb {
 std::string basename_of(const std::string& path);
 // Lower-cased extension without the dot; "" when there is none.
 std::string extension_of(const std::string& path);
+// Reads the whole of `path` into `content`. Only a regular file is read: a folder, a FIFO or
+// a device (/dev/zero) is refused before it is opened, since reading it would fail late,
+// block forever or never end. Failures are one line: "<display>: <reason>", where the
+// reason is "cannot open: <strerror>", "is a directory, not a <what>", "not a regular file"
+// or "read error".
+Status read_regular_file(const std::string& path, const std::string& display, const std::string& what,
+                         std::string* content);
+
 // Appends the shortest decimal form that reads back as the same double (std::to_chars).
 void append_double(std::string* s, double v);
 // The same form as a string.

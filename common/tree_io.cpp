@@ -62,15 +62,6 @@ bool get_int_list(const Json& j, std::vector<int32_t>* out) {
   return true;
 }
 
-Status slurp(const std::string& path, std::string* text) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return Status::error(basename_of(path) + ": cannot open");
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  *text = ss.str();
-  if (in.bad()) return Status::error(basename_of(path) + ": read error");
-  return Status::ok();
-}
 
 }  // namespace
 
@@ -164,7 +155,7 @@ Status parse_tree(const std::string& text, const std::string& display, Tree* tre
 
 Status read_tree(const std::string& path, Tree* tree) {
   std::string text;
-  Status s = slurp(path, &text);
+  Status s = read_regular_file(path, basename_of(path), "tree file", &text);
   if (!s) return s;
   return parse_tree(text, basename_of(path), tree);
 }
@@ -183,7 +174,7 @@ Status write_boxes(const std::vector<Obb>& boxes, const std::string& path) {
 
 Status read_boxes(const std::string& path, std::vector<Obb>* boxes) {
   std::string text;
-  Status s = slurp(path, &text);
+  Status s = read_regular_file(path, basename_of(path), "box file", &text);
   if (!s) return s;
   const std::string display = basename_of(path);
   const Json j = Json::parse(text, nullptr, false);

@@ -1,8 +1,10 @@
 #include "fast/variational_builder.h"
 
 #include <Eigen/Geometry>
+#include <sys/stat.h>
 #include <nlohmann/json.hpp>
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <fstream>
 #include <iterator>
@@ -18,6 +20,7 @@
 #include "common/atomic_file.h"
 #include "common/sha256.h"
 #include "common/status.h"
+#include "common/text_util.h"
 #include "fast/obbtree_builder.h"
 
 namespace vobb {
@@ -765,13 +768,14 @@ Status write_variational_state(const VariationalState& st, const std::string& fi
 Status read_variational_state(const std::string& path, const std::string& fingerprint, size_t mesh_faces,
                               int arity, int depth, VariationalState* state, bool* found) {
   *found = false;
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return Status::ok();
+  struct stat st;
+  if (::stat(path.c_str(), &st) != 0 && (errno == ENOENT || errno == ENOTDIR)) return Status::ok();
   *found = true;
-  std::stringstream buf;
-  buf << in.rdbuf();
+  std::string text;
+  const Status read = read_regular_file(path, path, "checkpoint file", &text);
+  if (!read) return read;
   auto bad = [&](const std::string& why) { return Status::error(path + ": damaged checkpoint: " + why); };
-  nlohmann::json j = nlohmann::json::parse(buf.str(), nullptr, /*allow_exceptions=*/false);
+  nlohmann::json j = nlohmann::json::parse(text, nullptr, /*allow_exceptions=*/false);
   if (j.is_discarded() || !j.is_object()) return bad("not JSON");
   try {
     if (j.value("format", "") != kCheckpointFormat || j.value("version", 0) != 1) return bad("not a vobb checkpoint");

@@ -645,19 +645,6 @@ Status read_stl(const Reader& r, LoadedMesh* out) {
   return read_stl_binary(r, out);
 }
 
-Status read_file(const std::string& path, const std::string& display, std::string* content) {
-  struct stat st;
-  if (::stat(path.c_str(), &st) != 0) return Status::error(display + ": cannot open: " + std::strerror(errno));
-  if (S_ISDIR(st.st_mode)) return Status::error(display + ": is a directory, not a mesh file");
-  if (!S_ISREG(st.st_mode)) return Status::error(display + ": not a regular file");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return Status::error(display + ": cannot open: " + std::strerror(errno));
-  content->resize(static_cast<size_t>(st.st_size));
-  in.read(content->data(), static_cast<std::streamsize>(content->size()));
-  if (static_cast<size_t>(in.gcount()) != content->size()) return Status::error(display + ": read error");
-  return Status::ok();
-}
-
 }  // namespace
 
 void weld_vertices(Mesh* mesh, size_t* welded, size_t* unreferenced) {
@@ -745,7 +732,7 @@ Status load_mesh(const std::string& path, LoadedMesh* out) {
 #endif
   } else {
     std::string content;
-    Status s = read_file(path, display, &content);
+    Status s = read_regular_file(path, display, "mesh file", &content);
     if (!s) return s;
     if (content.empty()) return Status::error(display + ": empty file");
     // A file saved under another format's extension fails in that format's terms ("binary

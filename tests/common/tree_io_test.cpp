@@ -2,8 +2,12 @@
 
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
+
+#include <cstdio>
 #include <fstream>
 
+#include "common/text_util.h"
 #include "data/analytic_meshes.h"
 #include "test_common.h"
 
@@ -142,6 +146,33 @@ TEST(BoxFile, RefusesBoxesThatAreNotBoxes) {
   EXPECT_TRUE(read_boxes(path, &boxes));
   EXPECT_EQ(boxes.size(), 2u);
   std::remove(path.c_str());
+}
+
+// Only regular files are read: /dev/zero would be read forever and a FIFO would block, so both
+// are refused before they are opened, as is a folder (by name, not as "not valid JSON").
+TEST(TreeIo, OnlyRegularFilesAreRead) {
+  const std::string fifo = test::temp_path("fifo_tree.json");
+  std::remove(fifo.c_str());
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  const std::string folder = test::temp_path("folder_tree.json");
+  ::mkdir(folder.c_str(), 0700);
+  Tree t;
+  std::vector<Obb> boxes;
+  for (const std::string& path : {std::string("/dev/zero"), fifo}) {
+    const Status tree = read_tree(path, &t);
+    EXPECT_FALSE(tree);
+    EXPECT_NE(tree.message().find(": not a regular file"), std::string::npos) << tree.message();
+    const Status box = read_boxes(path, &boxes);
+    EXPECT_FALSE(box);
+    EXPECT_NE(box.message().find(": not a regular file"), std::string::npos) << box.message();
+  }
+  const std::string name = basename_of(folder);
+  EXPECT_EQ(read_tree(folder, &t).message(), name + ": is a directory, not a tree file");
+  EXPECT_EQ(read_boxes(folder, &boxes).message(), name + ": is a directory, not a box file");
+  const std::string absent = test::temp_path("absent_tree.json");
+  EXPECT_EQ(read_tree(absent, &t).message(), basename_of(absent) + ": cannot open: No such file or directory");
+  std::remove(fifo.c_str());
+  ::rmdir(folder.c_str());
 }
 
 TEST(BoxFile, RoundTrip) {

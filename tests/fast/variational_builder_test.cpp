@@ -1,6 +1,7 @@
 #include "fast/variational_builder.h"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <nlohmann/json.hpp>
 
 #include <cmath>
@@ -212,6 +213,22 @@ TEST(VariationalBuilder, ResumedBuildEqualsUninterrupted) {
     r.checkpoint = nullptr;
     EXPECT_EQ(tree_to_json(build_variational(mesh, r, cpu_at(cpu, 8), &back)), whole);
   }
+  std::remove(path.c_str());
+}
+
+// A missing state means a fresh build; a state file that is not a regular file (here a FIFO,
+// which would block the read forever) is refused.
+TEST(VariationalBuilder, CheckpointThatIsNotARegularFileIsRefused) {
+  VariationalState back;
+  bool found = true;
+  const std::string path = test::temp_path("fifo_state.json");
+  std::remove(path.c_str());
+  EXPECT_TRUE(read_variational_state(path, "fp", 8, 2, 2, &back, &found));
+  EXPECT_FALSE(found);
+  ASSERT_EQ(::mkfifo(path.c_str(), 0600), 0);
+  const Status s = read_variational_state(path, "fp", 8, 2, 2, &back, &found);
+  EXPECT_FALSE(s);
+  EXPECT_NE(s.message().find("fifo_state.json: not a regular file"), std::string::npos) << s.message();
   std::remove(path.c_str());
 }
 
