@@ -7,7 +7,9 @@
 #include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <string>
+#include <vector>
 
 #include "common/status.h"
 
@@ -39,6 +41,20 @@ inline std::string one_line(const std::string& s) {
 inline int refuse(const Status& s) {
   std::fprintf(stderr, "vobb: %s\n", one_line(s.message()).c_str());
   return kExitBadInput;
+}
+
+// An output that names one of the run's input files (the same file by any path: "./x", a
+// link) would replace it: `build dino.off -o dino.off` turned the mesh into a tree. Refused
+// before anything runs. An output that does not exist yet cannot be an input.
+inline Status check_output_is_not_input(const std::string& option, const std::string& output,
+                                        const std::vector<std::string>& inputs) {
+  if (output.empty()) return Status::ok();
+  for (const std::string& in : inputs) {
+    std::error_code ec;
+    if (std::filesystem::equivalent(output, in, ec) && !ec)
+      return Status::error(option + " " + output + ": is the input file " + in + "; choose another output");
+  }
+  return Status::ok();
 }
 
 // CLI::Range lets NaN through (every comparison with it is false), and an unsigned option

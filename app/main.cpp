@@ -312,7 +312,7 @@ int run_certify(const std::string& mesh_path, const std::string& tree_path, bool
     j["containment"] = {{"ok", c.containment.ok()}, {"violations", c.containment.violations},
                         {"checked_pairs", c.containment.checked_pairs}, {"first", first}};
     j["seconds"] = c.seconds;
-    std::printf("%s\n", j.dump(2).c_str());
+    std::printf("%s\n", j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace).c_str());
   } else {
     std::printf("%5s %7s %24s %24s %24s %6s\n", "level", "boxes", "OMV", "sum OBV", "overlap", "bound");
     for (const auto& l : c.layers)
@@ -465,7 +465,7 @@ int run_obv(const std::string& mesh_path, const std::string& boxes_path, const s
     nlohmann::ordered_json doc;
     if (gl) doc["renderer"] = gl->renderer();
     doc["boxes"] = out;
-    std::printf("%s\n", doc.dump(2).c_str());
+    std::printf("%s\n", doc.dump(2, ' ', false, nlohmann::json::error_handler_t::replace).c_str());
   }
   return kExitOk;
 }
@@ -524,7 +524,7 @@ int run_compare(const std::string& mesh_path, const BuildFlags& flags, bool json
     doc["seconds_baseline"] = r[0].build_seconds;
     doc["seconds_variational"] = r[1].build_seconds;
     doc["certified"] = ok;
-    std::printf("%s\n", doc.dump(2).c_str());
+    std::printf("%s\n", doc.dump(2, ' ', false, nlohmann::json::error_handler_t::replace).c_str());
   } else {
     std::printf("%5s %24s %24s %10s\n", "layer", "OMV obbtree", "OMV variational", "change %");
     for (size_t l = 0; l < levels; ++l)
@@ -716,6 +716,18 @@ int main(int argc, char** argv) {
   const int threads = build->parsed() ? bf.threads : cmp->parsed() ? cf.threads : cert->parsed() ? certify_threads : 0;
   std::optional<tbb::global_control> thread_limit;
   if (threads > 0) thread_limit.emplace(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
+  {
+    vobb::Status s = vobb::Status::ok();
+    if (build->parsed()) s = vobb::app::check_output_is_not_input("-o", out, {mesh});
+    if (exp->parsed()) s = vobb::app::check_output_is_not_input("-o", out, {tree_path});
+    if (cmp->parsed()) s = vobb::app::check_output_is_not_input("--figure", compare_figure, {mesh});
+    if (collide_cmd->parsed()) {
+      std::vector<std::string> inputs = collide_flags.trees;
+      inputs.push_back(collide_flags.mesh);
+      s = vobb::app::check_output_is_not_input("-o", collide_flags.output, inputs);
+    }
+    if (!s) return refuse(s);
+  }
   auto run = [&]() -> int {
     if (info->parsed()) return run_info(mesh, json, rational);
     if (build->parsed()) return run_build(mesh, out, bf);

@@ -87,7 +87,7 @@ std::string format_report_json(const MeshReport& r, bool rational) {
     d.push_back(one);
   }
   j["defects"] = d;
-  return j.dump(2) + "\n";
+  return j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";  // file names need not be UTF-8
 }
 
 }  // namespace vobb

@@ -126,6 +126,40 @@ TEST(CliBadInput, NonFiniteAndNegativeNumbersAndOddNames) {
   EXPECT_NE(odd.err.find("no\\x0asuch.off"), std::string::npos) << odd.err;
 }
 
+// An output that is one of the run's inputs, by another spelling of its path, is refused
+// before anything runs, and the input is left as it was (it used to be replaced, exit 0).
+TEST(CliBadInput, OutputThatIsAnInputIsRefused) {
+  const std::string mesh = write_cube("same_cube.off", 1);
+  const std::string tree = test::temp_path("same_tree.json");
+  ASSERT_EQ(vobb_cli("build " + mesh + " -o " + tree + " --method obbtree --depth 1").code, 0);
+  const std::string mesh_bytes = slurp(mesh), tree_bytes = slurp(tree);
+  const std::string dir = mesh.substr(0, mesh.find_last_of('/'));
+  const std::string mesh_again = dir + "/./" + mesh.substr(mesh.find_last_of('/') + 1);
+  for (const std::string& args :
+       {"build " + mesh + " -o " + mesh_again + " --method obbtree --depth 1",
+        "export " + tree + " --level 0 -o " + tree, "collide " + mesh + " " + tree + " --static --colliders 5 -o " + tree,
+        "collide " + mesh + " " + tree + " --static --colliders 5 -o " + mesh,
+        "compare " + mesh + " --depth 1 --backend cpu --m 4 --quiet --figure " + mesh_again}) {
+    const CliRun r = vobb_cli(args);
+    EXPECT_EQ(r.code, 2) << args;
+    EXPECT_EQ(line_count(r.err), 1u) << args << ": " << r.err;
+    EXPECT_NE(r.err.find("is the input file"), std::string::npos) << args << ": " << r.err;
+  }
+  EXPECT_EQ(slurp(mesh), mesh_bytes);
+  EXPECT_EQ(slurp(tree), tree_bytes);
+}
+
+// File names need not be UTF-8; a JSON report escapes what is not (U+FFFD) instead of failing
+// with exit 3.
+TEST(Cli, JsonReportsTakeFileNamesThatAreNotUtf8) {
+  const std::string name = write_cube("latin\xff_cube.off", 1);
+  const CliRun r = vobb_cli("info '" + name + "' --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_NE(r.out.find("latin\xef\xbf\xbd_cube.off"), std::string::npos) << r.out;
+  EXPECT_EQ(j.at("faces"), 12);
+}
+
 // ODE's tolerances are absolute: at 1e60 (the scale-free scene runs at 1e22) it fails an assertion.
 // The run ends with one line naming ODE's message, exit 2, and no report file.
 TEST(CliBadInput, PhysicsFailureIsOneLineNotAnAbort) {
