@@ -109,8 +109,16 @@ Status parse_tree(const std::string& text, const std::string& display, Tree* tre
   t.arity = static_cast<int>(arity);
   t.depth = static_cast<int>(depth);
   t.mesh_triangles = static_cast<size_t>(triangles);
-  if (j["mesh"].contains("sha256") && j["mesh"]["sha256"].is_string()) t.mesh_sha256 = j["mesh"]["sha256"];
-  if (j.contains("method") && j["method"].is_string()) t.method = j["method"];
+  // Both may be absent (a hand-made tree: the mesh check is then skipped), but one that is
+  // there must be a string: a damaged sha256 must not switch the mesh check off.
+  if (j["mesh"].contains("sha256")) {
+    if (!j["mesh"]["sha256"].is_string()) return fail("bad 'mesh.sha256' (not a string)");
+    t.mesh_sha256 = j["mesh"]["sha256"];
+  }
+  if (j.contains("method")) {
+    if (!j["method"].is_string()) return fail("bad 'method' (not a string)");
+    t.method = j["method"];
+  }
   if (!j.contains("nodes") || !j["nodes"].is_array()) return fail("bad or missing 'nodes'");
   const Json& nodes = j["nodes"];
   t.nodes.resize(nodes.size());

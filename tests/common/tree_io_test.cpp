@@ -117,6 +117,9 @@ TEST(TreeIo, RefusesBrokenTreesWithOneLine) {
   refused(edit("\"center\":[", "\"centre\":["), "center");
   refused(edit("\"depth\":1", "\"depth\":3"), "deepest leaf");
   refused(edit("\"parent\":0", "\"parent\":2"), "bad child 1");
+  // A sha256 or method of another type is damage, not absence: it must not turn the mesh check off.
+  refused(edit("\"sha256\":\"abc\"", "\"sha256\":5"), "bad 'mesh.sha256'");
+  refused(edit("\"method\":\"test\"", "\"method\":[1]"), "bad 'method'");
   // A claimed triangle count far beyond the faces listed is refused without sizing memory by it.
   refused(edit("\"triangles\":8", "\"triangles\":2147483647"), "the mesh has 2147483647 triangles");
   // DESIGN §7: axes only nearly orthonormal; a scaled or sheared frame is not a box.

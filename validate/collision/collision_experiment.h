@@ -31,6 +31,9 @@
 
 namespace vobb::collision {
 
+// The most colliders of the dynamic scene (bodies alive at once); static poses are not limited.
+constexpr int kMaxDynamicColliders = 1000000;
+
 struct ExperimentOptions {
   bool dynamic = true;     // false: static poses on and near the surface
   int colliders = 1000;    // bodies (dynamic) or poses (static); >= 1

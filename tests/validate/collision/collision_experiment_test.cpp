@@ -260,6 +260,23 @@ TEST(CollisionExperiment, RefusesANonConservativeTree) {
   EXPECT_NE(s.message().find("bad.json: not conservative"), std::string::npos) << s.message();
 }
 
+// The dynamic scene holds every collider as a physics body at once: beyond
+// kMaxDynamicColliders it is refused before any body is made (10^7 took 10.5 GB), while the
+// static scene takes as many poses as asked.
+TEST(CollisionExperiment, DynamicSceneRefusesMoreBodiesThanItsLimit) {
+  const Mesh mesh = analytic::octahedron().mesh;
+  const Tree tree = baseline(mesh, 1);
+  ExperimentOptions opt;
+  opt.colliders = kMaxDynamicColliders + 1;
+  opt.seconds = 0;
+  opt.fcl = false;
+  ExperimentReport r;
+  const Status s = run_collision_experiment(mesh, {{"t.json", &tree}}, opt, &r);
+  ASSERT_FALSE(s);
+  EXPECT_NE(s.message().find("at most 1000000 colliders in the dynamic scene"), std::string::npos) << s.message();
+  EXPECT_EQ(r.queries, 0u);
+}
+
 using test::CliRun;
 using test::vobb_cli;
 
