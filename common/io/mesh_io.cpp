@@ -253,6 +253,14 @@ Status read_obj(const Reader& r, LoadedMesh* out) {
       for (int k = 0; k < 3; ++k)
         if (!parse_double(t[k + 1], &p[k]))
           return r.fail_at(lines.number(), "not a number: '" + std::string(t[k + 1].substr(0, 32)) + "'");
+      // After x y z: a weight w, or a colour r g b [a] (a common extension): at most 4
+      // numbers. A word, or more numbers, means the line is not what it seems.
+      if (const size_t k = first_word(t, 4); k < t.size())
+        return r.fail_at(lines.number(), "unexpected '" + std::string(t[k].substr(0, 32)) +
+                                             "' after the vertex's coordinates");
+      if (t.size() > 8)
+        return r.fail_at(lines.number(), "vertex has " + std::to_string(t.size() - 4) +
+                                             " values after its coordinates (a weight or a colour has at most 4)");
       m.vertices.push_back(p);
     } else if (t[0] == "f") {
       idx.clear();
@@ -484,6 +492,11 @@ Status read_ply(const Reader& r, LoadedMesh* out) {
           if (is_vertex && static_cast<int>(k) == iz) p[2] = v;
         }
       }
+      // An ASCII record is one line: values beyond its properties (a damaged list length, a
+      // stray word) mean the line and the header disagree.
+      if (ascii && tok < t.size())
+        return r.fail_at(line, "unexpected '" + std::string(t[tok].substr(0, 32)) + "' after the " + e.name +
+                                   " record's " + std::to_string(tok) + " values");
       if (is_vertex) m.vertices.push_back(p);
       if (is_face) polys.emplace_back(idx, ascii ? line : 0);
     }

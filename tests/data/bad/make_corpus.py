@@ -101,6 +101,15 @@ files["records_beyond_count.ply"] = (
 files["junk_after_face_indices.off"] = off(V, F).replace("3 0 4 6\n", "3 0 4 6 abc\n", 1)
 files["junk_after_vertex.off"] = off(V, F).replace("\n1 0 0\n", "\n1 0 0 zz\n", 1)
 files["long_face_line.off"] = off(V, F).replace("3 0 4 6\n", "3 0 4 6 1 2 3 4 5\n", 1)
+# ASCII PLY and OBJ records with more than they should hold: a word after a vertex, a face
+# line with one index more than its list length says, a word after an OBJ vertex.
+ply_ascii = ("ply\nformat ascii 1.0\nelement vertex 8\nproperty float x\nproperty float y\nproperty float z\n"
+             "element face 12\nproperty list uchar int vertex_indices\nend_header\n" +
+             "".join(" ".join(map(str, v)) + "\n" for v in V) + "".join("3 %d %d %d\n" % f for f in F))
+files["junk_after_vertex.ply"] = ply_ascii.replace("\n1 0 0\n", "\n1 0 0 zz\n", 1)
+files["index_beyond_list_length.ply"] = ply_ascii.replace("3 %d %d %d\n" % F[0], "3 %d %d %d 7\n" % F[0], 1)
+files["junk_after_vertex.obj"] = ("".join("v %d %d %d\n" % v for v in V).replace("v 1 0 0\n", "v 1 0 0 zz\n", 1) +
+                                  "".join("f %d %d %d\n" % (a + 1, b + 1, c + 1) for a, b, c in F))
 # ASCII STL out of its grammar: a facet without its outer loop, words after a vertex's
 # coordinates, and text after endsolid.
 def stl_ascii(facets):
