@@ -16,6 +16,7 @@
 #include <string>
 
 #include <tbb/global_control.h>
+#include <unistd.h>
 
 #include "app/cli_support.h"
 #include "common/box_export.h"
@@ -136,25 +137,39 @@ vobb::Status build_tree(const vobb::Mesh& mesh, const BuildFlags& f, const vobb:
   opt.margin = f.collider_margin;
   const auto t0 = std::chrono::steady_clock::now();
   if (f.time_budget > 0) opt.out_of_time = [&] { return seconds_since(t0) > f.time_budget; };
-  double last = -1, done0 = -1;
+  // On a terminal the line is redrawn in place twice a second; into a file or a pipe it is
+  // a line of its own every 30 s, so a log stays readable.
+  const bool tty = ::isatty(::fileno(stderr)) != 0;
+  const double every = tty ? 0.5 : 30.0;
+  const char* start = tty ? "\r" : "";
+  const char* end = tty ? "     " : "\n";
+  double last = -1, done0 = -1, sweep_t0 = 0;
+  int sweep_seen = 0;
   if (!f.quiet)
     opt.progress = [&](const vobb::VariationalProgress& p) {
       const double now = seconds_since(t0);
-      if (now - last < 0.5) return;
+      if (p.sweep != sweep_seen) {  // a new sweep: its pace is measured from here
+        sweep_seen = p.sweep;
+        sweep_t0 = now;
+      }
+      if (last >= 0 && now - last < every) return;
       last = now;
       if (done0 < 0) done0 = p.done;
+      // Remaining: this run's pace over what is still to do, in the top-down pass or in the
+      // current sweep (how many sweeps run depends on their gains: at most --sweeps).
+      char eta[64] = "";
       if (p.sweep == 0) {
-        // Remaining: this run's pace over the fraction of levels still to make (top-down only;
-        // the sweeps come after and are shown as such).
-        char eta[48] = "";
         if (p.done - done0 > 0.02)
           std::snprintf(eta, sizeof eta, "  ~%.0f s left to split", now * (1 - p.done) / (p.done - done0));
-        std::fprintf(stderr, "\rvobb: level %d/%d  node %zu/%zu  iteration %d  sum %s %.6g  %.1f s%s     ",
-                     p.level, f.depth, p.node, p.nodes, p.iteration,
-                     f.collider_margin > 0 ? "grown OBV" : "OBV", p.sum_obv, now, eta);
+        std::fprintf(stderr, "%svobb: level %d/%d  nodes done %zu/%zu  iteration %d/%d  sum %s %.6g  %.1f s%s%s", start,
+                     p.level, f.depth, p.node, p.nodes, p.iteration, f.lloyd,
+                     f.collider_margin > 0 ? "grown OBV" : "OBV", p.sum_obv, now, eta, end);
       } else {
-        std::fprintf(stderr, "\rvobb: merging sweep %d/%d  level %d  node %zu/%zu  %.1f s                         ",
-                     p.sweep, f.sweeps, p.level, p.node, p.nodes, now);
+        if (p.sweep_done > 0.02)
+          std::snprintf(eta, sizeof eta, "  ~%.0f s left in this sweep",
+                        (now - sweep_t0) * (1 - p.sweep_done) / p.sweep_done);
+        std::fprintf(stderr, "%svobb: merging sweep %d (at most %d)  level %d  nodes done %zu/%zu  %.1f s%s%s", start,
+                     p.sweep, f.sweeps, p.level, p.node, p.nodes, now, eta, tty ? "                    " : "\n");
       }
       std::fflush(stderr);
     };
@@ -183,7 +198,9 @@ vobb::Status build_tree(const vobb::Mesh& mesh, const BuildFlags& f, const vobb:
       vobb::Status w = vobb::write_variational_state(st, fingerprint, state_path);
       if (!w && save_error) {
         save_error = w;
-        std::fprintf(stderr, "\nvobb: warning: checkpoint not saved: %s\n", one_line(w.message()).c_str());
+        // On a terminal the progress line is still open: end it first.
+        std::fprintf(stderr, "%svobb: warning: checkpoint not saved: %s\n", tty && last >= 0 ? "\n" : "",
+                     one_line(w.message()).c_str());
       }
       if (w && st.split_levels == kill_at) ::raise(SIGKILL);
     };
@@ -192,7 +209,7 @@ vobb::Status build_tree(const vobb::Mesh& mesh, const BuildFlags& f, const vobb:
   *tree = vobb::build_variational(mesh, opt, estimate, resuming ? &resume : nullptr, &report);
   vobb::Status valid = vobb::validate_tree(*tree, "variational tree");
   VOBB_ASSERT(valid, valid.message().c_str());  // a builder bug, not bad input
-  if (!f.quiet && last >= 0) std::fprintf(stderr, "\n");
+  if (!f.quiet && last >= 0 && tty) std::fprintf(stderr, "\n");
   if (!f.quiet)
     std::fprintf(stderr, "vobb: %zu boxes estimated, %zu adjusted splits and %zu merges kept, %d sweeps%s\n",
                  report.estimates, report.adjustments, report.merges, report.sweeps,

@@ -538,11 +538,16 @@ class Builder {
       progress.level = l;
       progress.sweep = st->sweeps + 1;
       progress.nodes = grand.size();
+      size_t level_faces = 0, faces_done = 0;
+      for (int32_t g : grand) level_faces += st->nodes[g].faces.size();
       for (int32_t g : grand) {
         if (out_of_time(st)) break;
+        faces_done += st->nodes[g].faces.size();
         gain += (d - l + 1) * regroup(st, g);
         ++progress.node;
         progress.estimates = report_->estimates;
+        progress.sweep_done = ((d - 1 - l) + static_cast<double>(faces_done) / std::max<size_t>(level_faces, 1)) /
+                              std::max(d - 1, 1);
         if (options_.progress) options_.progress(progress);
       }
     }

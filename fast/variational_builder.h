@@ -76,7 +76,9 @@ struct VariationalProgress {
   double sum_obv = 0;   // estimated sum of OBV of the finished children at this level (of the
                         // boxes grown by the margin, when there is one)
   size_t estimates = 0; // boxes estimated so far
-  double done = 0;      // rough fraction of the whole build done, for a remaining-time guess
+  double done = 0;      // rough fraction of the top-down pass done, for a remaining-time guess
+  double sweep_done = 0;  // in a merging sweep: rough fraction of it done (each level re-groups
+                          // about every face once, so levels weigh alike; within a level, by faces)
 };
 
 // The state of a build between two steps: what a checkpoint holds.

@@ -160,6 +160,18 @@ TEST(Cli, JsonReportsTakeFileNamesThatAreNotUtf8) {
   EXPECT_EQ(j.at("faces"), 12);
 }
 
+// Progress into a file (not a terminal) is whole lines, each "vobb: ...", never a line
+// redrawn with carriage returns; the first progress line comes at once.
+TEST(Cli, ProgressIntoAFileIsWholeLines) {
+  const std::string mesh = write_cube("progress_cube.off", 1);
+  const CliRun r = vobb_cli("build " + mesh + " -o " + test::temp_path("progress_tree.json") + " --depth 2 --backend cpu --m 4");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.err.find('\r'), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("vobb: level 1/2  nodes done 0/1  iteration"), std::string::npos) << r.err;
+  std::istringstream lines(r.err);
+  for (std::string line; std::getline(lines, line);) EXPECT_EQ(line.rfind("vobb: ", 0), 0u) << line;
+}
+
 // ODE's tolerances are absolute: at 1e60 (the scale-free scene runs at 1e22) it fails an assertion.
 // The run ends with one line naming ODE's message, exit 2, and no report file.
 TEST(CliBadInput, PhysicsFailureIsOneLineNotAnAbort) {
