@@ -77,8 +77,10 @@ std::string format_json(const CollideFlags& f, const collision::ExperimentReport
 }
 
 std::string format_text(const CollideFlags& f, const collision::ExperimentReport& r) {
-  using collision::reduction_pct;
   using ull = unsigned long long;
+  // The text shows changes (negative: fewer tests), the JSON reductions (positive: fewer).
+  // Adding +0.0 turns the first tree's -0.0 into 0.0, which prints without a sign.
+  auto change_pct = [](double first, double other) { return -collision::reduction_pct(first, other) + 0.0; };
   std::string out;
   const double unit = r.dynamic ? r.simulated_seconds : static_cast<double>(r.queries);
   out += fmt::sprintf("%s: %llu queries (%llu touching), %.3g s simulated, collider scale %g; brute force agrees: %s\n",
@@ -92,7 +94,7 @@ std::string format_text(const CollideFlags& f, const collision::ExperimentReport
   for (const auto& t : r.trees) {
     out += fmt::sprintf("%-28s %14llu %10.4g %14llu %10llu %10.3f %+9.2f", t.name.c_str(), static_cast<ull>(t.counts.box_tests),
                   t.counts.box_tests / unit, static_cast<ull>(t.counts.leaf_tests), static_cast<ull>(t.counts.contacts),
-                  t.narrow_phase_seconds, -reduction_pct(t0.counts.box_tests, t.counts.box_tests));
+                  t.narrow_phase_seconds, change_pct(t0.counts.box_tests, t.counts.box_tests));
     // FCL's columns only where it ran on this tree, its changes only where it ran on the first.
     if (!t.fcl.available) {
       out += fmt::sprintf(" %14s %14s %9s %9s\n", "-", "-", "-", "-");
@@ -100,8 +102,8 @@ std::string format_text(const CollideFlags& f, const collision::ExperimentReport
     }
     out += fmt::sprintf(" %14llu %14llu", static_cast<ull>(t.fcl.bv_tests), static_cast<ull>(t.fcl.tree_node_bv_tests));
     if (t0.fcl.available)
-      out += fmt::sprintf(" %+9.2f %+9.2f\n", -reduction_pct(t0.fcl.bv_tests, t.fcl.bv_tests),
-                    -reduction_pct(t0.fcl.tree_node_bv_tests, t.fcl.tree_node_bv_tests));
+      out += fmt::sprintf(" %+9.2f %+9.2f\n", change_pct(t0.fcl.bv_tests, t.fcl.bv_tests),
+                    change_pct(t0.fcl.tree_node_bv_tests, t.fcl.tree_node_bv_tests));
     else
       out += fmt::sprintf(" %9s %9s\n", "-", "-");
   }
@@ -114,7 +116,7 @@ std::string format_text(const CollideFlags& f, const collision::ExperimentReport
       const uint64_t n = t.counts.box_tests_by_level[l];
       out += fmt::sprintf(" %llu", static_cast<ull>(n));
       if (&t != &t0 && l < t0.counts.box_tests_by_level.size())
-        out += fmt::sprintf(" (%+.1f)", -reduction_pct(t0.counts.box_tests_by_level[l], n));
+        out += fmt::sprintf(" (%+.1f)", change_pct(t0.counts.box_tests_by_level[l], n));
     }
     out += "\n";
   }

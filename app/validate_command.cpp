@@ -15,7 +15,9 @@ CLI::App* add_validate_command(CLI::App& app, ValidateFlags* f) {
       ->capture_default_str()
       ->check(CLI::IsMember({"quick", "full"}));
   v->add_option("--out", f->out, "Output folder (default: validation-<suite>)");
-  v->add_option("--meshes", f->meshes, "Folder of the real meshes (default: data/real)");
+  v->add_option("--meshes", f->meshes,
+                std::string("Folder of the real meshes (default: data/real in the working folder if there is one, else ") +
+                    VOBB_SOURCE_MESH_DIR + ", where this build's data/fetch_meshes.sh puts them)");
   v->add_flag("--cpu-only", f->cpu_only, "Skip the GL estimator (the CPU twin only)");
   v->add_flag("--quiet", f->quiet, "No progress on stderr");
   return v;
