@@ -69,7 +69,6 @@ class AddressSpaceCap {
   double allowance_ = 0;
 };
 
-
 Status import_here(const std::string& path, const std::string& display, LoadedMesh* out) {
   Assimp::Importer importer;
   const aiScene* scene = nullptr;
@@ -119,7 +118,6 @@ Status import_here(const std::string& path, const std::string& display, LoadedMe
   return Status::ok();
 }
 
-
 // ---- the child's report, through the pipe ----
 // 'E' then the one-line message; or 'M', the vertex and face counts (uint64), the vertices
 // (3 doubles each; float32 values, so exact) and the faces (3 int32 each).
@@ -141,6 +139,7 @@ std::string encode(const Status& s, const LoadedMesh& m) {
   return out;
 }
 
+// False when the bytes are not a whole report (the child died while writing).
 bool decode(const std::string& in, const std::string& display, Status* s, LoadedMesh* m) {
   if (in.empty()) return false;
   if (in[0] == 'E') {
@@ -151,8 +150,7 @@ bool decode(const std::string& in, const std::string& display, Status* s, Loaded
   uint64_t nv, nf;
   std::memcpy(&nv, in.data() + 1, 8);
   std::memcpy(&nf, in.data() + 9, 8);
-  const size_t need = 17 + nv * 24 + nf * 12;
-  if (nv > in.size() / 24 || nf > in.size() / 12 || in.size() < need) return false;
+  if (nv > in.size() / 24 || nf > in.size() / 12 || in.size() < 17 + nv * 24 + nf * 12) return false;
   m->mesh.vertices.resize(nv);
   m->mesh.faces.resize(nf);
   const char* p = in.data() + 17;
@@ -160,13 +158,14 @@ bool decode(const std::string& in, const std::string& display, Status* s, Loaded
     for (int i = 0; i < 3; ++i, p += 8) std::memcpy(&v[i], p, 8);
   for (Face& f : m->mesh.faces)
     for (int i = 0; i < 3; ++i, p += 4) std::memcpy(&f[i], p, 4);
-  m->format = in.substr(need);
+  m->format = in.substr(17 + nv * 24 + nf * 12);
   m->single_precision = true;
+  *s = Status::ok();
+  // Assimp's indices are unsigned and per mesh; one past int32 or past the vertices would
+  // index out of bounds later.
   for (const Face& f : m->mesh.faces)
     for (int32_t i : f)
-      if (i < 0 || static_cast<uint64_t>(i) >= nv) return false;
-  *s = Status::ok();
-  (void)display;
+      if (i < 0 || static_cast<uint64_t>(i) >= nv) *s = Status::error(display + ": a face refers to a vertex that does not exist");
   return true;
 }
 
@@ -257,13 +256,21 @@ Status load_with_assimp(const std::string& path, const std::string& display, Loa
   }
   ::close(fds[0]);
   int status = 0;
-  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  struct rusage usage {};
+  while (::wait4(pid, &status, 0, &usage) < 0 && errno == EINTR) {
   }
+  const double cpu_used = usage.ru_utime.tv_sec + 1e-6 * usage.ru_utime.tv_usec + usage.ru_stime.tv_sec +
+                          1e-6 * usage.ru_stime.tv_usec;
   char limit[32];
   std::snprintf(limit, sizeof limit, "%.0f", cpu_seconds);
-  if (timed_out || (WIFSIGNALED(status) && (WTERMSIG(status) == SIGXCPU || WTERMSIG(status) == SIGKILL)))
+  // SIGXCPU, or SIGKILL after it, with the CPU time spent: the limit; SIGKILL before it is
+  // spent is an outside kill (the kernel's, out of memory) unless it was ours (timed_out).
+  const bool killed = WIFSIGNALED(status) && (WTERMSIG(status) == SIGXCPU || WTERMSIG(status) == SIGKILL);
+  if (timed_out || (killed && (WTERMSIG(status) == SIGXCPU || cpu_used >= cpu_seconds - 0.5)))
     return Status::error(display + ": cannot read: assimp did not finish within " + limit +
                          " s of CPU time (a damaged file can make it loop)");
+  if (killed)
+    return Status::error(display + ": cannot read: assimp's importer was killed (out of memory?)");
   if (WIFSIGNALED(status)) {
     const int sig = WTERMSIG(status);
     const char* name = ::sigabbrev_np(sig);
