@@ -1,10 +1,8 @@
 #include "common/tree_io.h"
 
 #include <cmath>
-#include <fstream>
 #include <functional>
 #include <nlohmann/json.hpp>
-#include <sstream>
 
 #include "common/atomic_file.h"
 #include "common/solidity.h"
@@ -61,7 +59,6 @@ bool get_int_list(const Json& j, std::vector<int32_t>* out) {
   }
   return true;
 }
-
 
 }  // namespace
 

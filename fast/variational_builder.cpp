@@ -6,9 +6,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
-#include <fstream>
 #include <iterator>
-#include <sstream>
 #include <limits>
 #include <map>
 #include <numeric>

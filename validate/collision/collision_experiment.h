@@ -31,7 +31,8 @@
 
 namespace vobb::collision {
 
-// The most colliders of the dynamic scene (bodies alive at once); static poses are not limited.
+// The most colliders of the dynamic scene (bodies alive at once); static poses, made one at a
+// time, are not limited here.
 constexpr int kMaxDynamicColliders = 1000000;
 
 struct ExperimentOptions {
