@@ -108,6 +108,22 @@ double edge_tie(const Vec3& E, const Vec3& p, const Vec3& q) {
   return 8 * u * (E.cwiseAbs().sum() + abs_cross(p, q).sum()) + 0x1p-1070;
 }
 
+// Whether E* = +-(p x q) is exactly the zero vector (LocalTriangle::edge_zero). Each component
+// of E = fl(E*) is within gamma_2 of |p| x |q| of E*'s (fused or not; edge_tie), plus
+// underflow, so only an E within that of 0 on every component can come from E* = 0: only such
+// an edge is tested in rationals, once.
+bool cross_is_exactly_zero(const Vec3& E, const Vec3& p, const Vec3& q) {
+  constexpr double u = 0x1p-53;
+  const Vec3 bound = abs_cross(p, q);
+  for (int c = 0; c < 3; ++c)
+    if (std::abs(E[c]) > 8 * u * bound[c] + 0x1p-1070) return false;
+  for (int c = 0; c < 3; ++c) {
+    const int c1 = (c + 1) % 3, c2 = (c + 2) % 3;
+    if (Rational(p[c1]) * Rational(q[c2]) != Rational(p[c2]) * Rational(q[c1])) return false;
+  }
+  return true;
+}
+
 // Sutherland-Hodgman: keep the part of a convex polygon where plane(p) >= 0.
 template <class Plane>
 int clip(const Vec3* in, int n, Vec3* out, const Plane& plane) {
@@ -267,6 +283,7 @@ namespace {
 }  // namespace
 
 int exact_edge_side(const LocalTriangle& t, int k, const Texel& x) {
+  if (t.edge_zero[k]) return 0;  // E* = 0, decided by plan(): the end of this function's search
   const int a = k, b = (k + 1) % 3;
   VOBB_ASSERT(t.p[a].allFinite() && t.p[b].allFinite(), "plan() keeps only finite faces");
   const bool canonical = t.id[a] < t.id[b];
@@ -484,6 +501,7 @@ void BoxPlanner::plan(const Obb& box, int m, BoxPlan* out) const {
       const int a = k, b = (k + 1) % 3;
       t.edge_cross[k] = t.id[a] < t.id[b] ? Vec3(t.p[a].cross(t.p[b])) : Vec3(-t.p[b].cross(t.p[a]));
       t.edge_tie[k] = edge_tie(t.edge_cross[k], t.p[a], t.p[b]);
+      t.edge_zero[k] = cross_is_exactly_zero(t.edge_cross[k], t.p[a], t.p[b]);
     }
     const Vec3 e1 = t.p[1] - t.p[0], e2 = t.p[2] - t.p[0];
     t.normal = e1.cross(e2);

@@ -46,6 +46,10 @@ struct LocalTriangle {
   // leaves [0, 1]). The CPU twin therefore decides every edge test within edge_tie[k] of 0
   // exactly (cpu_edge_side).
   double edge_tie[3];  // bounds |fl(d . edge_cross[k]) - d* . E*| over the texel directions
+  // E* of edge k is exactly the zero vector: its line passes through the centre (a box centred
+  // on a mesh vertex, or on an edge), and every texel's exact test gives 0. Decided once per
+  // edge by plan(), so that exact_edge_side need not redo it in rationals for every texel.
+  bool edge_zero[3] = {false, false, false};
   Vec3 normal;   // (p1 - p0) x (p2 - p0), outward for a solid (corrected for mirrored frames)
   double plane;  // normal . p0: along d the face's plane is at zeta = plane / (normal . d)
   // The exact face, or this plane's rounding, may pass so near the centre that the plan's

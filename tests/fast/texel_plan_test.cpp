@@ -59,6 +59,52 @@ TEST(TexelPlan, ThinBoxesDoNotTakeFarFacesAsNearTheCentre) {
 // alternate between large and small plans and the early exits: the whole mesh, a small box at
 // a rim vertex, a flat box, a thin box whose faces lie beyond 2^300 box units (unresolved), a
 // box across the rim. (Which order-keeping path a box takes is CulledPlansKeepTheFacesInMeshOrder's.)
+// A box centred on a mesh vertex, on the midpoint of a face's diagonal, or on an edge's
+// midpoint has edges whose line passes through the centre (E* = 0 exactly). plan() marks
+// exactly those, as a rational evaluation of E* says, and an edge test on a marked edge gives
+// 0 for every texel, as the full rational test does.
+TEST(TexelPlan, EdgesThroughTheCentreAreMarkedExactly) {
+  Mesh cube;
+  for (int i = 0; i < 8; ++i) cube.vertices.emplace_back(i & 1, (i >> 1) & 1, (i >> 2) & 1);
+  for (const auto& q : {std::array<int32_t, 4>{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4}, {2, 6, 7, 3},
+                        {0, 2, 3, 1}, {4, 5, 7, 6}}) {
+    cube.faces.push_back({q[0], q[1], q[2]});
+    cube.faces.push_back({q[0], q[2], q[3]});
+  }
+  const BoxPlanner planner(cube);
+  int marked = 0, unmarked = 0;
+  for (const Vec3& c : {Vec3(0, 0, 0), Vec3(0.5, 0.5, 0), Vec3(0.5, 0, 0), Vec3(0.3, 0.2, 0.1)}) {
+    Obb box;
+    box.center = c;
+    box.axes = {Vec3::UnitX(), Vec3::UnitY(), Vec3::UnitZ()};
+    box.half = Vec3(0.3, 0.2, 0.3);
+    const int m = 8;
+    const BoxPlan plan = planner.plan(box, m);
+    for (const LocalTriangle& t : plan.tris)
+      for (int k = 0; k < 3; ++k) {
+        const Vec3 &p = t.p[k], &q = t.p[(k + 1) % 3];
+        bool zero = true;
+        for (int a = 0; a < 3; ++a) {
+          const int a1 = (a + 1) % 3, a2 = (a + 2) % 3;
+          zero = zero && Rational(p[a1]) * Rational(q[a2]) == Rational(p[a2]) * Rational(q[a1]);
+        }
+        EXPECT_EQ(t.edge_zero[k], zero) << "centre " << c.transpose() << " edge " << k;
+        (zero ? marked : unmarked) += 1;
+        if (!zero) continue;
+        for (int f = 0; f < 6; ++f)
+          for (int i = 0; i < m; ++i)
+            for (int j = 0; j < m; ++j) {
+              const Texel x{f, i, j, m, cubemap_direction(f, texel_center(i, m), texel_center(j, m))};
+              EXPECT_EQ(exact_edge_side(t, k, x), 0);
+            }
+      }
+  }
+  // Around the vertex, the diagonal's midpoint and the edge's midpoint, some edges pass
+  // through the centre; most do not.
+  EXPECT_GE(marked, 6);
+  EXPECT_GT(unmarked, marked);
+}
+
 TEST(TexelPlan, APlanReusedAfterOthersEqualsAFreshOne) {
   const Vec3 d(4.0, 1.2, 0.8);
   const Mesh mesh = test::bipyramid_on_ray(d, 2000, 7);
@@ -104,6 +150,7 @@ TEST(TexelPlan, APlanReusedAfterOthersEqualsAFreshOne) {
           EXPECT_EQ(a.id[k], b.id[k]);
           EXPECT_EQ(a.edge_cross[k], b.edge_cross[k]);
           EXPECT_EQ(a.edge_tie[k], b.edge_tie[k]);
+          EXPECT_EQ(a.edge_zero[k], b.edge_zero[k]);
         }
         EXPECT_EQ(a.normal, b.normal);
         EXPECT_EQ(a.plane, b.plane);
