@@ -2,6 +2,7 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cctype>
@@ -35,6 +36,13 @@ inline std::string one_line(const std::string& s) {
     }
   }
   return out;
+}
+
+// A JSON report as printed: indented by 2, with bytes that are not UTF-8 (a file name may
+// hold any) replaced by U+FFFD instead of throwing.
+template <class Json>
+std::string report_json(const Json& j) {
+  return j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
 // Bad input: one line on stderr, exit code 2.

@@ -73,7 +73,7 @@ std::string format_json(const CollideFlags& f, const collision::ExperimentReport
                              {"leaf_tests", r.fcl_own.leaf_tests},
                              {"answer_disagreements", r.fcl_own.answer_disagreements},
                              {"face_disagreements", r.fcl_own.face_disagreements}};
-  return j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";  // file names need not be UTF-8
+  return vobb::app::report_json(j) + "\n";
 }
 
 std::string format_text(const CollideFlags& f, const collision::ExperimentReport& r) {

@@ -329,7 +329,7 @@ int run_certify(const std::string& mesh_path, const std::string& tree_path, bool
     j["containment"] = {{"ok", c.containment.ok()}, {"violations", c.containment.violations},
                         {"checked_pairs", c.containment.checked_pairs}, {"first", first}};
     j["seconds"] = c.seconds;
-    std::printf("%s\n", j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace).c_str());
+    std::printf("%s\n", vobb::app::report_json(j).c_str());
   } else {
     std::printf("%5s %7s %24s %24s %24s %6s\n", "level", "boxes", "OMV", "sum OBV", "overlap", "bound");
     for (const auto& l : c.layers)
@@ -482,7 +482,7 @@ int run_obv(const std::string& mesh_path, const std::string& boxes_path, const s
     nlohmann::ordered_json doc;
     if (gl) doc["renderer"] = gl->renderer();
     doc["boxes"] = out;
-    std::printf("%s\n", doc.dump(2, ' ', false, nlohmann::json::error_handler_t::replace).c_str());
+    std::printf("%s\n", vobb::app::report_json(doc).c_str());
   }
   return kExitOk;
 }
@@ -541,7 +541,7 @@ int run_compare(const std::string& mesh_path, const BuildFlags& flags, bool json
     doc["seconds_baseline"] = r[0].build_seconds;
     doc["seconds_variational"] = r[1].build_seconds;
     doc["certified"] = ok;
-    std::printf("%s\n", doc.dump(2, ' ', false, nlohmann::json::error_handler_t::replace).c_str());
+    std::printf("%s\n", vobb::app::report_json(doc).c_str());
   } else {
     std::printf("%5s %24s %24s %10s\n", "layer", "OMV obbtree", "OMV variational", "change %");
     for (size_t l = 0; l < levels; ++l)

@@ -2,6 +2,7 @@
 // messages, reading a whole input file, and the shortest round-trip form of a double.
 #pragma once
 
+#include <cstdint>
 #include <string>
 
 #include "common/mesh.h"
@@ -13,11 +14,15 @@ namespace vobb {
 std::string basename_of(const std::string& path);
 // Lower-cased extension without the dot; "" when there is none.
 std::string extension_of(const std::string& path);
-// Reads the whole of `path` into `content`. Only a regular file is read: a folder, a FIFO or
-// a device (/dev/zero) is refused before it is opened, since reading it would fail late,
-// block forever or never end. Failures are one line: "<display>: <reason>", where the
-// reason is "cannot open: <strerror>", "is a directory, not a <what>", "not a regular file"
-// or "read error".
+// Whether `path` is a regular file, and its size. A folder, a FIFO or a device (/dev/zero) is
+// refused before it is opened, since reading it would fail late, block forever or never end.
+// Failures are one line: "<display>: <reason>", where the reason is "cannot open:
+// <strerror>", "is a directory, not a <what>" or "not a regular file".
+Status check_regular_file(const std::string& path, const std::string& display, const std::string& what,
+                          uint64_t* size);
+
+// Reads the whole of `path` into `content`, after check_regular_file; a short read is
+// "<display>: read error".
 Status read_regular_file(const std::string& path, const std::string& display, const std::string& what,
                          std::string* content);
 

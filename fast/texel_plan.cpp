@@ -108,6 +108,14 @@ double edge_tie(const Vec3& E, const Vec3& p, const Vec3& q) {
   return 8 * u * (E.cwiseAbs().sum() + abs_cross(p, q).sum()) + 0x1p-1070;
 }
 
+// p x q in rationals, exactly.
+void exact_cross(const Vec3& p, const Vec3& q, Rational E[3]) {
+  for (int c = 0; c < 3; ++c) {
+    const int c1 = (c + 1) % 3, c2 = (c + 2) % 3;
+    E[c] = Rational(p[c1]) * Rational(q[c2]) - Rational(p[c2]) * Rational(q[c1]);
+  }
+}
+
 // Whether E* = +-(p x q) is exactly the zero vector (LocalTriangle::edge_zero). Each component
 // of E = fl(E*) is within gamma_2 of |p| x |q| of E*'s (fused or not; edge_tie), plus
 // underflow, so only an E within that of 0 on every component can come from E* = 0: only such
@@ -117,11 +125,9 @@ bool cross_is_exactly_zero(const Vec3& E, const Vec3& p, const Vec3& q) {
   const Vec3 bound = abs_cross(p, q);
   for (int c = 0; c < 3; ++c)
     if (std::abs(E[c]) > 8 * u * bound[c] + 0x1p-1070) return false;
-  for (int c = 0; c < 3; ++c) {
-    const int c1 = (c + 1) % 3, c2 = (c + 2) % 3;
-    if (Rational(p[c1]) * Rational(q[c2]) != Rational(p[c2]) * Rational(q[c1])) return false;
-  }
-  return true;
+  Rational exact[3];
+  exact_cross(p, q, exact);
+  return sgn(exact[0]) == 0 && sgn(exact[1]) == 0 && sgn(exact[2]) == 0;
 }
 
 // Sutherland-Hodgman: keep the part of a convex polygon where plane(p) >= 0.
@@ -291,11 +297,9 @@ int exact_edge_side(const LocalTriangle& t, int k, const Texel& x) {
   const Vec3& q = canonical ? t.p[b] : t.p[a];
   // E* = +-(p x q), exactly: the same rationals for the two faces of an edge, negated.
   Rational E[3];
-  for (int c = 0; c < 3; ++c) {
-    const int c1 = (c + 1) % 3, c2 = (c + 2) % 3;
-    E[c] = Rational(p[c1]) * Rational(q[c2]) - Rational(p[c2]) * Rational(q[c1]);
-    if (!canonical) E[c] = -E[c];
-  }
+  exact_cross(p, q, E);
+  if (!canonical)
+    for (Rational& e : E) e = -e;
   // m d* = (+-m, 2i + 1 - m, 2j + 1 - m) on the axes (k, a, b) of the cubemap face.
   const int fk = x.face / 2, fa = (fk + 1) % 3, fb = (fk + 2) % 3;
   const Rational dot = (x.face % 2 == 0 ? x.m : -x.m) * E[fk] + (2 * x.i + 1 - x.m) * E[fa] +

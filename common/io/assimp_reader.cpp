@@ -210,11 +210,6 @@ double assimp_cpu_seconds(uint64_t file_bytes) {
 
 Status load_with_assimp(const std::string& path, const std::string& display, LoadedMesh* out,
                         double cpu_seconds) {
-  if (cpu_seconds <= 0) {
-    struct stat st;
-    if (::stat(path.c_str(), &st) != 0) return Status::error(display + ": cannot open: " + std::strerror(errno));
-    cpu_seconds = assimp_cpu_seconds(static_cast<uint64_t>(st.st_size));
-  }
   int fds[2];
   if (::pipe2(fds, O_CLOEXEC) != 0)
     return Status::error(display + ": cannot start the importer: " + std::strerror(errno));

@@ -19,8 +19,9 @@ namespace vobb {
 // importers read tens of MiB per second, so a well-formed file stays far below it.
 double assimp_cpu_seconds(uint64_t file_bytes);
 
-// `cpu_seconds` <= 0: assimp_cpu_seconds() of the file's size.
+// `path` must be a regular file (load_mesh checks); `cpu_seconds` > 0, usually
+// assimp_cpu_seconds() of its size.
 Status load_with_assimp(const std::string& path, const std::string& display, LoadedMesh* out,
-                        double cpu_seconds = 0);
+                        double cpu_seconds);
 
 }  // namespace vobb

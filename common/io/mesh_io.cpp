@@ -1,10 +1,7 @@
 #include "common/io/mesh_io.h"
 
-#include <sys/stat.h>
-
 #include <algorithm>
 #include <cctype>
-#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstring>
@@ -731,12 +728,11 @@ Status load_mesh(const std::string& path, LoadedMesh* out) {
   const std::string ext = extension_of(path);
   const bool native = ext == "off" || ext == "obj" || ext == "ply" || ext == "stl";
   if (!native) {
-    struct stat st;
-    if (::stat(path.c_str(), &st) != 0) return Status::error(display + ": cannot open: " + std::strerror(errno));
-    if (S_ISDIR(st.st_mode)) return Status::error(display + ": is a directory, not a mesh file");
-    if (!S_ISREG(st.st_mode)) return Status::error(display + ": not a regular file");
+    uint64_t size = 0;
+    const Status regular = check_regular_file(path, display, "mesh file", &size);
+    if (!regular) return regular;
 #if VOBB_HAVE_ASSIMP
-    Status s = load_with_assimp(path, display, out);
+    Status s = load_with_assimp(path, display, out, assimp_cpu_seconds(size));
     if (!s) return s;
 #else
     return Status::error(display + ": unknown mesh format '" + ext + "' (this build reads OFF, OBJ, PLY, STL)");

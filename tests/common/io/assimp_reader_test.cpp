@@ -64,7 +64,7 @@ TEST(AssimpReader, AGoodFileComesBackWhole) {
   const std::string path = test::temp_path("tetra.raw");
   write_text(path, "0 0 0 0 1 0 1 0 0\n0 0 0 1 0 0 0 0 1\n0 0 0 0 0 1 0 1 0\n1 0 0 0 1 0 0 0 1\n");
   LoadedMesh lm;
-  const Status s = load_with_assimp(path, "tetra.raw", &lm);
+  const Status s = load_with_assimp(path, "tetra.raw", &lm, assimp_cpu_seconds(100));
   ASSERT_TRUE(s) << s.message();
   ASSERT_EQ(lm.mesh.faces.size(), 4u);
   ASSERT_EQ(lm.mesh.vertices.size(), 12u);  // RAW repeats each corner; load_mesh welds them
