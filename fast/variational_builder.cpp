@@ -3,8 +3,10 @@
 #include <Eigen/Geometry>
 #include <sys/stat.h>
 #include <nlohmann/json.hpp>
+#include <tbb/task_arena.h>
 #include <algorithm>
 #include <cerrno>
+#include <chrono>
 #include <cmath>
 #include <iterator>
 #include <limits>
@@ -123,23 +125,38 @@ class NodeSplitter {
     State state;
     state.groups = split_into_groups(mesh_, faces, options_.arity);
     for (const auto& g : state.groups) state.axes.push_back(covariance_axes(mesh_, g));
-    update_boxes(&state);
+    const bool whole = update_boxes(&state);
     State best = state;
     report(0, best.sum());
-    if (state.groups.size() < 2) return best;
+    if (!whole || state.groups.size() < 2) return best;
     iterate(faces, state, &best, report);
-    if (options_.adjust && level_ <= kAdjustLevels) adjust(faces, &best, report);
+    if (options_.adjust && level_ <= kAdjustLevels && !stopped()) adjust(faces, &best, report);
     return best;
   }
+
+  // Whether the time budget is spent. It is asked before every batch of estimates, so that a
+  // spent budget ends the search after the batch under way (at a large m one node's Lloyd
+  // iterations are hundreds of batches of seconds each). Once true it stays true: time only
+  // grows.
+  bool stopped() {
+    if (!spent_ && options_.out_of_time && options_.out_of_time()) spent_ = true;
+    return spent_;
+  }
+  // Whether stopped() has said so: the search may have been cut short.
+  bool spent() const { return spent_; }
+
   // Box update: per group, the orientation search (or the covariance axes alone), starting
-  // from s->axes; fills s->obv.
-  void update_boxes(State* s) {
+  // from s->axes; fills s->obv. False when the time budget cut it short: then the groups
+  // not reached keep their axes and an OBV of 0, so s->sum() is not to be compared.
+  bool update_boxes(State* s) {
     s->obv.assign(s->groups.size(), 0.0);
     for (size_t g = 0; g < s->groups.size(); ++g) {
+      if (stopped()) return false;
       const auto& faces = s->groups[g];
       std::array<Vec3, 3> axes = s->axes[g];
       double best = measure({tight_box(mesh_, faces, axes)})[0];
-      if (options_.optimise_axes) {
+      bool cut = false;
+      if (options_.optimise_axes && !(cut = stopped())) {
         // Other starts: the covariance axes of the (new) group, and seeded random orientations
         // (uniform unit quaternions), so that the search is not stuck in the start's basin.
         // More for the big boxes of the top levels, which weigh most in e.
@@ -162,6 +179,7 @@ class NodeSplitter {
         for (size_t i = 0; i < starts.size(); ++i)
           if (sv[i] < best) best = sv[i], axes = starts[i];
         for (double step = 0.2; step >= 0.0125;) {
+          if ((cut = stopped())) break;
           std::vector<std::array<Vec3, 3>> trial;
           std::vector<Obb> boxes;
           for (int about = 0; about < 3; ++about)
@@ -181,16 +199,44 @@ class NodeSplitter {
       }
       s->axes[g] = axes;
       s->obv[g] = best;
+      if (cut) return false;
     }
+    return true;
   }
 
   // The objective of each box: its estimated OBV, grown by the collider margin first.
+  // With a time budget the batch is estimated in chunks, the budget asked before each; boxes
+  // not reached get +inf, which no comparison picks, and the callers see stopped() and stop.
   std::vector<double> measure(const std::vector<Obb>& boxes) {
-    report_->estimates += boxes.size();
-    if (options_.margin == 0) return estimate_(boxes);
-    std::vector<Obb> grown = boxes;
-    for (Obb& b : grown) b.half.array() += options_.margin;
-    return estimate_(grown);
+    std::vector<Obb> grown;
+    if (options_.margin > 0) {
+      grown = boxes;
+      for (Obb& b : grown) b.half.array() += options_.margin;
+    }
+    const std::vector<Obb>& in = options_.margin > 0 ? grown : boxes;
+    if (!options_.out_of_time) {
+      report_->estimates += in.size();
+      return estimate_(in);
+    }
+    // Chunks start at one box per thread (the CPU twin estimates a batch a box per thread)
+    // and double while a chunk takes under 50 ms, so that at the builders' usual m a batch is
+    // still estimated whole (the GL estimator reads its atlas back once per call), while at a
+    // large m, where one box of a big node takes seconds, the budget is asked every few boxes.
+    const size_t threads = static_cast<size_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
+    chunk_ = std::max(chunk_, threads);
+    std::vector<double> out(in.size(), std::numeric_limits<double>::infinity());
+    for (size_t i = 0; i < in.size() && !stopped();) {
+      const size_t n = std::min(chunk_, in.size() - i);
+      const auto t0 = std::chrono::steady_clock::now();
+      const std::vector<double> v = estimate_(std::vector<Obb>(in.begin() + i, in.begin() + i + n));
+      std::copy(v.begin(), v.end(), out.begin() + i);
+      report_->estimates += n;
+      i += n;
+      const double took = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      if (n == chunk_ && took < 0.05) chunk_ *= 2;
+      else if (took > 0.2) chunk_ = std::max(threads, chunk_ / 2);
+    }
+    return out;
   }
 
  private:
@@ -199,7 +245,7 @@ class NodeSplitter {
                const std::function<void(int, double)>& report) {
     for (int it = 1; it <= options_.lloyd_iterations; ++it) {
       if (!partition(faces, &state)) break;
-      update_boxes(&state);
+      if (!update_boxes(&state)) break;  // cut short by the time budget: not comparable
       report(it, state.sum());
       const double before = best->sum();
       if (state.sum() < before) *best = state;
@@ -220,6 +266,7 @@ class NodeSplitter {
         State s;
         s.groups = planar_split(faces, axes[a], equal_count);
         if (s.groups.size() < 2) continue;
+        if (stopped()) return;
         std::vector<Obb> boxes;
         for (const auto& g : s.groups) {
           s.axes.push_back(covariance_axes(mesh_, g));
@@ -234,7 +281,7 @@ class NodeSplitter {
     std::stable_sort(order.begin(), order.end(), [&](size_t x, size_t y) { return screen[x] < screen[y]; });
     for (size_t r = 0; r < std::min<size_t>(2, order.size()); ++r) {
       State trial = alternatives[order[r]];
-      update_boxes(&trial);
+      if (!update_boxes(&trial)) return;
       State trial_best = trial;
       iterate(faces, trial, &trial_best, report);
       if (trial_best.sum() < best->sum()) {
@@ -267,7 +314,8 @@ class NodeSplitter {
     return out;
   }
 
-  // Flooding partition from the current boxes; false when it cannot make `groups` groups.
+  // Flooding partition from the current boxes; false when it cannot make `groups` groups, or
+  // when the time budget is spent before one of its batches of estimates.
   bool partition(const std::vector<int32_t>& faces, State* s) {
     const size_t k = s->groups.size();
     std::vector<Vec3> origin;  // where each region's distances are measured from
@@ -384,6 +432,7 @@ class NodeSplitter {
           batch.push_back(make_box(cand[c], nl[c], nh[c]));
         }
         const std::vector<double> v = measure(batch);
+        if (stopped()) return false;  // some of v may be missing (+inf)
         double best = INFINITY;
         size_t at = 0;
         for (size_t c = 0; c < cand.size(); ++c) {
@@ -421,6 +470,8 @@ class NodeSplitter {
   const ObvEstimate& estimate_;
   VariationalReport* report_;
   int level_ = 0;                // level of the boxes being fitted
+  bool spent_ = false;           // stopped() has returned true
+  size_t chunk_ = 1;             // boxes per estimate call under a time budget (measure())
   std::vector<int32_t> local_;   // mesh face -> index in the node being partitioned, else -1
 };
 
@@ -443,7 +494,8 @@ class Builder {
         splitter_(mesh, adjacency_, options, estimate, report), report_(report) {}
 
   bool out_of_time(VariationalState* st) {
-    if (!st->budget_spent && options_.out_of_time && options_.out_of_time()) st->budget_spent = true;
+    if (!st->budget_spent && (splitter_.spent() || (options_.out_of_time && options_.out_of_time())))
+      st->budget_spent = true;
     return st->budget_spent;
   }
 
@@ -499,6 +551,7 @@ class Builder {
       }
     }
     ++st->split_levels;
+    if (splitter_.spent()) st->budget_spent = true;  // a node's search was cut short
   }
 
   int depth(const VariationalState& st) const {
@@ -549,6 +602,7 @@ class Builder {
         if (options_.progress) options_.progress(progress);
       }
     }
+    if (splitter_.spent()) st->budget_spent = true;  // a regrouping was cut short
     return gain;
   }
 
@@ -566,7 +620,7 @@ class Builder {
     std::map<int32_t, double> cur;
     for (size_t i = 0; i < parents.size(); ++i) cur[parents[i]] = v[i];
     double total = 0;
-    for (int pass = 0; pass < 3; ++pass) {
+    for (int pass = 0; pass < 3 && !out_of_time(st); ++pass) {
       std::vector<Move> moves;
       std::set<std::pair<std::vector<int32_t>, std::vector<int32_t>>> seen;
       auto add = [&](int32_t a, int32_t b, std::vector<int32_t> ua, std::vector<int32_t> ub) {
@@ -604,6 +658,7 @@ class Builder {
       std::vector<NodeSplitter::State> cand(moves.size());
       std::vector<double> screen(moves.size());
       for (size_t c = 0; c < moves.size(); ++c) {
+        if (out_of_time(st)) return total;  // nothing of this pass is applied
         const Move& mv = moves[c];
         NodeSplitter::State& s = cand[c];
         std::vector<Obb> boxes;
@@ -631,7 +686,7 @@ class Builder {
       for (size_t r = 0; r < std::min<size_t>(2, order.size()); ++r) {
         const Move& mv = moves[order[r]];
         NodeSplitter::State s = cand[order[r]];
-        splitter_.update_boxes(&s);
+        if (!splitter_.update_boxes(&s)) break;  // cut short by the time budget: not comparable
         const double before = cur[mv.a] + cur[mv.b];
         // Kept only for a drop of 0.1 % or more of the pair's sum: smaller drops are within
         // the estimator's discretization error at the m the builders use (docs/BENCHMARKS.md:
@@ -707,6 +762,7 @@ Tree build_variational(const Mesh& mesh, const VariationalOptions& options, cons
       break;
     }
     const double e = builder.estimated_e(st);
+    if (builder.out_of_time(&st)) break;  // e may be missing boxes; no sweep is started
     const double gain = builder.sweep(&st);
     ++st.sweeps;
     if (!(gain >= 1e-3 * e) || st.sweeps >= options.max_sweeps) st.sweeping_done = true;

@@ -47,8 +47,13 @@
 // CPU twin does: its values do not depend on the thread count). The build state after each
 // level and each sweep can be saved (checkpoint) and a build resumed from it gives the same
 // tree as an uninterrupted one. A time budget ends the search
-// early: the nodes not yet split get the baseline split, and no further sweep starts. A state
-// saved after the budget was spent keeps it spent when resumed.
+// early: it is asked before every call to the estimator (under a budget a batch is estimated
+// in chunks of about one box per thread while the calls are slow), so it ends within the call
+// under way, not after a node's whole search. The node being searched keeps the best complete
+// state found (its start if none), the nodes not yet split get the baseline split, and no
+// further sweep starts; a regrouping it cuts short is not applied. A state saved after the
+// budget was spent keeps it spent when resumed. A budget that is not reached changes nothing:
+// the chunks' estimates are the whole batch's, so the tree is the unbudgeted one.
 #pragma once
 
 #include <array>

@@ -6,7 +6,9 @@
 
 #include <cmath>
 #include <cstdio>
+#include <chrono>
 #include <fstream>
+#include <thread>
 
 #include <tbb/task_arena.h>
 
@@ -367,6 +369,58 @@ TEST(VariationalBuilder, SpentTimeBudgetGivesAValidTree) {
   EXPECT_EQ(t.depth, 3);
   EXPECT_TRUE(validate_tree(t, "budget"));
   EXPECT_TRUE(check_conservative(mesh, t).ok());
+}
+
+// The budget is asked before every call to the estimator, not once per node: once it has run
+// out, no further call is made, wherever in the search (a node's orientation search, its
+// partition, a merging sweep) it ran out. Budgets of 1, 7 and 40 boxes fall in the root's
+// search and in level-1 nodes' searches; the last one falls in the merging sweeps. The tree is
+// still complete, valid and conservative.
+// Under a budget a batch is estimated in chunks of one box per thread, which grow only while
+// a chunk takes under 50 ms: with an estimator that takes 60 ms a call (a large m), the call
+// that spends the budget holds at most one box per thread, even inside a batch of 33
+// orientation starts.
+TEST(VariationalBuilder, BudgetEndsTheSearchInTheCallUnderWay) {
+  const Mesh mesh = analytic::polygonal_torus().mesh;
+  const CpuObvEstimator cpu(mesh);
+  VariationalOptions o;
+  o.depth = 3;
+  size_t boxes = 0, calls_after = 0, spent_at = 0;
+  bool slow = false;
+  const ObvEstimate counted = [&](const std::vector<Obb>& batch) {
+    if (spent_at > 0 && boxes >= spent_at) ++calls_after;
+    boxes += batch.size();
+    if (slow) std::this_thread::sleep_for(std::chrono::milliseconds(60));
+    return cpu.estimate(batch, 8);
+  };
+  size_t sweep_from = 0;  // boxes estimated when the first sweep reported progress
+  o.progress = [&](const VariationalProgress& p) {
+    if (p.sweep > 0 && sweep_from == 0) sweep_from = boxes;
+  };
+  VariationalReport full;
+  build_variational(mesh, o, counted, nullptr, &full);
+  const size_t all = boxes;
+  ASSERT_FALSE(full.budget_spent);
+  ASSERT_GT(sweep_from, 40u);
+  ASSERT_LT(sweep_from, all - 20) << "the last budget is meant to fall in a sweep";
+  o.progress = nullptr;
+  const size_t threads = static_cast<size_t>(tbb::this_task_arena::max_concurrency());
+  for (size_t k : {size_t{1}, size_t{7}, size_t{40}, all - 20}) {
+    boxes = calls_after = 0;
+    spent_at = k;
+    slow = k < all - 20;
+    o.out_of_time = [&boxes, k] { return boxes >= k; };
+    VariationalReport report;
+    const Tree t = build_variational(mesh, o, counted, nullptr, &report);
+    EXPECT_EQ(calls_after, 0u) << "estimator calls after the budget was spent, k = " << k;
+    EXPECT_GE(boxes, k);
+    if (slow) EXPECT_LT(boxes, k + threads) << "the call that spent the budget held more than one box per thread";
+    EXPECT_EQ(report.estimates, boxes);
+    EXPECT_TRUE(report.budget_spent) << k;
+    EXPECT_EQ(t.depth, 3) << k;
+    EXPECT_TRUE(validate_tree(t, "budget")) << k;
+    EXPECT_TRUE(check_conservative(mesh, t).ok()) << k;
+  }
 }
 
 }  // namespace
