@@ -414,7 +414,9 @@ TEST(VariationalBuilder, BudgetEndsTheSearchInTheCallUnderWay) {
     const Tree t = build_variational(mesh, o, counted, nullptr, &report);
     EXPECT_EQ(calls_after, 0u) << "estimator calls after the budget was spent, k = " << k;
     EXPECT_GE(boxes, k);
-    if (slow) EXPECT_LT(boxes, k + threads) << "the call that spent the budget held more than one box per thread";
+    if (slow) {
+      EXPECT_LT(boxes, k + threads) << "the call that spent the budget held more than one box per thread";
+    }
     EXPECT_EQ(report.estimates, boxes);
     EXPECT_TRUE(report.budget_spent) << k;
     EXPECT_EQ(t.depth, 3) << k;

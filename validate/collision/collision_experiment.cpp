@@ -66,7 +66,7 @@ class QueryEngine {
  public:
   QueryEngine(const Mesh& mesh, const std::vector<NamedTree>& trees, const ExperimentOptions& opt,
               ExperimentReport* report)
-      : mesh_(mesh), scale_(mesh_scale(mesh)), report_(report), tamper_(opt.tamper_answer) {
+      : mesh_(mesh), scale_(mesh_scale(mesh)), report_(report), tamper_(opt.tamper_answer), brute_force_(mesh) {
     for (const NamedTree& t : trees) traversals_.emplace_back(mesh, *t.tree);
     if (opt.fcl) {
       fcl_own_ = FclModel::fcl_own(mesh);
@@ -88,7 +88,7 @@ class QueryEngine {
     const PreparedCollider pc = prepare_collider(c, scale_);
     ++report_->queries;
     const auto t0 = Clock::now();
-    brute_force_touching(mesh_, pc, &brute_);
+    brute_force_.touching(pc, &brute_);
     report_->brute_force_seconds += std::chrono::duration<double>(Clock::now() - t0).count();
     if (!brute_.empty()) ++report_->touching_queries;
     for (size_t i = 0; i < traversals_.size(); ++i) {
@@ -127,6 +127,7 @@ class QueryEngine {
   const double scale_;
   ExperimentReport* report_;
   const std::function<void(size_t, uint64_t, std::vector<int32_t>*)> tamper_;
+  const BruteForce brute_force_;
   std::vector<TreeTraversal> traversals_;
   std::unique_ptr<FclModel> fcl_own_;
   std::vector<std::unique_ptr<FclModel>> fcl_trees_;

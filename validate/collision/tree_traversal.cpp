@@ -1,6 +1,8 @@
 #include "validate/collision/tree_traversal.h"
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 
 namespace vobb::collision {
 
@@ -44,11 +46,54 @@ void TreeTraversal::query(const PreparedCollider& c, std::vector<int32_t>* faces
   counts->contacts += faces->size();
 }
 
-void brute_force_touching(const Mesh& mesh, const PreparedCollider& c, std::vector<int32_t>* faces) {
-  faces->clear();
+namespace {
+// A float at most x (float_down) or at least x (float_up), the nearest such one; a double beyond
+// float's range goes to +-FLT_MAX or +-inf on the safe side (explicitly: converting it is
+// undefined in C++).
+float float_down(double x) {
+  constexpr float kMax = std::numeric_limits<float>::max();
+  if (x > kMax) return kMax;
+  if (x < -kMax) return -std::numeric_limits<float>::infinity();
+  float f = static_cast<float>(x);
+  if (static_cast<double>(f) > x) f = std::nextafter(f, -std::numeric_limits<float>::infinity());
+  return f;
+}
+float float_up(double x) { return -float_down(-x); }
+}  // namespace
+
+BruteForce::BruteForce(const Mesh& mesh) : mesh_(mesh) {
+  for (int i = 0; i < 3; ++i) {
+    lo_[i].resize(mesh.faces.size());
+    hi_[i].resize(mesh.faces.size());
+  }
   for (size_t f = 0; f < mesh.faces.size(); ++f)
-    if (touches_triangle(c, mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2)))
-      faces->push_back(static_cast<int32_t>(f));
+    for (int i = 0; i < 3; ++i) {
+      const double a = mesh.corner(f, 0)[i], b = mesh.corner(f, 1)[i], c = mesh.corner(f, 2)[i];
+      lo_[i][f] = float_down(std::min(std::min(a, b), c));
+      hi_[i][f] = float_up(std::max(std::max(a, b), c));
+    }
+}
+
+void BruteForce::touching(const PreparedCollider& c, std::vector<int32_t>* faces) const {
+  faces->clear();
+  constexpr size_t kBlock = 256;
+  unsigned char pass[kBlock];
+  const size_t n = mesh_.faces.size();
+  float lo[3], hi[3];
+  for (int i = 0; i < 3; ++i) lo[i] = float_down(c.bounds.lo[i]), hi[i] = float_up(c.bounds.hi[i]);
+  const float *lx = lo_[0].data(), *hx = hi_[0].data();
+  for (size_t start = 0; start < n; start += kBlock) {
+    const size_t len = std::min(kBlock, n - start);
+    // Branch-free, so that the compiler can vectorise it.
+    for (size_t k = 0; k < len; ++k) pass[k] = !((hx[start + k] < lo[0]) | (lx[start + k] > hi[0]));
+    for (size_t k = 0; k < len; ++k) {
+      if (!pass[k]) continue;
+      const size_t f = start + k;
+      if (hi_[1][f] < lo[1] || lo_[1][f] > hi[1] || hi_[2][f] < lo[2] || lo_[2][f] > hi[2]) continue;
+      if (touches_triangle(c, mesh_.corner(f, 0), mesh_.corner(f, 1), mesh_.corner(f, 2)))
+        faces->push_back(static_cast<int32_t>(f));
+    }
+  }
 }
 
 }  // namespace vobb::collision

@@ -6,7 +6,7 @@
 // costs one leaf triangle test (`touches_triangle`). There is no early exit: a query finds
 // every touching face. Preconditions: the tree is well formed (validate_tree) and its boxes contain
 // their faces (check_conservative);
-// then the faces found equal brute force's (`brute_force_touching`).
+// then the faces found equal brute force's (`BruteForce`).
 #pragma once
 
 #include <cstdint>
@@ -48,7 +48,22 @@ class TreeTraversal {
   mutable std::vector<int32_t> stack_;
 };
 
-// Every face against the collider, in mesh order.
-void brute_force_touching(const Mesh& mesh, const PreparedCollider& c, std::vector<int32_t>* faces);
+// Brute force, the traversal's check: every face of the mesh against the collider, in mesh
+// order, by touches_triangle. A first screen drops the faces whose x range misses the
+// collider's bounding box; it reads two floats per face from flat arrays, rounded outward
+// (the face's range down and up, the collider's too), so it only drops faces that
+// touches_triangle's own exact bounding-box prefilter drops as well. The faces that pass go to
+// touches_triangle, so the answer is touches_triangle's on every face. Keeps a reference to
+// `mesh`.
+class BruteForce {
+ public:
+  explicit BruteForce(const Mesh& mesh);
+  // Sets `faces` to the touching faces, ascending.
+  void touching(const PreparedCollider& c, std::vector<int32_t>* faces) const;
+
+ private:
+  const Mesh& mesh_;
+  std::vector<float> lo_[3], hi_[3];  // per face and axis: its range, rounded outward
+};
 
 }  // namespace vobb::collision
