@@ -109,7 +109,12 @@ class NodeSplitter {
   };
 
   // Level of the boxes being fitted: the orientation search tries more starts near the root.
-  void set_level(int level) { level_ = level; }
+  void set_level(int level) {
+    level_ = level;
+    pace_ = 0;
+  }
+  // Boxes of every level follow (the sweeps' estimated e): the pace measured so far is forgotten.
+  void forget_pace() { pace_ = 0; }
 
   // The root: one group, its axes optimised like any child's.
   std::array<Vec3, 3> optimise_single(const std::vector<int32_t>& faces) {
@@ -127,8 +132,9 @@ class NodeSplitter {
     for (const auto& g : state.groups) state.axes.push_back(covariance_axes(mesh_, g));
     const bool whole = update_boxes(&state);
     State best = state;
+    if (!whole) return best;  // its sum is not reported: some boxes were not estimated
     report(0, best.sum());
-    if (!whole || state.groups.size() < 2) return best;
+    if (state.groups.size() < 2) return best;
     iterate(faces, state, &best, report);
     if (options_.adjust && level_ <= kAdjustLevels && !stopped()) adjust(faces, &best, report);
     return best;
@@ -199,7 +205,9 @@ class NodeSplitter {
       }
       s->axes[g] = axes;
       s->obv[g] = best;
-      if (cut) return false;
+      // Cut, or the budget ran out inside one of this group's calls (whose boxes not reached
+      // are +inf): the state is not complete.
+      if (cut || spent_) return false;
     }
     return true;
   }
@@ -218,23 +226,30 @@ class NodeSplitter {
       report_->estimates += in.size();
       return estimate_(in);
     }
-    // Chunks start at one box per thread (the CPU twin estimates a batch a box per thread)
-    // and double while a chunk takes under 50 ms, so that at the builders' usual m a batch is
-    // still estimated whole (the GL estimator reads its atlas back once per call), while at a
-    // large m, where one box of a big node takes seconds, the budget is asked every few boxes.
+    // Chunks of about options_.budget_check_seconds at the pace measured so far at this
+    // level: the first call of a
+    // level (or of a sweep's e) estimates one box per thread to measure it (the CPU twin
+    // estimates a batch a box per thread), and later ones go on at that pace, so that at the
+    // builders' usual m a batch is still one call (the GL estimator reads its atlas back once
+    // per call), while at a large m, where one box of a big node takes seconds, the budget is
+    // asked every box per thread. The pace is forgotten when the level changes, because boxes
+    // of another level take another time.
     const size_t threads = static_cast<size_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
-    chunk_ = std::max(chunk_, threads);
+    auto chunk_at = [&](double per_box, size_t left) {
+      if (per_box <= 0) return threads;  // not measured yet
+      const double t = options_.budget_check_seconds;
+      return per_box * left <= t ? left : std::max(threads, static_cast<size_t>(t / per_box));
+    };
     std::vector<double> out(in.size(), std::numeric_limits<double>::infinity());
     for (size_t i = 0; i < in.size() && !stopped();) {
-      const size_t n = std::min(chunk_, in.size() - i);
+      const size_t n = std::min(chunk_at(pace_, in.size() - i), in.size() - i);
       const auto t0 = std::chrono::steady_clock::now();
       const std::vector<double> v = estimate_(std::vector<Obb>(in.begin() + i, in.begin() + i + n));
       std::copy(v.begin(), v.end(), out.begin() + i);
       report_->estimates += n;
       i += n;
-      const double took = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      if (n == chunk_ && took < 0.05) chunk_ *= 2;
-      else if (took > 0.2) chunk_ = std::max(threads, chunk_ / 2);
+      // Never 0 once measured (a call too quick for the clock counts as 1 ns a box).
+      pace_ = std::max(1e-9, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() / n);
     }
     return out;
   }
@@ -471,7 +486,7 @@ class NodeSplitter {
   VariationalReport* report_;
   int level_ = 0;                // level of the boxes being fitted
   bool spent_ = false;           // stopped() has returned true
-  size_t chunk_ = 1;             // boxes per estimate call under a time budget (measure())
+  double pace_ = 0;              // seconds per box of the last chunk under a budget; 0: unknown
   std::vector<int32_t> local_;   // mesh face -> index in the node being partitioned, else -1
 };
 
@@ -507,6 +522,7 @@ class Builder {
     splitter_.set_level(0);
     // The root's axes: the best of the covariance axes and the search, like any group's.
     st->axes = {out_of_time(st) ? covariance_axes(mesh_, root.faces) : splitter_.optimise_single(root.faces)};
+    if (splitter_.spent()) st->budget_spent = true;  // the root's search was cut short
   }
 
   // Splits every node of level st->split_levels that can be split.
@@ -536,7 +552,7 @@ class Builder {
             options_.progress(q);
           }
         });
-        progress.sum_obv += s.sum();
+        if (!splitter_.spent()) progress.sum_obv += s.sum();  // a cut state's sum is incomplete
       }
       ++progress.node;
       for (size_t g = 0; g < s.groups.size(); ++g) {
@@ -565,6 +581,7 @@ class Builder {
     const int d = depth(st);
     std::vector<Obb> boxes;
     for (size_t i = 0; i < st.nodes.size(); ++i) boxes.push_back(tight_box(mesh_, st.nodes[i].faces, st.axes[i]));
+    splitter_.forget_pace();  // the root first, then ever smaller boxes
     const std::vector<double> v = splitter_.measure(boxes);
     double e = 0;
     for (size_t i = 0; i < st.nodes.size(); ++i) {
@@ -730,6 +747,7 @@ Tree build_variational(const Mesh& mesh, const VariationalOptions& options, cons
   VOBB_ASSERT(options.depth >= 0 && options.arity >= 2, "depth >= 0 and arity >= 2");
   VOBB_ASSERT(!mesh.faces.empty(), "build_variational needs faces");
   VOBB_ASSERT(std::isfinite(options.margin) && options.margin >= 0, "margin finite and >= 0");
+  VOBB_ASSERT(options.budget_check_seconds > 0, "budget_check_seconds > 0");
   VariationalReport local_report;
   if (!report) report = &local_report;
   *report = VariationalReport{};

@@ -372,19 +372,22 @@ TEST(VariationalBuilder, SpentTimeBudgetGivesAValidTree) {
 }
 
 // The budget is asked before every call to the estimator, not once per node: once it has run
-// out, no further call is made, wherever in the search (a node's orientation search, its
-// partition, a merging sweep) it ran out. Budgets of 1, 7 and 40 boxes fall in the root's
-// search and in level-1 nodes' searches; the last one falls in the merging sweeps. The tree is
-// still complete, valid and conservative.
-// Under a budget a batch is estimated in chunks of one box per thread, which grow only while
-// a chunk takes under 50 ms: with an estimator that takes 60 ms a call (a large m), the call
-// that spends the budget holds at most one box per thread, even inside a batch of 33
-// orientation starts.
+// out, no further call is made, wherever in the search it ran out. The root's search costs at
+// least 64 boxes (1, 33 starts, then at least five rotation steps of 6): budgets of 1, 7 and
+// 40 boxes fall there. Here the level-1 split's first boxes end at 240 and its first Lloyd
+// iteration (partition and boxes) at 408: budgets of 150 and 300 fall in them; the last one
+// falls in the merging sweeps. The tree is still complete, valid and conservative.
+// Under a budget a batch is estimated in chunks of about budget_check_seconds (50 ms here) at
+// the pace measured at the level, one box per thread until it is known: with an estimator that
+// takes 60 ms a call (a large m), the call that spends the budget holds at most one box per
+// thread, even inside a batch of 33 orientation starts (budgets up to 150; the others run at
+// full speed).
 TEST(VariationalBuilder, BudgetEndsTheSearchInTheCallUnderWay) {
   const Mesh mesh = analytic::polygonal_torus().mesh;
   const CpuObvEstimator cpu(mesh);
   VariationalOptions o;
   o.depth = 3;
+  o.budget_check_seconds = 0.05;
   size_t boxes = 0, calls_after = 0, spent_at = 0;
   bool slow = false;
   const ObvEstimate counted = [&](const std::vector<Obb>& batch) {
@@ -401,14 +404,14 @@ TEST(VariationalBuilder, BudgetEndsTheSearchInTheCallUnderWay) {
   build_variational(mesh, o, counted, nullptr, &full);
   const size_t all = boxes;
   ASSERT_FALSE(full.budget_spent);
-  ASSERT_GT(sweep_from, 40u);
+  ASSERT_GT(sweep_from, 300u);
   ASSERT_LT(sweep_from, all - 20) << "the last budget is meant to fall in a sweep";
   o.progress = nullptr;
   const size_t threads = static_cast<size_t>(tbb::this_task_arena::max_concurrency());
-  for (size_t k : {size_t{1}, size_t{7}, size_t{40}, all - 20}) {
+  for (size_t k : {size_t{1}, size_t{7}, size_t{40}, size_t{150}, size_t{300}, all - 20}) {
     boxes = calls_after = 0;
     spent_at = k;
-    slow = k < all - 20;
+    slow = k <= 150;
     o.out_of_time = [&boxes, k] { return boxes >= k; };
     VariationalReport report;
     const Tree t = build_variational(mesh, o, counted, nullptr, &report);
@@ -423,6 +426,46 @@ TEST(VariationalBuilder, BudgetEndsTheSearchInTheCallUnderWay) {
     EXPECT_TRUE(validate_tree(t, "budget")) << k;
     EXPECT_TRUE(check_conservative(mesh, t).ok()) << k;
   }
+}
+
+// A budget that never runs out changes nothing: the batches estimated in chunks give the
+// estimates of the whole batches, so the tree is the unbudgeted one, byte for byte, and so is
+// the count of boxes estimated.
+TEST(VariationalBuilder, UnspentBudgetGivesTheSameTree) {
+  const Mesh mesh = analytic::polygonal_torus().mesh;
+  const CpuObvEstimator cpu(mesh);
+  VariationalOptions o;
+  o.depth = 4;
+  VariationalReport plain, budgeted;
+  const std::string a = tree_to_json(build_variational(mesh, o, cpu_at(cpu, 16), nullptr, &plain));
+  o.out_of_time = [] { return false; };
+  const std::string b = tree_to_json(build_variational(mesh, o, cpu_at(cpu, 16), nullptr, &budgeted));
+  EXPECT_EQ(a, b);
+  EXPECT_EQ(plain.estimates, budgeted.estimates);
+  EXPECT_FALSE(budgeted.budget_spent);
+}
+
+// A root search cut short is recorded at once: the first checkpoint, saved before any level
+// is split, already says the budget is spent, so a build resumed from it does not search.
+TEST(VariationalBuilder, CutRootSearchIsSavedAsSpent) {
+  const Mesh mesh = analytic::polygonal_torus().mesh;
+  const CpuObvEstimator cpu(mesh);
+  VariationalOptions o;
+  o.depth = 2;
+  size_t boxes = 0;
+  const ObvEstimate counted = [&](const std::vector<Obb>& batch) {
+    boxes += batch.size();
+    return cpu.estimate(batch, 8);
+  };
+  o.out_of_time = [&boxes] { return boxes >= 5; };
+  std::vector<VariationalState> saved;
+  o.checkpoint = [&](const VariationalState& st) { saved.push_back(st); };
+  VariationalReport report;
+  build_variational(mesh, o, counted, nullptr, &report);
+  ASSERT_FALSE(saved.empty());
+  EXPECT_EQ(saved.front().split_levels, 0);
+  EXPECT_TRUE(saved.front().budget_spent);
+  EXPECT_TRUE(report.budget_spent);
 }
 
 }  // namespace
