@@ -47,6 +47,10 @@ void TreeTraversal::query(const PreparedCollider& c, std::vector<int32_t>* faces
 }
 
 namespace {
+// Why the screen is safe: it drops a face when float_up(h) < float_down(l), h the top of the
+// face's range and l the bottom of the collider's (or the mirror case), and then
+// h <= float_up(h) < float_down(l) <= l: the exact prefilter's h < l holds too. (Rounding both
+// to nearest would also be safe, being monotone; outward rounding makes it evident.)
 // A float at most x (float_down) or at least x (float_up), the nearest such one; a double beyond
 // float's range goes to +-FLT_MAX or +-inf on the safe side (explicitly: converting it is
 // undefined in C++).

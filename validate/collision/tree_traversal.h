@@ -50,11 +50,12 @@ class TreeTraversal {
 
 // Brute force, the traversal's check: every face of the mesh against the collider, in mesh
 // order, by touches_triangle. A first screen drops the faces whose x range misses the
-// collider's bounding box; it reads two floats per face from flat arrays, rounded outward
-// (the face's range down and up, the collider's too), so it only drops faces that
-// touches_triangle's own exact bounding-box prefilter drops as well. The faces that pass go to
-// touches_triangle, so the answer is touches_triangle's on every face. Keeps a reference to
-// `mesh`.
+// collider's bounding box, reading two floats per face from flat arrays (a vectorised scan);
+// a second one does the same for y and z on the faces that pass. The floats are the ranges
+// rounded outward (the face's and the collider's), so a face is dropped only when
+// touches_triangle's own exact bounding-box prefilter drops it as well. The faces that pass go
+// to touches_triangle, so the answer is touches_triangle's on every face. Keeps a reference
+// to `mesh`.
 class BruteForce {
  public:
   explicit BruteForce(const Mesh& mesh);
