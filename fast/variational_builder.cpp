@@ -140,10 +140,10 @@ class NodeSplitter {
     return best;
   }
 
-  // Whether the time budget is spent. It is asked before every batch of estimates, so that a
-  // spent budget ends the search after the batch under way (at a large m one node's Lloyd
-  // iterations are hundreds of batches of seconds each). Once true it stays true: time only
-  // grows.
+  // Whether the time budget is spent. It is asked before every call to the estimator (see
+  // measure()), so that a spent budget ends the search within the call under way: at a large m
+  // one node's Lloyd iterations are hundreds of batches of seconds each. Once true it stays
+  // true: time only grows.
   bool stopped() {
     if (!spent_ && options_.out_of_time && options_.out_of_time()) spent_ = true;
     return spent_;
@@ -213,8 +213,15 @@ class NodeSplitter {
   }
 
   // The objective of each box: its estimated OBV, grown by the collider margin first.
-  // With a time budget the batch is estimated in chunks, the budget asked before each; boxes
+  // Under a time budget the batch is estimated in chunks, the budget asked before each; boxes
   // not reached get +inf, which no comparison picks, and the callers see stopped() and stop.
+  // A chunk is about options_.budget_check_seconds of estimates at the pace measured so far at
+  // this level, and one box per thread (the CPU twin's unit of parallel work) until that pace
+  // is known: the first call of a level, or of a sweep's e. So at the builders' usual m a
+  // batch stays one call (the GL estimator reads its atlas back once per call), while at a
+  // large m, where one box of a big node takes seconds, the budget is asked every box per
+  // thread. The pace is forgotten when the level changes: boxes of another level take another
+  // time.
   std::vector<double> measure(const std::vector<Obb>& boxes) {
     std::vector<Obb> grown;
     if (options_.margin > 0) {
@@ -226,14 +233,6 @@ class NodeSplitter {
       report_->estimates += in.size();
       return estimate_(in);
     }
-    // Chunks of about options_.budget_check_seconds at the pace measured so far at this
-    // level: the first call of a
-    // level (or of a sweep's e) estimates one box per thread to measure it (the CPU twin
-    // estimates a batch a box per thread), and later ones go on at that pace, so that at the
-    // builders' usual m a batch is still one call (the GL estimator reads its atlas back once
-    // per call), while at a large m, where one box of a big node takes seconds, the budget is
-    // asked every box per thread. The pace is forgotten when the level changes, because boxes
-    // of another level take another time.
     const size_t threads = static_cast<size_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
     auto chunk_at = [&](double per_box, size_t left) {
       if (per_box <= 0) return threads;  // not measured yet
