@@ -576,16 +576,17 @@ int run_compare(const std::string& mesh_path, const BuildFlags& flags, bool json
 }  // namespace
 
 constexpr const char* kThreadsHelp =
-    "Threads for the CPU twin's batches of boxes (default: every core this process may use); "
-    "the tree is the same for any number. No effect on the GL estimator or on obbtree";
+    "Threads for the estimator's batches of boxes: the CPU twin's estimates, or the GL estimator's "
+    "plans (default: every core this process may use); the tree is the same for any number. No "
+    "effect on obbtree";
 constexpr const char* kCertifyThreadsHelp =
     "Threads for the boxes' OBV and for the layers, one layer per thread at a time (default: every "
     "core this process may use); the values are exact, so the same for any number. Each thread "
     "that computes a union holds its own Nef polyhedron of the mesh";
 constexpr const char* kCompareThreadsHelp =
-    "Threads for the CPU twin's batches of boxes and for certifying both trees (default: every core "
-    "this process may use); trees and values are the same for any number. No effect on the GL "
-    "estimator or on obbtree";
+    "Threads for the estimator's batches of boxes (the CPU twin's estimates, or the GL estimator's "
+    "plans) and for certifying both trees (default: every core this process may use); trees and "
+    "values are the same for any number. No effect on obbtree's build";
 
 int main(int argc, char** argv) {
   CLI::App app{"vobb: tight oriented-bounding-box trees for solid meshes, with exact outer volumes"};

@@ -4,8 +4,12 @@
 #include <GL/glcorearb.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
+
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include "fast/cpu_estimator.h"
 #include "fast/cubemap.h"
@@ -24,6 +28,58 @@ struct SpanRecord {
 };
 static_assert(sizeof(SpanRecord) == 84, "SpanRecord is read with a fixed stride");
 
+// One box of a window, planned on a worker thread: what the packing on the GL thread needs.
+struct PlannedBox {
+  BoxPlan plan;                      // vectors keep their capacity from window to window
+  std::vector<SpanRecord> records;   // meta[0..1] relative to the box's tile (0, 0)
+  std::vector<std::array<float, 13>> tri_data;
+  bool fallback = false;             // evaluated in double by the CPU twin's code
+  double value = 0;                  // the box's whole OBV when nothing goes to the GPU
+};
+
+// Plans `box` into *p and turns its spans into records; all of it depends on the box alone.
+void plan_box(const BoxPlanner& planner, const Obb& box, int m, PlannedBox* p) {
+  planner.plan(box, m, &p->plan);
+  const BoxPlan& plan = p->plan;
+  p->records.clear();
+  p->fallback = false;
+  p->value = 0;
+  if (plan.flat) return;  // OBV 0
+  if (!gl_evaluates_in_float(plan)) {  // the CPU twin's expression, in double (header)
+    p->fallback = true;
+    p->value = plan.frame.volume_scale * (plan.constant + 4.0 / (3.0 * m * m) * sum_texel_hits(plan, m));
+    return;
+  }
+  p->value = plan.frame.volume_scale * plan.constant;  // the whole answer when nothing is drawn
+  p->tri_data.resize(plan.tris.size());
+  for (size_t t = 0; t < plan.tris.size(); ++t) {
+    const LocalTriangle& tri = plan.tris[t];
+    for (int k = 0; k < 3; ++k) {
+      const Vec3& e = tri.edge_cross[k];
+      const double f = pow2_normalizer(e[0], e[1], e[2]);
+      for (int c = 0; c < 3; ++c) p->tri_data[t][3 * k + c] = static_cast<float>(e[c] * f);
+    }
+    const double f = pow2_normalizer(tri.normal[0], tri.normal[1], tri.normal[2]);
+    for (int c = 0; c < 3; ++c) p->tri_data[t][9 + c] = static_cast<float>(tri.normal[c] * f);
+    p->tri_data[t][12] = static_cast<float>(tri.plane * f);
+  }
+  for (const TexelSpan& span : plan.spans) {
+    if (span.i0 > span.i1 || span.j0 > span.j1) continue;  // covers no texel centre
+    SpanRecord r;
+    r.span[0] = span.i0;
+    r.span[1] = span.j0;
+    r.span[2] = span.i1;
+    r.span[3] = span.j1;
+    r.meta[0] = span.face % 3 * m;
+    r.meta[1] = span.face / 3 * m;
+    r.meta[2] = span.face | (plan.far_count << 6);
+    r.meta[3] = 0;
+    std::memcpy(r.edge, p->tri_data[span.tri].data(), 9 * sizeof(float));
+    std::memcpy(r.plane, p->tri_data[span.tri].data() + 9, 4 * sizeof(float));
+    p->records.push_back(r);
+  }
+}
+
 }  // namespace
 
 struct GlObvEstimator::Gl {
@@ -36,6 +92,7 @@ struct GlObvEstimator::Gl {
   std::vector<size_t> batch_boxes;         // output index of each tile
   std::vector<double> batch_scale, batch_constant;
   std::vector<double>* out = nullptr;
+  std::vector<PlannedBox> window;  // the boxes planned in parallel, packed in order
 };
 
 GlObvEstimator::GlObvEstimator(const Mesh& mesh) : planner_(mesh), gl_(new Gl) {}
@@ -117,55 +174,37 @@ std::vector<double> GlObvEstimator::estimate(const std::vector<Obb>& boxes, int 
   }
   std::vector<double> out(boxes.size(), 0.0);
   g.out = &out;
-  BoxPlan plan;  // reused from box to box: its vectors keep their capacity
-  for (size_t b = 0; b < boxes.size(); ++b) {
-    planner_.plan(boxes[b], m, &plan);
-    if (plan.flat) continue;  // OBV 0
-    if (!gl_evaluates_in_float(plan)) {  // the CPU twin's expression, in double (header)
-      ++cpu_fallbacks_;
-      out[b] = plan.frame.volume_scale * (plan.constant + 4.0 / (3.0 * m * m) * sum_texel_hits(plan, m));
-      continue;
-    }
-    out[b] = plan.frame.volume_scale * plan.constant;  // the whole answer when nothing is drawn
-    const size_t records_before = g.batch_records.size();
-    const int tile = static_cast<int>(g.batch_boxes.size());
-    const int tile_x = tile % g.tiles_per_row * 3 * m, tile_y = tile / g.tiles_per_row * 2 * m;
-    std::vector<std::array<float, 13>> tri_data(plan.tris.size());
-    for (size_t t = 0; t < plan.tris.size(); ++t) {
-      const LocalTriangle& tri = plan.tris[t];
-      for (int k = 0; k < 3; ++k) {
-        const Vec3& e = tri.edge_cross[k];
-        const double f = pow2_normalizer(e[0], e[1], e[2]);
-        for (int c = 0; c < 3; ++c) tri_data[t][3 * k + c] = static_cast<float>(e[c] * f);
+  // The boxes are planned in parallel (TBB, as many threads as the caller's arena allows), a
+  // window of twice that many at a time so that at most that many plans are held, and packed
+  // into the batch in box order on this thread, which holds the GL context. Each box's records
+  // depend on that box alone, so the records drawn, their order, and the floats blended are
+  // the same for any number of threads.
+  const size_t window = 2 * static_cast<size_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
+  if (g.window.size() < std::min(window, boxes.size())) g.window.resize(std::min(window, boxes.size()));
+  for (size_t w0 = 0; w0 < boxes.size(); w0 += window) {
+    const size_t w1 = std::min(boxes.size(), w0 + window);
+    tbb::parallel_for(w0, w1, [&](size_t b) { plan_box(planner_, boxes[b], m, &g.window[b - w0]); });
+    for (size_t b = w0; b < w1; ++b) {
+      PlannedBox& p = g.window[b - w0];
+      out[b] = p.value;
+      if (p.fallback) ++cpu_fallbacks_;
+      if (p.records.empty()) continue;  // flat, evaluated in double, or no span covers a texel centre
+      const int tile = static_cast<int>(g.batch_boxes.size());
+      const int tile_x = tile % g.tiles_per_row * 3 * m, tile_y = tile / g.tiles_per_row * 2 * m;
+      for (SpanRecord& r : p.records) {
+        r.meta[0] += tile_x;
+        r.meta[1] += tile_y;
       }
-      const double f = pow2_normalizer(tri.normal[0], tri.normal[1], tri.normal[2]);
-      for (int c = 0; c < 3; ++c) tri_data[t][9 + c] = static_cast<float>(tri.normal[c] * f);
-      tri_data[t][12] = static_cast<float>(tri.plane * f);
+      g.batch_records.insert(g.batch_records.end(), p.records.begin(), p.records.end());
+      g.batch_boxes.push_back(b);
+      g.batch_scale.push_back(p.plan.frame.volume_scale);
+      g.batch_constant.push_back(p.plan.constant);
+      // Flush when the atlas is full, or the span records pass 64 MiB (boxes in far-count mode
+      // or without culling draw every face of the mesh).
+      constexpr size_t kMaxRecords = (size_t{64} << 20) / sizeof(SpanRecord);
+      if (!batching_ || static_cast<int>(g.batch_boxes.size()) == g.capacity || g.batch_records.size() >= kMaxRecords)
+        flush(m);
     }
-    for (const TexelSpan& span : plan.spans) {
-      if (span.i0 > span.i1 || span.j0 > span.j1) continue;  // covers no texel centre
-      SpanRecord r;
-      r.span[0] = span.i0;
-      r.span[1] = span.j0;
-      r.span[2] = span.i1;
-      r.span[3] = span.j1;
-      r.meta[0] = tile_x + span.face % 3 * m;
-      r.meta[1] = tile_y + span.face / 3 * m;
-      r.meta[2] = span.face | (plan.far_count << 6);
-      r.meta[3] = 0;
-      std::memcpy(r.edge, tri_data[span.tri].data(), 9 * sizeof(float));
-      std::memcpy(r.plane, tri_data[span.tri].data() + 9, 4 * sizeof(float));
-      g.batch_records.push_back(r);
-    }
-    if (g.batch_records.size() == records_before) continue;  // no span covers a texel centre
-    g.batch_boxes.push_back(b);
-    g.batch_scale.push_back(plan.frame.volume_scale);
-    g.batch_constant.push_back(plan.constant);
-    // Flush when the atlas is full, or the span records pass 64 MiB (boxes in far-count mode or
-    // without culling draw every face of the mesh).
-    constexpr size_t kMaxRecords = (size_t{64} << 20) / sizeof(SpanRecord);
-    if (!batching_ || static_cast<int>(g.batch_boxes.size()) == g.capacity || g.batch_records.size() >= kMaxRecords)
-      flush(m);
   }
   if (!g.batch_boxes.empty()) flush(m);
   g.out = nullptr;

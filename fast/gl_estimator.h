@@ -2,7 +2,9 @@
 // float by OpenGL through a headless EGL context (gl_context.h), many boxes per round trip.
 //
 // Per box the CPU makes the shared plan (texel_plan.h: box frame in double, exact centre class,
-// culled faces in box-normalized coordinates, texel spans). Each span becomes one instanced
+// culled faces in box-normalized coordinates, texel spans); the boxes of a call are planned in
+// parallel (TBB, as many threads as the caller's arena allows) and packed in box order, so the
+// values do not depend on the number of threads. Each span becomes one instanced
 // quad in an R32F atlas, one 3m x 2m tile per box; the fragment shader runs the ray test of
 // texel_hit() in float and blends the hit's value additively; a compute pass sums each tile,
 // and one float per box is read back. Boxes whose plan draws nothing take no GPU work.
@@ -39,7 +41,9 @@ class GlObvEstimator {
   static Status create(const Mesh& mesh, std::unique_ptr<GlObvEstimator>* out, bool device_only = false);
   ~GlObvEstimator();
 
-  // OBV estimate of each box at resolution m, 1 <= m <= max_m(), in world volume units.
+  // OBV estimate of each box at resolution m, 1 <= m <= max_m(), in world volume units. Makes
+  // the context current on the calling thread: not to be called on one estimator from several
+  // threads at once.
   std::vector<double> estimate(const std::vector<Obb>& boxes, int m);
   double estimate(const Obb& box, int m);
   int max_m() const;

@@ -7,6 +7,8 @@
 #include <cstdlib>
 #include <random>
 
+#include <tbb/task_arena.h>
+
 #include "common/io/mesh_report.h"
 #include "data/analytic_meshes.h"
 #include "fast/cpu_estimator.h"
@@ -226,6 +228,21 @@ TEST(GlEstimator, BatchingChangesNothingButTheRoundTrips) {
     if (res == 256) {
       EXPECT_GT(batched_trips, 1u);
     }
+  }
+}
+
+// The boxes are planned on several threads, a window at a time, and packed in box order
+// (gl_estimator.cpp): one thread and all of them give the same floats, with windows of
+// different sizes cutting the 200 boxes at different places (2 boxes a window on one thread).
+// At m = 256 the batch also spans several round trips.
+TEST(GlEstimator, ThreadsChangeNothing) {
+  const Mesh m = analytic::polygonal_torus().mesh;
+  VOBB_MAKE_GL(gl, m);
+  const std::vector<Obb> boxes = random_boxes(m, 200, 13);
+  for (int res : {8, 256}) {
+    std::vector<double> one;
+    tbb::task_arena(1).execute([&] { one = gl->estimate(boxes, res); });
+    EXPECT_EQ(gl->estimate(boxes, res), one) << res;
   }
 }
 
