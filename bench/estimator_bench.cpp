@@ -1,7 +1,8 @@
 // Per-OBV time of the cubemap estimator (issue 4): GL (whatever EGL gives: llvmpipe here, a GPU
 // on the device machine) and the CPU twin, amortised over seeded corpora of leaf-sized and
 // root-sized boxes (validate/box_corpus.h), with the culling and batching ablations.
-// Every configuration runs in this one process, so the ratios compare like with like.
+// Every configuration runs in this one process, so the ratios compare like with like. Each GL
+// value of the full batch is also checked against gl_deviation_bound; the run fails above it.
 // Usage: vobb-bench-estimator MESH [--m M] [--leaves N] [--roots N] [--ablation-boxes N]
 #include <chrono>
 #include <cmath>
@@ -61,6 +62,7 @@ int main(int argc, char** argv) {
   vobb::CpuObvEstimator cpu(lm.mesh);
   std::printf("mesh %s, %zu faces, m = %d, renderer: %s\n", argv[1], lm.mesh.faces.size(), m, gl->renderer().c_str());
   std::printf("%-6s %6s %-28s %12s %14s\n", "boxes", "count", "configuration", "ms per OBV", "max rel diff");
+  bool bound_exceeded = false;
   using vobb::validate::BoxSize;
   for (BoxSize size : {BoxSize::kLeaf, BoxSize::kRoot}) {
     const int count = size == BoxSize::kLeaf ? leaves : roots;
@@ -77,6 +79,17 @@ int main(int argc, char** argv) {
     t = seconds([&] { v = gl->estimate(boxes, m); });
     std::printf("%-6s %6d %-28s %12.4f %14.2e   (%zu round trips)\n", name, count, "gl, batched, first call", 1e3 * t / count,
                 max_abs_diff(v, ref), gl->round_trips() - trips);
+    // Each GL value against the CPU twin's within the derived float bound (gl_estimator.h):
+    // the worst |GL - CPU| / bound over the batch. Above 1 is a defect, and fails the run.
+    double worst = 0;
+    for (size_t i = 0; i < boxes.size(); ++i) {
+      const double bound = vobb::gl_deviation_bound(gl->planner().plan(boxes[i], m), m);
+      const double diff = std::abs(v[i] - ref[i]);
+      worst = std::max(worst, diff == 0 ? 0.0 : bound > 0 ? diff / bound : HUGE_VAL);
+    }
+    std::printf("%-6s %6d %-28s %12s %14.2e   (worst |gl - cpu| / gl_deviation_bound)\n", name, count,
+                "gl against its bound", "-", worst);
+    if (worst > 1) bound_exceeded = true;
     // The first call pays for first touches of the atlas's pages; the rest are steady state.
     // Ablations on the first `ablation` boxes, against the full configuration on the same boxes.
     const std::vector<vobb::Obb> few(boxes.begin(), boxes.begin() + std::min<size_t>(boxes.size(), ablation));
@@ -101,6 +114,10 @@ int main(int argc, char** argv) {
       for (const auto& b : few) (void)gl->planner().plan(b, m);
     });
     std::printf("%-6s %6d %-28s %12.4f %14s\n", name, n, "plan only (CPU side of gl)", 1e3 * t / n, "-");
+  }
+  if (bound_exceeded) {
+    std::fprintf(stderr, "vobb-bench-estimator: a GL value is outside gl_deviation_bound of the CPU twin's\n");
+    return 1;
   }
   return 0;
 }
