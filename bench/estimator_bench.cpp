@@ -85,11 +85,12 @@ int main(int argc, char** argv) {
     for (size_t i = 0; i < boxes.size(); ++i) {
       const double bound = vobb::gl_deviation_bound(gl->planner().plan(boxes[i], m), m);
       const double diff = std::abs(v[i] - ref[i]);
-      worst = std::max(worst, diff == 0 ? 0.0 : bound > 0 ? diff / bound : HUGE_VAL);
+      if (!(diff <= bound)) bound_exceeded = true;  // a NaN on either side too
+      const double ratio = diff == 0 ? 0.0 : bound > 0 ? diff / bound : HUGE_VAL;
+      worst = std::isnan(ratio) ? HUGE_VAL : std::max(worst, ratio);
     }
     std::printf("%-6s %6d %-28s %12s %14.2e   (worst |gl - cpu| / gl_deviation_bound)\n", name, count,
                 "gl against its bound", "-", worst);
-    if (worst > 1) bound_exceeded = true;
     // The first call pays for first touches of the atlas's pages; the rest are steady state.
     // Ablations on the first `ablation` boxes, against the full configuration on the same boxes.
     const std::vector<vobb::Obb> few(boxes.begin(), boxes.begin() + std::min<size_t>(boxes.size(), ablation));
@@ -109,11 +110,12 @@ int main(int argc, char** argv) {
     t = seconds([&] { v = cpu.estimate(few, m); });
     std::printf("%-6s %6d %-28s %12.4f %14.2e\n", name, n, "cpu twin, all faces", 1e3 * t / n, max_abs_diff(v, few_ref));
     cpu.set_culling(true);
-    // Where the time goes: the CPU-side plan alone (shared by both backends).
+    // Where the time goes: the CPU-side plan alone (shared by both backends), on one thread
+    // (GL plans a batch on every core, the CPU twin each box on one).
     t = seconds([&] {
       for (const auto& b : few) (void)gl->planner().plan(b, m);
     });
-    std::printf("%-6s %6d %-28s %12.4f %14s\n", name, n, "plan only (CPU side of gl)", 1e3 * t / n, "-");
+    std::printf("%-6s %6d %-28s %12.4f %14s\n", name, n, "plan only, one thread", 1e3 * t / n, "-");
   }
   if (bound_exceeded) {
     std::fprintf(stderr, "vobb-bench-estimator: a GL value is outside gl_deviation_bound of the CPU twin's\n");

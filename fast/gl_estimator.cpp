@@ -37,6 +37,12 @@ struct PlannedBox {
   double value = 0;                  // the box's whole OBV when nothing goes to the GPU
 };
 
+// The heap memory a slot keeps for its next box.
+size_t held_bytes(const PlannedBox& p) {
+  return p.plan.tris.capacity() * sizeof(LocalTriangle) + p.plan.spans.capacity() * sizeof(TexelSpan) +
+         p.tri_data.capacity() * sizeof(p.tri_data[0]) + p.records.capacity() * sizeof(SpanRecord);
+}
+
 // Plans `box` into *p and turns its spans into records; all of it depends on the box alone.
 void plan_box(const BoxPlanner& planner, const Obb& box, int m, PlannedBox* p) {
   planner.plan(box, m, &p->plan);
@@ -175,14 +181,19 @@ std::vector<double> GlObvEstimator::estimate(const std::vector<Obb>& boxes, int 
   std::vector<double> out(boxes.size(), 0.0);
   g.out = &out;
   // The boxes are planned in parallel (TBB, as many threads as the caller's arena allows), a
-  // window of twice that many at a time so that at most that many plans are held, and packed
-  // into the batch in box order on this thread, which holds the GL context. Each box's records
-  // depend on that box alone, so the records drawn, their order, and the floats blended are
-  // the same for any number of threads.
-  const size_t window = 2 * static_cast<size_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
+  // window of twice that many at a time, and packed into the batch in box order on this thread,
+  // which holds the GL context. Each box's records depend on that box alone, so the records
+  // drawn, their order, and the floats blended are the same for any number of threads.
+  // Memory: a slot keeps its vectors' capacity from call to call unless they pass kKeepBytes
+  // (as the CPU twin's per-thread plan); after a window with such a plan, the next window
+  // holds one box per thread, so that large plans are held at most one per thread at once,
+  // as the CPU twin holds them.
+  constexpr size_t kKeepBytes = size_t{64} << 20;
+  const size_t threads = static_cast<size_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
+  size_t window = 2 * threads;
   if (g.window.size() < std::min(window, boxes.size())) g.window.resize(std::min(window, boxes.size()));
-  for (size_t w0 = 0; w0 < boxes.size(); w0 += window) {
-    const size_t w1 = std::min(boxes.size(), w0 + window);
+  for (size_t w0 = 0, w1 = 0; w0 < boxes.size(); w0 = w1) {
+    w1 = std::min(boxes.size(), w0 + window);
     tbb::parallel_for(w0, w1, [&](size_t b) { plan_box(planner_, boxes[b], m, &g.window[b - w0]); });
     for (size_t b = w0; b < w1; ++b) {
       PlannedBox& p = g.window[b - w0];
@@ -204,6 +215,12 @@ std::vector<double> GlObvEstimator::estimate(const std::vector<Obb>& boxes, int 
       constexpr size_t kMaxRecords = (size_t{64} << 20) / sizeof(SpanRecord);
       if (!batching_ || static_cast<int>(g.batch_boxes.size()) == g.capacity || g.batch_records.size() >= kMaxRecords)
         flush(m);
+    }
+    window = 2 * threads;
+    for (size_t b = w0; b < w1; ++b) {  // the slots of large plans are not kept
+      if (held_bytes(g.window[b - w0]) <= kKeepBytes) continue;
+      g.window[b - w0] = PlannedBox{};
+      window = threads;
     }
   }
   if (!g.batch_boxes.empty()) flush(m);

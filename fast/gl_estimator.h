@@ -43,7 +43,10 @@ class GlObvEstimator {
 
   // OBV estimate of each box at resolution m, 1 <= m <= max_m(), in world volume units. Makes
   // the context current on the calling thread: not to be called on one estimator from several
-  // threads at once.
+  // threads at once, nor from a TBB task that another task may call it from (the call waits
+  // on its planning tasks, and a waiting thread may take such a task). Like the CPU twin's, not
+  // under a changed floating-point environment (a CGAL rounding scope): the planning workers
+  // keep the one captured when their arena started.
   std::vector<double> estimate(const std::vector<Obb>& boxes, int m);
   double estimate(const Obb& box, int m);
   int max_m() const;

@@ -513,6 +513,12 @@ class Builder {
     return st->budget_spent;
   }
 
+  // A search that the budget cut short marks the state spent, and a checkpoint saves it so
+  // (test CutRootSearchIsSavedAsSpent).
+  void record_cut(VariationalState* st) {
+    if (splitter_.spent()) st->budget_spent = true;
+  }
+
   void start(VariationalState* st) {
     TreeNode root;
     root.faces.resize(mesh_.faces.size());
@@ -521,7 +527,7 @@ class Builder {
     splitter_.set_level(0);
     // The root's axes: the best of the covariance axes and the search, like any group's.
     st->axes = {out_of_time(st) ? covariance_axes(mesh_, root.faces) : splitter_.optimise_single(root.faces)};
-    if (splitter_.spent()) st->budget_spent = true;  // the root's search was cut short
+    record_cut(st);  // if the root's search was cut short
   }
 
   // Splits every node of level st->split_levels that can be split.
@@ -566,7 +572,7 @@ class Builder {
       }
     }
     ++st->split_levels;
-    if (splitter_.spent()) st->budget_spent = true;  // a node's search was cut short
+    record_cut(st);  // if a node's search was cut short
   }
 
   int depth(const VariationalState& st) const {
@@ -618,7 +624,7 @@ class Builder {
         if (options_.progress) options_.progress(progress);
       }
     }
-    if (splitter_.spent()) st->budget_spent = true;  // a regrouping was cut short
+    record_cut(st);  // if a regrouping was cut short
     return gain;
   }
 

@@ -232,17 +232,37 @@ TEST(GlEstimator, BatchingChangesNothingButTheRoundTrips) {
 }
 
 // The boxes are planned on several threads, a window at a time, and packed in box order
-// (gl_estimator.cpp): one thread and all of them give the same floats, with windows of
-// different sizes cutting the 200 boxes at different places (2 boxes a window on one thread).
-// At m = 256 the batch also spans several round trips.
+// (gl_estimator.cpp): arenas of 1, 3 and 8 threads (windows of 2, 6 and 16 boxes, cutting the
+// batch at different places, whatever the machine's cores) and the default give the same floats
+// as each box estimated alone, and the same CPU fallbacks. The batch mixes ordinary boxes with
+// a flat box (OBV 0, no plan drawn), a box far from the mesh (no record), and a box float cannot
+// evaluate (the CPU twin's code). At m = 192 (70 tiles an atlas) the batch spans several round
+// trips.
 TEST(GlEstimator, ThreadsChangeNothing) {
   const Mesh m = analytic::polygonal_torus().mesh;
   VOBB_MAKE_GL(gl, m);
-  const std::vector<Obb> boxes = random_boxes(m, 200, 13);
-  for (int res : {8, 256}) {
-    std::vector<double> one;
-    tbb::task_arena(1).execute([&] { one = gl->estimate(boxes, res); });
-    EXPECT_EQ(gl->estimate(boxes, res), one) << res;
+  std::vector<Obb> boxes = random_boxes(m, 200, 13);
+  boxes.insert(boxes.begin() + 50, aabox(Vec3::Zero(), Vec3(1, 1, 0)));                // flat
+  boxes.insert(boxes.begin() + 100, aabox(Vec3(1e3, 0, 0), Vec3(1, 1, 1)));             // far
+  boxes.insert(boxes.begin() + 150, aabox(Vec3::Zero(), Vec3(1e38, 1e38, 1e38)));       // beyond float
+  for (int res : {8, 192}) {
+    ASSERT_FALSE(gl_evaluates_in_float(gl->planner().plan(boxes[150], res)));
+    std::vector<double> alone;
+    size_t before = gl->cpu_fallbacks();
+    for (const Obb& b : boxes) alone.push_back(gl->estimate(b, res));
+    const size_t alone_fallbacks = gl->cpu_fallbacks() - before;
+    EXPECT_EQ(alone_fallbacks, 1u) << res;
+    EXPECT_EQ(alone[50], 0.0);
+    for (int threads : {1, 3, 8}) {
+      std::vector<double> batch;
+      before = gl->cpu_fallbacks();
+      tbb::task_arena(threads).execute([&] { batch = gl->estimate(boxes, res); });
+      EXPECT_EQ(batch, alone) << "m " << res << ", " << threads << " threads";
+      EXPECT_EQ(gl->cpu_fallbacks() - before, alone_fallbacks) << res;
+    }
+    const size_t trips = gl->round_trips();
+    EXPECT_EQ(gl->estimate(boxes, res), alone) << "m " << res << ", the default arena";
+    if (res == 192) EXPECT_GT(gl->round_trips() - trips, 1u);
   }
 }
 

@@ -374,9 +374,10 @@ TEST(VariationalBuilder, SpentTimeBudgetGivesAValidTree) {
 // The budget is asked before every call to the estimator, not once per node: once it has run
 // out, no further call is made, wherever in the search it ran out. The root's search costs at
 // least 64 boxes (1, 33 starts, then at least five rotation steps of 6): budgets of 1, 7 and
-// 40 boxes fall there. Here the level-1 split's first boxes end at 240 and its first Lloyd
-// iteration (partition and boxes) at 408: budgets of 150 and 300 fall in them; the last one
-// falls in the merging sweeps. The tree is still complete, valid and conservative.
+// 40 boxes fall there. Level 1's split reports its starting boxes at 240 estimates and its
+// first Lloyd iteration (partition and boxes) at 408: budgets of 150 and 300 fall before each
+// (asserted: 150 < first report < 300 < second); the last one falls in the merging sweeps
+// (asserted). The tree is still complete, valid and conservative.
 // Under a budget a batch is estimated in chunks of about budget_check_seconds (50 ms here) at
 // the pace measured at the level, one box per thread until it is known: with an estimator that
 // takes 60 ms a call (a large m), the call that spends the budget holds at most one box per
@@ -397,13 +398,19 @@ TEST(VariationalBuilder, BudgetEndsTheSearchInTheCallUnderWay) {
     return cpu.estimate(batch, 8);
   };
   size_t sweep_from = 0;  // boxes estimated when the first sweep reported progress
+  std::vector<size_t> level1;  // boxes estimated at each of level 1's progress reports
   o.progress = [&](const VariationalProgress& p) {
     if (p.sweep > 0 && sweep_from == 0) sweep_from = boxes;
+    if (p.sweep == 0 && p.level == 1) level1.push_back(boxes);
   };
   VariationalReport full;
   build_variational(mesh, o, counted, nullptr, &full);
   const size_t all = boxes;
   ASSERT_FALSE(full.budget_spent);
+  ASSERT_GE(level1.size(), 2u);
+  ASSERT_GT(level1[0], 150u) << "a budget of 150 is meant to fall before level 1's first report";
+  ASSERT_LT(level1[0], 300u);
+  ASSERT_GT(level1[1], 300u) << "a budget of 300 is meant to fall in level 1's first Lloyd iteration";
   ASSERT_GT(sweep_from, 300u);
   ASSERT_LT(sweep_from, all - 20) << "the last budget is meant to fall in a sweep";
   o.progress = nullptr;
