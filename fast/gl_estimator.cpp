@@ -180,6 +180,11 @@ std::vector<double> GlObvEstimator::estimate(const std::vector<Obb>& boxes, int 
   }
   std::vector<double> out(boxes.size(), 0.0);
   g.out = &out;
+  // A call that threw (an allocation in planning, say) may have left a batch half gathered.
+  g.batch_records.clear();
+  g.batch_boxes.clear();
+  g.batch_scale.clear();
+  g.batch_constant.clear();
   // The boxes are planned in parallel (TBB, as many threads as the caller's arena allows), a
   // window of twice that many at a time, and packed into the batch in box order on this thread,
   // which holds the GL context. Each box's records depend on that box alone, so the records
