@@ -425,7 +425,12 @@ int run_obv(const std::string& mesh_path, const std::string& boxes_path, const s
       runs.push_back(std::move(r));
     }
   std::vector<std::vector<double>> bound;
-  for (const Run& r : runs) bound.push_back(bounds_of(r));
+  for (const Run& r : runs) {
+    bound.push_back(bounds_of(r));
+    // The exact OBV lies between 0 and the box's volume, which bounds the error too.
+    for (size_t i = 0; i < n; ++i)
+      bound.back()[i] = std::min(bound.back()[i], vobb::validate::range_bound(boxes[i], r.obv[i]));
+  }
   for (size_t i = 0; i < n; ++i)
     if (unresolved[i])
       std::fprintf(stderr,

@@ -93,4 +93,12 @@ class EstimatorSet {
   EstimatePerturbation perturb_;
 };
 
+// A bound on |estimate - exact OBV| from the OBV's range alone: the exact OBV lies in [0, V*],
+// V* = 8 h0 h1 h2 |det[a0 a1 a2]| the parallelepiped's exact volume, so |E - OBV| <=
+// max(|E|, |U - E|) for any U >= V*. EstimatorSet's rigorous bound can exceed the box's volume
+// (at small m each texel may be off by its whole pyramid; an unresolved plan); `vobb obv`
+// reports the smaller of the two. Holds for every box that box_defect accepts (common/obb.h),
+// and for an estimate outside [0, V*] too.
+double range_bound(const Obb& box, double estimate);
+
 }  // namespace vobb::validate

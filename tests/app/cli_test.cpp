@@ -329,6 +329,37 @@ TEST(Cli, BuildExportAndInfoOnAnAnalyticMesh) {
 
 // The library prints nothing about GL; the command line names the renderer once on stderr,
 // and --quiet leaves it out (the build's closing summary line stays).
+// The exact OBV lies between 0 and the box's volume, so no error bound needs to be larger than
+// the box: at m = 1 on the unit cube, the rigorous bound of a box over the cube's top face is
+// 0.18 (CPU) and 0.32 (GL) of a box of volume 0.216 (measured before obv clipped it); obv
+// reports at most max(E, vol - E) plus its derived round-off (validate/estimators.h,
+// range_bound; 1e-12 relative is far above it), and the bound still holds against the exact
+// value.
+TEST(Cli, ObvBoundIsNeverAboveTheBoxVolume) {
+  const std::string mesh = write_cube("range_cube.off", 1);
+  Obb b;
+  b.center = Vec3(0.5, 0.5, 0.9);
+  b.half = Vec3(0.3, 0.3, 0.3);
+  const std::string boxes = test::temp_path("range_boxes.json");
+  ASSERT_TRUE(write_boxes({b}, boxes));
+  const CliRun r = vobb_cli("obv " + mesh + " --boxes " + boxes + " --m 1,2 --backend all --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const nlohmann::json doc = nlohmann::json::parse(r.out);
+  ASSERT_EQ(doc["boxes"].size(), 1u);
+  const auto& box = doc["boxes"][0];
+  const double vol = box["box_volume"].get<double>(), exact = box["exact"].get<double>();
+  EXPECT_DOUBLE_EQ(vol, 0.216);
+  ASSERT_EQ(box["estimates"].size(), 4u);
+  for (const auto& e : box["estimates"]) {
+    const double obv = e["obv"].get<double>(), bound = e["bound"].get<double>();
+    EXPECT_LE(std::abs(obv - exact), bound) << e;
+    EXPECT_LE(bound, std::max(obv, vol - obv) * (1 + 1e-12)) << e;
+    EXPECT_LT(bound, vol) << e;
+  }
+  std::remove(boxes.c_str());
+  std::remove(mesh.c_str());
+}
+
 TEST(Cli, GlRendererIsNamedByTheCommandLineOnlyWhenNotQuiet) {
   const std::string mesh = write_cube("gl_cube.off", 1);
   const std::string tree = test::temp_path("gl_cube_tree.json");
