@@ -327,8 +327,6 @@ TEST(Cli, BuildExportAndInfoOnAnAnalyticMesh) {
   for (const std::string& p : {mesh, tree, boxes, margin_tree, plain_tree}) std::remove(p.c_str());
 }
 
-// The library prints nothing about GL; the command line names the renderer once on stderr,
-// and --quiet leaves it out (the build's closing summary line stays).
 // The exact OBV lies between 0 and the box's volume, so no error bound needs to be larger than
 // the box: at m = 1 on the unit cube, the rigorous bound of a box over the cube's top face is
 // 0.18 (CPU) and 0.32 (GL) of a box of volume 0.216 (measured before obv clipped it); obv
@@ -360,6 +358,8 @@ TEST(Cli, ObvBoundIsNeverAboveTheBoxVolume) {
   std::remove(mesh.c_str());
 }
 
+// The library prints nothing about GL; the command line names the renderer once on stderr,
+// and --quiet leaves it out (the build's closing summary line stays).
 TEST(Cli, GlRendererIsNamedByTheCommandLineOnlyWhenNotQuiet) {
   const std::string mesh = write_cube("gl_cube.off", 1);
   const std::string tree = test::temp_path("gl_cube_tree.json");

@@ -29,14 +29,18 @@ Rational exact_volume(const Obb& box) {
 // range_bound must hold against the exact range [0, V*] of the OBV, compared in rationals: for
 // estimates below, inside and above the range, it is at least the distance from the estimate
 // to both ends. Boxes: axis-aligned, and turned with axes off orthonormal by a few 1e-6 (where
-// V* is not the product of the extents), 2^200 long and 2^-1000 thin (the product of the
-// extents passes through the subnormals), tiny (V* underflows to 0 in double), and flat.
+// V* is not the product of the extents), 2^200 long and 2^-1000 thin, extents (2^-600, 2^-500,
+// 2^200) and (2^-209, 2^-1022, 2^235), whose product taken left to right underflows on the way
+// to a normal V* (volume(), common/obb.cpp, had that defect), tiny (V* below the doubles), and
+// flat.
 TEST(RangeBound, CoversTheDistanceToBothEndsOfTheExactRange) {
   std::mt19937_64 rng(7);
   auto uniform = [&] { return static_cast<double>(rng() >> 11) * 0x1.0p-53; };
   const std::array<Vec3, 3> identity = {Vec3::UnitX(), Vec3::UnitY(), Vec3::UnitZ()};
   std::vector<Obb> boxes = {make_box(Vec3(1, 2, 3), identity),
                             make_box(Vec3(0x1p200, 0x1p-1000, 0.75), identity),
+                            make_box(Vec3(0x1p-600, 0x1p-500, 0x1p200), identity),
+                            make_box(Vec3(0x1p-209, 0x1p-1022, 0x1p235), identity),
                             make_box(Vec3(0x1p-400, 0x1p-400, 0x1p-300), identity),
                             make_box(Vec3(1, 0, 2), identity)};
   for (int i = 0; i < 20; ++i) {
