@@ -64,16 +64,16 @@ double CpuObvEstimator::estimate_one(const Obb& box, int m, size_t* faces_used) 
   thread_local BoxPlan plan;
   planner_.plan(box, m, &plan);
   *faces_used = plan.tris.size();
-  double value = 0.0;
-  if (!plan.flat) {
-    const double texel_weight = 4.0 / (3.0 * m * m);
-    value = plan.frame.volume_scale * (plan.constant + texel_weight * sum_texel_hits(plan, m));
-  }
-  // A plan over a very large mesh is not kept for the thread's lifetime.
-  constexpr size_t kKeepBytes = size_t{64} << 20;
-  if (plan.tris.capacity() * sizeof(LocalTriangle) + plan.spans.capacity() * sizeof(TexelSpan) > kKeepBytes)
+  const double value = evaluate_plan(plan, m);
+  if (plan.tris.capacity() * sizeof(LocalTriangle) + plan.spans.capacity() * sizeof(TexelSpan) > kPlanKeepBytes)
     plan = BoxPlan{};
   return value;
+}
+
+double evaluate_plan(const BoxPlan& plan, int m) {
+  if (plan.flat) return 0.0;
+  const double texel_weight = 4.0 / (3.0 * m * m);
+  return plan.frame.volume_scale * (plan.constant + texel_weight * sum_texel_hits(plan, m));
 }
 
 }  // namespace vobb

@@ -42,4 +42,14 @@ class CpuObvEstimator {
 // The sum over a plan's (texel, face) hits of their values (texel_plan.h), in double.
 double sum_texel_hits(const BoxPlan& plan, int m);
 
+// The CPU twin's estimate from a plan: 0 for a flat plan, else
+// scale * (constant + 4 / (3 m^2) * sum_texel_hits). The GL estimator evaluates the plans that
+// float cannot hold with it, so that theirs are the twin's values bit for bit.
+double evaluate_plan(const BoxPlan& plan, int m);
+
+// A plan kept for reuse (one per thread here, one per window slot in the GL estimator) is
+// dropped once its vectors hold more than this, so that plans over a very large mesh are not
+// kept for the process's lifetime.
+inline constexpr size_t kPlanKeepBytes = size_t{64} << 20;
+
 }  // namespace vobb

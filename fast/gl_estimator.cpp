@@ -53,7 +53,7 @@ void plan_box(const BoxPlanner& planner, const Obb& box, int m, PlannedBox* p) {
   if (plan.flat) return;  // OBV 0
   if (!gl_evaluates_in_float(plan)) {  // the CPU twin's expression, in double (header)
     p->fallback = true;
-    p->value = plan.frame.volume_scale * (plan.constant + 4.0 / (3.0 * m * m) * sum_texel_hits(plan, m));
+    p->value = evaluate_plan(plan, m);
     return;
   }
   p->value = plan.frame.volume_scale * plan.constant;  // the whole answer when nothing is drawn
@@ -189,11 +189,10 @@ std::vector<double> GlObvEstimator::estimate(const std::vector<Obb>& boxes, int 
   // window of twice that many at a time, and packed into the batch in box order on this thread,
   // which holds the GL context. Each box's records depend on that box alone, so the records
   // drawn, their order, and the floats blended are the same for any number of threads.
-  // Memory: a slot keeps its vectors' capacity from call to call unless they pass kKeepBytes
-  // (as the CPU twin's per-thread plan); after a window with such a plan, the next window
-  // holds one box per thread, so that large plans are held at most one per thread at once,
-  // as the CPU twin holds them.
-  constexpr size_t kKeepBytes = size_t{64} << 20;
+  // Memory: a slot keeps its vectors' capacity from call to call unless they pass
+  // kPlanKeepBytes (cpu_estimator.h); after a window with such a plan, the next window holds
+  // one box per thread, so that large plans are held at most one per thread at once, as the
+  // CPU twin holds them.
   const size_t threads = static_cast<size_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
   size_t window = 2 * threads;
   if (g.window.size() < std::min(window, boxes.size())) g.window.resize(std::min(window, boxes.size()));
@@ -223,7 +222,7 @@ std::vector<double> GlObvEstimator::estimate(const std::vector<Obb>& boxes, int 
     }
     window = 2 * threads;
     for (size_t b = w0; b < w1; ++b) {  // the slots of large plans are not kept
-      if (held_bytes(g.window[b - w0]) <= kKeepBytes) continue;
+      if (held_bytes(g.window[b - w0]) <= kPlanKeepBytes) continue;
       g.window[b - w0] = PlannedBox{};
       window = threads;
     }

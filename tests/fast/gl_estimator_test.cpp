@@ -262,7 +262,9 @@ TEST(GlEstimator, ThreadsChangeNothing) {
     }
     const size_t trips = gl->round_trips();
     EXPECT_EQ(gl->estimate(boxes, res), alone) << "m " << res << ", the default arena";
-    if (res == 192) EXPECT_GT(gl->round_trips() - trips, 1u);
+    if (res == 192) {
+      EXPECT_GT(gl->round_trips() - trips, 1u);
+    }
   }
 }
 
