@@ -135,6 +135,7 @@ vobb::Status build_tree(const vobb::Mesh& mesh, const BuildFlags& f, const vobb:
   opt.max_sweeps = f.sweeps;
   opt.seed = f.seed;
   opt.margin = f.collider_margin;
+  opt.concurrent_estimates = gl == nullptr;  // the CPU twin may be called from any thread; GL may not
   const auto t0 = std::chrono::steady_clock::now();
   if (f.time_budget > 0) opt.out_of_time = [&] { return seconds_since(t0) > f.time_budget; };
   // On a terminal the line is redrawn in place twice a second; into a file or a pipe it is
@@ -581,9 +582,9 @@ int run_compare(const std::string& mesh_path, const BuildFlags& flags, bool json
 }  // namespace
 
 constexpr const char* kThreadsHelp =
-    "Threads for the estimator's batches of boxes: the CPU twin's estimates, or the GL estimator's "
-    "plans (default: every core this process may use); the tree is the same for any number. No "
-    "effect on obbtree";
+    "Threads of a variational build: with the CPU twin, the nodes of a level searched at once and "
+    "each batch's estimates; with GL, the estimator's plans (default: every core this process may "
+    "use); the tree is the same for any number. No effect on obbtree";
 constexpr const char* kCertifyThreadsHelp =
     "Threads for the boxes' OBV and for the layers, one layer per thread at a time (default: every "
     "core this process may use); the values are exact, so the same for any number. Each thread "

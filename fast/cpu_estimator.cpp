@@ -16,14 +16,18 @@ std::vector<double> CpuObvEstimator::estimate(const std::vector<Obb>& boxes, int
   std::vector<double> out(boxes.size());
   std::vector<size_t> used(boxes.size());
   tbb::parallel_for(size_t{0}, boxes.size(), [&](size_t i) { out[i] = estimate_one(boxes[i], m, &used[i]); });
-  faces_used_ = 0;
-  for (size_t u : used) faces_used_ += u;
+  size_t total = 0;
+  for (size_t u : used) total += u;
+  faces_used_ = total;
   return out;
 }
 
 double CpuObvEstimator::estimate(const Obb& box, int m) const {
   VOBB_ASSERT(m >= 1, "cubemap resolution m >= 1");
-  return estimate_one(box, m, &faces_used_);
+  size_t used = 0;
+  const double value = estimate_one(box, m, &used);
+  faces_used_ = used;
+  return value;
 }
 
 double sum_texel_hits(const BoxPlan& plan, int m) {

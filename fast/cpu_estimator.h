@@ -7,6 +7,7 @@
 // classification; a centre exactly on the surface switches to the far-count mode.
 #pragma once
 
+#include <atomic>
 #include <cstddef>
 #include <vector>
 
@@ -22,21 +23,22 @@ class CpuObvEstimator {
   // OBV estimate of each box at resolution m >= 1, in world volume units. The boxes of a batch
   // are estimated in parallel (TBB; as many threads as the caller's arena allows), each by one
   // thread exactly as alone, so the values do not depend on the number of threads.
-  // Not to be called on one estimator from several threads at once (faces_used), nor under a
+  // May be called on one estimator from several threads at once (each thread plans into its
+  // own scratch). Not to be called under a
   // changed floating-point environment (a CGAL rounding scope): TBB's workers keep the one
   // captured when their arena started, so only the default gives the single-box values.
   std::vector<double> estimate(const std::vector<Obb>& boxes, int m) const;
   double estimate(const Obb& box, int m) const;
   // For the culling ablation benchmark: cast against every face.
   void set_culling(bool on) { planner_.set_culling(on); }
-  // Faces cast against in the last estimate() call (the culling statistic).
+  // Faces cast against in the last estimate() call to finish (the culling statistic).
   size_t faces_used() const { return faces_used_; }
 
  private:
   double estimate_one(const Obb& box, int m, size_t* faces_used) const;
 
   BoxPlanner planner_;
-  mutable size_t faces_used_ = 0;
+  mutable std::atomic<size_t> faces_used_{0};
 };
 
 // The sum over a plan's (texel, face) hits of their values (texel_plan.h), in double.

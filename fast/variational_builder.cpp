@@ -3,14 +3,19 @@
 #include <Eigen/Geometry>
 #include <sys/stat.h>
 #include <nlohmann/json.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 #include <algorithm>
+#include <atomic>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <iterator>
 #include <limits>
 #include <map>
+#include <mutex>
 #include <numeric>
 #include <queue>
 #include <random>
@@ -95,11 +100,22 @@ std::array<Vec3, 3> rotate(const std::array<Vec3, 3>& axes, int about, double an
 // (ω = D - l + 1) and are few, so it costs little there.
 constexpr int kAdjustLevels = 4;
 
+// What the splitters of one build share. With concurrent_estimates, several splitters (one
+// per thread) search nodes at once: the counts add up, the time budget once spent is spent for
+// all, and the pace under a budget is the level's, as the wall clock sees it.
+struct SearchShared {
+  std::atomic<size_t> estimates{0};
+  std::atomic<size_t> adjustments{0};
+  std::atomic<size_t> merges{0};
+  std::atomic<bool> spent{false};  // a stopped() has returned true
+  std::atomic<double> pace{0};     // seconds per box of the last chunk under a budget; 0: unknown
+};
+
 class NodeSplitter {
  public:
   NodeSplitter(const Mesh& mesh, const std::vector<std::array<int32_t, 3>>& adjacency,
-               const VariationalOptions& options, const ObvEstimate& estimate, VariationalReport* report)
-      : mesh_(mesh), adj_(adjacency), options_(options), estimate_(estimate), report_(report) {}
+               const VariationalOptions& options, const ObvEstimate& estimate, SearchShared* shared)
+      : mesh_(mesh), adj_(adjacency), options_(options), estimate_(estimate), shared_(shared) {}
 
   struct State {
     std::vector<std::vector<int32_t>> groups;
@@ -109,12 +125,8 @@ class NodeSplitter {
   };
 
   // Level of the boxes being fitted: the orientation search tries more starts near the root.
-  void set_level(int level) {
-    level_ = level;
-    pace_ = 0;
-  }
-  // Boxes of every level follow (the sweeps' estimated e): the pace measured so far is forgotten.
-  void forget_pace() { pace_ = 0; }
+  // (The pace is the builder's to forget when the level changes: SearchShared.)
+  void set_level(int level) { level_ = level; }
 
   // The root: one group, its axes optimised like any child's.
   std::array<Vec3, 3> optimise_single(const std::vector<int32_t>& faces) {
@@ -145,11 +157,11 @@ class NodeSplitter {
   // one node's Lloyd iterations are hundreds of batches of seconds each. Once true it stays
   // true: time only grows.
   bool stopped() {
-    if (!spent_ && options_.out_of_time && options_.out_of_time()) spent_ = true;
-    return spent_;
+    if (!shared_->spent && options_.out_of_time && options_.out_of_time()) shared_->spent = true;
+    return shared_->spent;
   }
   // Whether stopped() has said so: the search may have been cut short.
-  bool spent() const { return spent_; }
+  bool spent() const { return shared_->spent; }
 
   // Box update: per group, the orientation search (or the covariance axes alone), starting
   // from s->axes; fills s->obv. False when the time budget cut it short: then the groups
@@ -207,7 +219,7 @@ class NodeSplitter {
       s->obv[g] = best;
       // Cut, or the budget ran out inside one of this group's calls (whose boxes not reached
       // are +inf): the state is not complete.
-      if (cut || spent_) return false;
+      if (cut || spent()) return false;
     }
     return true;
   }
@@ -230,8 +242,8 @@ class NodeSplitter {
     }
     const std::vector<Obb>& in = options_.margin > 0 ? grown : boxes;
     if (!options_.out_of_time) {
-      report_->estimates += in.size();
-      return estimate_(in);
+      shared_->estimates += in.size();
+      return call(in);
     }
     const size_t threads = static_cast<size_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
     auto chunk_at = [&](double per_box, size_t left) {
@@ -241,19 +253,30 @@ class NodeSplitter {
     };
     std::vector<double> out(in.size(), std::numeric_limits<double>::infinity());
     for (size_t i = 0; i < in.size() && !stopped();) {
-      const size_t n = std::min(chunk_at(pace_, in.size() - i), in.size() - i);
+      const size_t n = std::min(chunk_at(shared_->pace, in.size() - i), in.size() - i);
       const auto t0 = std::chrono::steady_clock::now();
-      const std::vector<double> v = estimate_(std::vector<Obb>(in.begin() + i, in.begin() + i + n));
+      const std::vector<double> v = call(std::vector<Obb>(in.begin() + i, in.begin() + i + n));
       std::copy(v.begin(), v.end(), out.begin() + i);
-      report_->estimates += n;
+      shared_->estimates += n;
       i += n;
       // Never 0 once measured (a call too quick for the clock counts as 1 ns a box).
-      pace_ = std::max(1e-9, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() / n);
+      shared_->pace = std::max(1e-9, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() / n);
     }
     return out;
   }
 
  private:
+  // One estimator call. When nodes are searched in parallel, the estimator's own parallel work
+  // is isolated: a thread waiting for its batch helps with that batch only, and does not start
+  // another node's search on top of this one (which could nest a search per node on one stack,
+  // and would hold this node back).
+  std::vector<double> call(const std::vector<Obb>& boxes) {
+    if (!options_.concurrent_estimates) return estimate_(boxes);
+    std::vector<double> v;
+    tbb::this_task_arena::isolate([&] { v = estimate_(boxes); });
+    return v;
+  }
+
   // Lloyd iterations from `state`; `best` keeps the lowest sum seen.
   void iterate(const std::vector<int32_t>& faces, State state, State* best,
                const std::function<void(int, double)>& report) {
@@ -300,7 +323,7 @@ class NodeSplitter {
       iterate(faces, trial, &trial_best, report);
       if (trial_best.sum() < best->sum()) {
         *best = std::move(trial_best);
-        ++report_->adjustments;
+        ++shared_->adjustments;
       }
     }
   }
@@ -482,10 +505,8 @@ class NodeSplitter {
   const std::vector<std::array<int32_t, 3>>& adj_;
   const VariationalOptions& options_;
   const ObvEstimate& estimate_;
-  VariationalReport* report_;
+  SearchShared* shared_;
   int level_ = 0;                // level of the boxes being fitted
-  bool spent_ = false;           // stopped() has returned true
-  double pace_ = 0;              // seconds per box of the last chunk under a budget; 0: unknown
   std::vector<int32_t> local_;   // mesh face -> index in the node being partitioned, else -1
 };
 
@@ -503,20 +524,27 @@ class Builder {
   };
 
  public:
-  Builder(const Mesh& mesh, const VariationalOptions& options, const ObvEstimate& estimate, VariationalReport* report)
+  Builder(const Mesh& mesh, const VariationalOptions& options, const ObvEstimate& estimate)
       : mesh_(mesh), options_(options), adjacency_(face_neighbours(mesh)),
-        splitter_(mesh, adjacency_, options, estimate, report), report_(report) {}
+        splitters_([this, &estimate] { return NodeSplitter(mesh_, adjacency_, options_, estimate, &shared_); }) {}
 
+  // Whether the time budget is spent (a state resumed after it was keeps it spent). Only
+  // between parallel steps: it writes the state.
   bool out_of_time(VariationalState* st) {
-    if (!st->budget_spent && (splitter_.spent() || (options_.out_of_time && options_.out_of_time())))
-      st->budget_spent = true;
+    if (!st->budget_spent && budget_gone(*st)) st->budget_spent = true;
     return st->budget_spent;
   }
 
   // A search that the budget cut short marks the state spent, and a checkpoint saves it so
   // (test CutRootSearchIsSavedAsSpent).
   void record_cut(VariationalState* st) {
-    if (splitter_.spent()) st->budget_spent = true;
+    if (shared_.spent) st->budget_spent = true;
+  }
+
+  void count(VariationalReport* report) const {
+    report->estimates = shared_.estimates;
+    report->adjustments = shared_.adjustments;
+    report->merges = shared_.merges;
   }
 
   void start(VariationalState* st) {
@@ -524,9 +552,10 @@ class Builder {
     root.faces.resize(mesh_.faces.size());
     std::iota(root.faces.begin(), root.faces.end(), 0);
     st->nodes = {root};
-    splitter_.set_level(0);
+    NodeSplitter& splitter = splitters_.local();
+    splitter.set_level(0);
     // The root's axes: the best of the covariance axes and the search, like any group's.
-    st->axes = {out_of_time(st) ? covariance_axes(mesh_, root.faces) : splitter_.optimise_single(root.faces)};
+    st->axes = {out_of_time(st) ? covariance_axes(mesh_, root.faces) : splitter.optimise_single(root.faces)};
     record_cut(st);  // if the root's search was cut short
   }
 
@@ -539,17 +568,26 @@ class Builder {
     VariationalProgress progress;
     progress.level = level;
     progress.nodes = parents.size();
-    splitter_.set_level(level);
-    for (int32_t p : parents) {
-      const std::vector<int32_t> faces = st->nodes[p].faces;
-      NodeSplitter::State s;
-      if (out_of_time(st)) {  // the time budget is spent: the baseline's split and axes
+    shared_.pace = 0;  // boxes of another level take another time
+    std::mutex progress_mutex;
+    // Each node's split depends on its faces alone (the orientation starts are seeded by the
+    // group), so the nodes may be split in any order, or at once: the children are appended in
+    // the parents' order below, and the tree is the same.
+    std::vector<NodeSplitter::State> split(parents.size());
+    for_each_node(parents.size(), [&](size_t i) {
+      const std::vector<int32_t>& faces = st->nodes[parents[i]].faces;  // not written until all are split
+      NodeSplitter::State& s = split[i];
+      bool complete = false;
+      if (budget_gone(*st)) {  // the time budget is spent: the baseline's split and axes
         s.groups = split_into_groups(mesh_, faces, options_.arity);
         for (const auto& g : s.groups) s.axes.push_back(covariance_axes(mesh_, g));
       } else {
-        s = splitter_.split(faces, [&](int it, double sum) {
+        NodeSplitter& splitter = splitters_.local();
+        splitter.set_level(level);
+        s = splitter.split(faces, [&](int it, double sum) {
+          std::lock_guard<std::mutex> lock(progress_mutex);
           progress.iteration = it;
-          progress.estimates = report_->estimates;
+          progress.estimates = shared_.estimates;
           progress.done = (st->split_levels + static_cast<double>(progress.node) / parents.size()) / options_.depth;
           if (options_.progress) {
             VariationalProgress q = progress;
@@ -557,9 +595,15 @@ class Builder {
             options_.progress(q);
           }
         });
-        if (!splitter_.spent()) progress.sum_obv += s.sum();  // a cut state's sum is incomplete
+        complete = !splitter.spent();
       }
+      std::lock_guard<std::mutex> lock(progress_mutex);
+      if (complete) progress.sum_obv += s.sum();  // a cut state's sum is incomplete
       ++progress.node;
+    });
+    for (size_t i = 0; i < parents.size(); ++i) {
+      const int32_t p = parents[i];
+      const NodeSplitter::State& s = split[i];
       for (size_t g = 0; g < s.groups.size(); ++g) {
         TreeNode child;
         child.id = static_cast<int32_t>(st->nodes.size());
@@ -572,7 +616,7 @@ class Builder {
       }
     }
     ++st->split_levels;
-    record_cut(st);  // if a node's search was cut short
+    record_cut(st);  // if a node's search was cut short, or the budget ran out
   }
 
   int depth(const VariationalState& st) const {
@@ -586,8 +630,8 @@ class Builder {
     const int d = depth(st);
     std::vector<Obb> boxes;
     for (size_t i = 0; i < st.nodes.size(); ++i) boxes.push_back(tight_box(mesh_, st.nodes[i].faces, st.axes[i]));
-    splitter_.forget_pace();  // the root first, then ever smaller boxes
-    const std::vector<double> v = splitter_.measure(boxes);
+    shared_.pace = 0;  // the root first, then ever smaller boxes
+    const std::vector<double> v = splitters_.local().measure(boxes);
     double e = 0;
     for (size_t i = 0; i < st.nodes.size(); ++i) {
       const TreeNode& n = st.nodes[i];
@@ -606,23 +650,32 @@ class Builder {
       std::vector<int32_t> grand;
       for (const TreeNode& n : st->nodes)
         if (n.level == l - 1 && n.children.size() >= 2) grand.push_back(n.id);
-      splitter_.set_level(l);
+      shared_.pace = 0;
       VariationalProgress progress;
       progress.level = l;
       progress.sweep = st->sweeps + 1;
       progress.nodes = grand.size();
       size_t level_faces = 0, faces_done = 0;
       for (int32_t g : grand) level_faces += st->nodes[g].faces.size();
-      for (int32_t g : grand) {
-        if (out_of_time(st)) break;
-        faces_done += st->nodes[g].faces.size();
-        gain += (d - l + 1) * regroup(st, g);
+      std::mutex progress_mutex;
+      // Each regrouping reads and writes only the children and grandchildren of its node g, so
+      // those of one level may run at once. The gains are added in the nodes' order, as one
+      // after another would: the same sum, to the bit, and so the same decision to sweep again.
+      std::vector<double> gains(grand.size(), 0.0);
+      for_each_node(grand.size(), [&](size_t i) {
+        if (budget_gone(*st)) return;
+        NodeSplitter& splitter = splitters_.local();
+        splitter.set_level(l);
+        gains[i] = regroup(*st, grand[i], &splitter);
+        std::lock_guard<std::mutex> lock(progress_mutex);
+        faces_done += st->nodes[grand[i]].faces.size();
         ++progress.node;
-        progress.estimates = report_->estimates;
+        progress.estimates = shared_.estimates;
         progress.sweep_done = ((d - 1 - l) + static_cast<double>(faces_done) / std::max<size_t>(level_faces, 1)) /
                               std::max(d - 1, 1);
         if (options_.progress) options_.progress(progress);
-      }
+      });
+      for (double g : gains) gain += (d - l + 1) * g;
     }
     record_cut(st);  // if a regrouping was cut short
     return gain;
@@ -631,18 +684,20 @@ class Builder {
  private:
   // Re-groups the grandchildren of node g among its children; returns the drop in the
   // estimated sum of OBV of its children.
-  double regroup(VariationalState* st, int32_t g) {
+  // Reads st's other nodes only where no other regrouping of the level writes (see sweep()).
+  double regroup(VariationalState& state, int32_t g, NodeSplitter* splitter) {
+    VariationalState* st = &state;
     std::vector<int32_t> parents;
     for (int32_t c : st->nodes[g].children)
       if (!st->nodes[c].children.empty()) parents.push_back(c);
     if (parents.size() < 2) return 0;
     std::vector<Obb> boxes;
     for (int32_t p : parents) boxes.push_back(tight_box(mesh_, st->nodes[p].faces, st->axes[p]));
-    const std::vector<double> v = splitter_.measure(boxes);
+    const std::vector<double> v = splitter->measure(boxes);
     std::map<int32_t, double> cur;
     for (size_t i = 0; i < parents.size(); ++i) cur[parents[i]] = v[i];
     double total = 0;
-    for (int pass = 0; pass < 3 && !out_of_time(st); ++pass) {
+    for (int pass = 0; pass < 3 && !budget_gone(*st); ++pass) {
       std::vector<Move> moves;
       std::set<std::pair<std::vector<int32_t>, std::vector<int32_t>>> seen;
       auto add = [&](int32_t a, int32_t b, std::vector<int32_t> ua, std::vector<int32_t> ub) {
@@ -680,7 +735,7 @@ class Builder {
       std::vector<NodeSplitter::State> cand(moves.size());
       std::vector<double> screen(moves.size());
       for (size_t c = 0; c < moves.size(); ++c) {
-        if (out_of_time(st)) return total;  // nothing of this pass is applied
+        if (budget_gone(*st)) return total;  // nothing of this pass is applied
         const Move& mv = moves[c];
         NodeSplitter::State& s = cand[c];
         std::vector<Obb> boxes;
@@ -691,7 +746,7 @@ class Builder {
             boxes.push_back(tight_box(mesh_, faces, ax));
           s.groups.push_back(std::move(faces));
         }
-        const std::vector<double> v = splitter_.measure(boxes);
+        const std::vector<double> v = splitter->measure(boxes);
         screen[c] = 0;
         for (int k = 0; k < 2; ++k) {
           const size_t at = std::min_element(v.begin() + 3 * k, v.begin() + 3 * k + 3) - v.begin();
@@ -708,7 +763,7 @@ class Builder {
       for (size_t r = 0; r < std::min<size_t>(2, order.size()); ++r) {
         const Move& mv = moves[order[r]];
         NodeSplitter::State s = cand[order[r]];
-        if (!splitter_.update_boxes(&s)) break;  // cut short by the time budget: not comparable
+        if (!splitter->update_boxes(&s)) break;  // cut short by the time budget: not comparable
         const double before = cur[mv.a] + cur[mv.b];
         // Kept only for a drop of 0.1 % or more of the pair's sum: smaller drops are within
         // the estimator's discretization error at the m the builders use (docs/BENCHMARKS.md:
@@ -721,7 +776,7 @@ class Builder {
       cur[best->a] = best_state.obv[0];
       cur[best->b] = best_state.obv[1];
       total += best_gain;
-      ++report_->merges;
+      ++shared_.merges;
     }
     return total;
   }
@@ -738,11 +793,34 @@ class Builder {
     }
   }
 
+  // Whether the time budget is spent; safe to ask from the parallel steps.
+  bool budget_gone(const VariationalState& st) {
+    if (st.budget_spent) return true;
+    if (!shared_.spent && options_.out_of_time && options_.out_of_time()) shared_.spent = true;
+    return shared_.spent;
+  }
+
+  // f(0) ... f(n - 1): at once where the estimator may be called from several threads, else in
+  // order on this thread (the GL estimator's context is this thread's).
+  template <class F>
+  void for_each_node(size_t n, const F& f) {
+    if (!options_.concurrent_estimates || n < 2) {
+      for (size_t i = 0; i < n; ++i) f(i);
+      return;
+    }
+    // One node a task: nodes differ in size by orders of magnitude.
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t i = r.begin(); i != r.end(); ++i) f(i);
+    }, tbb::simple_partitioner());
+  }
+
   const Mesh& mesh_;
   const VariationalOptions& options_;
   const std::vector<std::array<int32_t, 3>> adjacency_;
-  NodeSplitter splitter_;
-  VariationalReport* report_;
+  SearchShared shared_;
+  // One splitter per thread: a splitter's scratch (the face-local ids) is for one search at a
+  // time, and a thread runs one search at a time (NodeSplitter::call isolates its waits).
+  tbb::enumerable_thread_specific<NodeSplitter> splitters_;
 };
 
 }  // namespace
@@ -756,7 +834,7 @@ Tree build_variational(const Mesh& mesh, const VariationalOptions& options, cons
   VariationalReport local_report;
   if (!report) report = &local_report;
   *report = VariationalReport{};
-  Builder builder(mesh, options, estimate, report);
+  Builder builder(mesh, options, estimate);
   VariationalState st;
   if (resume) {
     st = *resume;
@@ -793,6 +871,7 @@ Tree build_variational(const Mesh& mesh, const VariationalOptions& options, cons
   }
   report->budget_spent = st.budget_spent;
   report->sweeps = st.sweeps;
+  builder.count(report);
 
   Tree tree;
   tree.method = "variational";

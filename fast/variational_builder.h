@@ -41,17 +41,20 @@
 // paper's OBV (margin 0) leaves out the shell around the box that grows with its surface area.
 // It is an extension beyond the paper, measured on the collision experiment in
 // docs/BENCHMARKS.md; the tree's boxes stay the tight fits of their faces.
-// Boxes are written through fit_obb (exactly conservative). Deterministic: the search runs on
-// the calling thread, ties by face id, box index and node id; the same mesh, options and
-// estimator values give the same tree (the estimator may evaluate a batch in parallel, as the
-// CPU twin does: its values do not depend on the thread count). The build state after each
+// Boxes are written through fit_obb (exactly conservative). Deterministic: ties go by face id,
+// box index and node id, and the orientation starts are seeded per group; the same mesh,
+// options and estimator values give the same tree, whether the nodes of a level are searched
+// one after another on the calling thread or at once (concurrent_estimates), and whether the
+// estimator evaluates a batch in parallel, as the CPU twin does (its values do not depend on
+// the thread count). The build state after each
 // level and each sweep can be saved (checkpoint) and a build resumed from it gives the same
 // tree as an uninterrupted one.
 // A time budget ends the search early. It is asked before every call to the estimator: under a
 // budget a batch is estimated in chunks of about budget_check_seconds at the pace measured at
 // the current level (one box per thread until that pace is known), so the search ends within the call
-// under way, not after a node's whole search. The node being searched keeps the best complete
-// state found (its start if none), the nodes not yet split get the baseline split, and no
+// under way, not after a node's whole search. The node being searched (each of them, with
+// concurrent_estimates) keeps the best complete state found (its start if none), the nodes
+// not yet split get the baseline split, and no
 // further sweep starts; a regrouping move whose evaluation it cuts short is not applied (one
 // evaluated in full before it may be). A state saved after the budget was spent keeps it
 // spent when resumed. A budget that is not reached changes nothing: the chunks' estimates are
@@ -108,8 +111,14 @@ struct VariationalOptions {
   int max_sweeps = 3;
   uint64_t seed = 1;         // the random starts of the orientation search
   double margin = 0;         // collider margin, world units, finite and >= 0 (see above)
-  std::function<void(const VariationalProgress&)> progress;  // called often; may be empty
-  std::function<bool()> out_of_time;                          // may be empty: no budget
+  // Whether `estimate` may be called from several threads at once (the CPU twin may; the GL
+  // estimator, bound to its context's thread, may not). Then the nodes of a level are split,
+  // and the nodes of a sweep's level regrouped, in parallel (TBB, in the caller's arena); the
+  // tree is the same either way. Then out_of_time too is called from several threads.
+  bool concurrent_estimates = false;
+  // Called often, never from two threads at once; may be empty.
+  std::function<void(const VariationalProgress&)> progress;
+  std::function<bool()> out_of_time;  // may be empty: no budget
   // Under a budget, about how many seconds of estimates go in one estimator call (> 0): the
   // budget is asked this often at the least. 0.25 s keeps a batch of 33 boxes one call at the
   // usual m even on llvmpipe's GL (about 5 ms a box), where chunks of 50 ms cost 15 %.

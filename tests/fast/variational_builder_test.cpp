@@ -4,6 +4,7 @@
 #include <sys/stat.h>
 #include <nlohmann/json.hpp>
 
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <chrono>
@@ -75,6 +76,53 @@ TEST(VariationalBuilder, SameTreeForAnyThreadCount) {
   tbb::task_arena(1).execute([&] { one = tree_to_json(build_variational(mesh, o, cpu_at(cpu, 8))); });
   tbb::task_arena(4).execute([&] { four = tree_to_json(build_variational(mesh, o, cpu_at(cpu, 8))); });
   EXPECT_EQ(one, four);
+}
+
+// With concurrent_estimates the nodes of a level are split, and a sweep's regroupings run, at
+// once; the tree must still be the serial build's, byte for byte, with the same counts, for
+// any number of threads, at arity 2 and 3. Merges are kept (asserted), so the parallel sweep is
+// exercised, not only the parallel split. And the searches do run at once: with two threads
+// and an estimator that takes 2 ms a call, some call starts while another is under way (a
+// serial search never has two calls in flight, so this fails without the parallel steps;
+// only that run is slowed, as the sleep adds seconds per build).
+TEST(VariationalBuilder, ConcurrentSearchGivesTheSameTree) {
+  const Mesh mesh = analytic::polygonal_torus().mesh;
+  const CpuObvEstimator cpu(mesh);
+  for (int arity : {2, 3}) {
+    VariationalOptions o;
+    o.depth = arity == 2 ? 4 : 3;
+    o.arity = arity;
+    VariationalReport serial;
+    std::string ref;
+    tbb::task_arena(2).execute([&] { ref = tree_to_json(build_variational(mesh, o, cpu_at(cpu, 8), nullptr, &serial)); });
+    ASSERT_GT(serial.merges, 0u) << "no merge kept: the parallel sweep would go untested, arity " << arity;
+    o.concurrent_estimates = true;
+    for (int threads : {1, 2, 3, 8}) {
+      std::atomic<int> in_flight{0}, most{0};
+      const ObvEstimate timed = [&](const std::vector<Obb>& boxes) {
+        const int now = ++in_flight;
+        for (int seen = most; now > seen && !most.compare_exchange_weak(seen, now);) {
+        }
+        if (threads == 2) std::this_thread::sleep_for(std::chrono::milliseconds(2));
+        std::vector<double> v = cpu.estimate(boxes, 8);
+        --in_flight;
+        return v;
+      };
+      VariationalReport report;
+      std::string got;
+      tbb::task_arena(threads).execute([&] { got = tree_to_json(build_variational(mesh, o, timed, nullptr, &report)); });
+      EXPECT_EQ(got, ref) << "arity " << arity << ", threads " << threads;
+      EXPECT_EQ(report.estimates, serial.estimates) << threads;
+      EXPECT_EQ(report.merges, serial.merges) << threads;
+      EXPECT_EQ(report.sweeps, serial.sweeps) << threads;
+      if (threads == 1) {
+        EXPECT_EQ(most, 1) << "one thread made two calls at once";
+      }
+      if (threads == 2 && arity == 2) {
+        EXPECT_GE(most, 2) << "the nodes were not searched at once";
+      }
+    }
+  }
 }
 
 // The collider margin is defined as measuring each box grown by the margin: a build with
@@ -432,6 +480,52 @@ TEST(VariationalBuilder, BudgetEndsTheSearchInTheCallUnderWay) {
     EXPECT_EQ(t.depth, 3) << k;
     EXPECT_TRUE(validate_tree(t, "budget")) << k;
     EXPECT_TRUE(check_conservative(mesh, t).ok()) << k;
+  }
+}
+
+// The same under concurrent searches. The budget is asked before every call, but by each
+// thread for itself: a call another thread had already decided on may start after the budget
+// ran out, at most one per other thread. The tree is complete, valid and conservative.
+TEST(VariationalBuilder, BudgetEndsConcurrentSearches) {
+  const Mesh mesh = analytic::polygonal_torus().mesh;
+  const CpuObvEstimator cpu(mesh);
+  VariationalOptions o;
+  o.depth = 4;
+  o.concurrent_estimates = true;
+  VariationalReport full;
+  size_t sweep_from = 0;  // boxes estimated when the first sweep reported progress
+  o.progress = [&](const VariationalProgress& p) {
+    if (p.sweep > 0 && sweep_from == 0) sweep_from = p.estimates;
+  };
+  build_variational(mesh, o, cpu_at(cpu, 8), nullptr, &full);
+  o.progress = nullptr;
+  const size_t all = full.estimates;
+  ASSERT_FALSE(full.budget_spent);
+  // Budgets in the root's search, in the levels (a quarter and half of the way), and in the
+  // sweeps (asserted).
+  ASSERT_GT(sweep_from, all / 2);
+  ASSERT_LT(sweep_from, all - 20) << "the last budget is meant to fall in a sweep";
+  for (int threads : {1, 2, 4}) {
+    for (size_t k : {size_t{1}, all / 4, all / 2, all - 20}) {
+      std::atomic<size_t> boxes{0}, calls_after{0};
+      const ObvEstimate counted = [&](const std::vector<Obb>& batch) {
+        if (boxes >= k) ++calls_after;
+        boxes += batch.size();
+        return cpu.estimate(batch, 8);
+      };
+      o.out_of_time = [&boxes, k] { return boxes >= k; };
+      VariationalReport report;
+      Tree t;
+      tbb::task_arena(threads).execute([&] { t = build_variational(mesh, o, counted, nullptr, &report); });
+      const size_t concurrency = static_cast<size_t>(threads);
+      EXPECT_LE(calls_after, concurrency - 1) << "threads " << threads << ", k " << k;
+      EXPECT_GE(boxes, k);
+      EXPECT_EQ(report.estimates, boxes);
+      EXPECT_TRUE(report.budget_spent) << k;
+      EXPECT_EQ(t.depth, 4) << k;
+      EXPECT_TRUE(validate_tree(t, "budget")) << k;
+      EXPECT_TRUE(check_conservative(mesh, t).ok()) << k;
+    }
   }
 }
 
