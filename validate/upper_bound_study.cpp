@@ -50,6 +50,7 @@ UpperBoundResult run_upper_bound_study(const UpperBoundConfig& config, const Sta
         o.depth = config.depth;
         o.lloyd_iterations = config.lloyd_iterations;
         o.max_sweeps = config.max_sweeps;
+        o.concurrent_estimates = true;  // the CPU twin may be called from several threads
         tree = build_variational(mesh, o, estimate);
       }
       TreeCheck tc{nm.name, builder};
