@@ -79,12 +79,21 @@ void say_renderer(const vobb::GlContext& gl) {
                gl.version().c_str());
 }
 
+// From this m on, `--backend auto` builds with GL where there is a GPU. Below it the CPU twin
+// is faster even beside a GPU, because it searches the nodes of a level at once and GL's search
+// stays on one thread: an NVIDIA H200 with 16 cores built dino at depth 6 in 4.3 s (twin) against
+// 12.0 s (GL) at m = 32, and 6.5 s against 12.9 s at m = 64. At m = 128 they were level (14.0 s
+// against 12.5 s, and 27.1 s each at depth 8), and from 256 GL was faster (35.2 s against
+// 21.7 s; docs/BENCHMARKS.md). With fewer cores GL gains, so the tie goes to GL.
+constexpr int kAutoGlFromM = 128;
+
 // The OBV estimator that the variational builder runs in its loop. auto: the GL estimator on an
-// EGL device (a GPU); on llvmpipe, or without a context, the CPU twin, which is faster there
-// (docs/BENCHMARKS.md) and gives the same texels in double.
+// EGL device (a GPU) from m = kAutoGlFromM; below that m, on llvmpipe, or without a context,
+// the CPU twin, which is faster there (docs/BENCHMARKS.md) and gives the same texels in double.
+// No GL context is made where the CPU twin is chosen by m.
 vobb::Status make_estimator(const vobb::Mesh& mesh, const BuildFlags& f, std::unique_ptr<vobb::GlObvEstimator>* gl,
                             std::unique_ptr<vobb::CpuObvEstimator>* cpu, vobb::ObvEstimate* estimate) {
-  if (f.backend == "gl" || f.backend == "auto") {
+  if (f.backend == "gl" || (f.backend == "auto" && f.m >= kAutoGlFromM)) {
     vobb::Status s = vobb::GlObvEstimator::create(mesh, gl, /*device_only=*/f.backend == "auto");
     if (!s && f.backend == "gl") return s;
     if (s && f.m > (*gl)->max_m())
@@ -620,7 +629,8 @@ int main(int argc, char** argv) {
       ->capture_default_str()->check(CLI::Range(2, 64));
   build->add_option("--m", bf.m, "Cubemap resolution of the OBV estimator (variational)")
       ->capture_default_str()->check(CLI::Range(1, 4096));
-  build->add_option("--backend", bf.backend, "OBV estimator: auto (GL on a GPU, else the CPU twin), gl, cpu")
+  build->add_option("--backend", bf.backend,
+                    "OBV estimator: auto (GL on a GPU from --m 128, where it was measured faster; else the CPU twin), gl, cpu")
       ->capture_default_str()->check(CLI::IsMember({"auto", "gl", "cpu"}));
   build->add_option("--lloyd", bf.lloyd, "Most Lloyd iterations per node (variational)")
       ->capture_default_str()->check(CLI::Range(0, 1000));
@@ -675,7 +685,7 @@ int main(int argc, char** argv) {
   cmp->add_option("--arity", cf.arity, "Most children per node")->capture_default_str()->check(CLI::Range(2, 64));
   cmp->add_option("--m", cf.m, "Cubemap resolution of the variational builder's estimator")
       ->capture_default_str()->check(CLI::Range(1, 4096));
-  cmp->add_option("--backend", cf.backend, "auto, gl or cpu")->capture_default_str()->check(CLI::IsMember({"auto", "gl", "cpu"}));
+  cmp->add_option("--backend", cf.backend, "auto (as for build), gl or cpu")->capture_default_str()->check(CLI::IsMember({"auto", "gl", "cpu"}));
   cmp->add_option("--lloyd", cf.lloyd, "Most Lloyd iterations per node")->capture_default_str()->check(CLI::Range(0, 1000));
   cmp->add_option("--seed", cf.seed, "Seed of the orientation search's random starts")
       ->capture_default_str()->check(vobb::app::kSeed);
