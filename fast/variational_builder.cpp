@@ -101,14 +101,13 @@ std::array<Vec3, 3> rotate(const std::array<Vec3, 3>& axes, int about, double an
 constexpr int kAdjustLevels = 4;
 
 // What the splitters of one build share. With concurrent_estimates, several splitters (one
-// per thread) search nodes at once: the counts add up, the time budget once spent is spent for
-// all, and the pace under a budget is the level's, as the wall clock sees it.
+// per thread) search nodes at once: the counts add up, and the time budget once spent is
+// spent for all.
 struct SearchShared {
   std::atomic<size_t> estimates{0};
   std::atomic<size_t> adjustments{0};
   std::atomic<size_t> merges{0};
   std::atomic<bool> spent{false};  // a stopped() has returned true
-  std::atomic<double> pace{0};     // seconds per box of the last chunk under a budget; 0: unknown
 };
 
 class NodeSplitter {
@@ -125,8 +124,10 @@ class NodeSplitter {
   };
 
   // Level of the boxes being fitted: the orientation search tries more starts near the root.
-  // (The pace is the builder's to forget when the level changes: SearchShared.)
   void set_level(int level) { level_ = level; }
+  // Boxes of another level follow: the pace measured so far is forgotten. The builder calls it
+  // on every thread's splitter, between parallel steps.
+  void forget_pace() { pace_ = 0; }
 
   // The root: one group, its axes optimised like any child's.
   std::array<Vec3, 3> optimise_single(const std::vector<int32_t>& faces) {
@@ -253,14 +254,14 @@ class NodeSplitter {
     };
     std::vector<double> out(in.size(), std::numeric_limits<double>::infinity());
     for (size_t i = 0; i < in.size() && !stopped();) {
-      const size_t n = std::min(chunk_at(shared_->pace, in.size() - i), in.size() - i);
+      const size_t n = std::min(chunk_at(pace_, in.size() - i), in.size() - i);
       const auto t0 = std::chrono::steady_clock::now();
       const std::vector<double> v = call(std::vector<Obb>(in.begin() + i, in.begin() + i + n));
       std::copy(v.begin(), v.end(), out.begin() + i);
       shared_->estimates += n;
       i += n;
       // Never 0 once measured (a call too quick for the clock counts as 1 ns a box).
-      shared_->pace = std::max(1e-9, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() / n);
+      pace_ = std::max(1e-9, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() / n);
     }
     return out;
   }
@@ -268,8 +269,7 @@ class NodeSplitter {
  private:
   // One estimator call. When nodes are searched in parallel, the estimator's own parallel work
   // is isolated: a thread waiting for its batch helps with that batch only, and does not start
-  // another node's search on top of this one (which could nest a search per node on one stack,
-  // and would hold this node back).
+  // another node's search on top of this one (Builder::splitters_).
   std::vector<double> call(const std::vector<Obb>& boxes) {
     if (!options_.concurrent_estimates) return estimate_(boxes);
     std::vector<double> v;
@@ -507,6 +507,9 @@ class NodeSplitter {
   const ObvEstimate& estimate_;
   SearchShared* shared_;
   int level_ = 0;                // level of the boxes being fitted
+  // Seconds per box of this splitter's last chunk under a budget; 0: unknown. Each thread's
+  // own: the nodes searched at once differ in size, and a chunk's length is this thread's.
+  double pace_ = 0;
   std::vector<int32_t> local_;   // mesh face -> index in the node being partitioned, else -1
 };
 
@@ -568,7 +571,7 @@ class Builder {
     VariationalProgress progress;
     progress.level = level;
     progress.nodes = parents.size();
-    shared_.pace = 0;  // boxes of another level take another time
+    forget_pace();  // boxes of another level take another time
     std::mutex progress_mutex;
     // Each node's split depends on its faces alone (the orientation starts are seeded by the
     // group), so the nodes may be split in any order, or at once: the children are appended in
@@ -630,7 +633,7 @@ class Builder {
     const int d = depth(st);
     std::vector<Obb> boxes;
     for (size_t i = 0; i < st.nodes.size(); ++i) boxes.push_back(tight_box(mesh_, st.nodes[i].faces, st.axes[i]));
-    shared_.pace = 0;  // the root first, then ever smaller boxes
+    forget_pace();  // the root first, then ever smaller boxes
     const std::vector<double> v = splitters_.local().measure(boxes);
     double e = 0;
     for (size_t i = 0; i < st.nodes.size(); ++i) {
@@ -650,7 +653,7 @@ class Builder {
       std::vector<int32_t> grand;
       for (const TreeNode& n : st->nodes)
         if (n.level == l - 1 && n.children.size() >= 2) grand.push_back(n.id);
-      shared_.pace = 0;
+      forget_pace();
       VariationalProgress progress;
       progress.level = l;
       progress.sweep = st->sweeps + 1;
@@ -793,6 +796,10 @@ class Builder {
     }
   }
 
+  void forget_pace() {
+    for (NodeSplitter& splitter : splitters_) splitter.forget_pace();
+  }
+
   // Whether the time budget is spent; safe to ask from the parallel steps.
   bool budget_gone(const VariationalState& st) {
     if (st.budget_spent) return true;
@@ -818,8 +825,11 @@ class Builder {
   const VariationalOptions& options_;
   const std::vector<std::array<int32_t, 3>> adjacency_;
   SearchShared shared_;
-  // One splitter per thread: a splitter's scratch (the face-local ids) is for one search at a
-  // time, and a thread runs one search at a time (NodeSplitter::call isolates its waits).
+  // One splitter per thread, each with its own scratch and pace. A thread runs one search at a
+  // time: NodeSplitter::call isolates its waits, so that a thread waiting for its batch does not
+  // start another node's search on its stack (which would hold the first node back and deepen
+  // the stack by a search per node; the scratch would survive it, as nodes of a level have
+  // disjoint faces and partition() restores its entries).
   tbb::enumerable_thread_specific<NodeSplitter> splitters_;
 };
 

@@ -114,9 +114,13 @@ struct VariationalOptions {
   // Whether `estimate` may be called from several threads at once (the CPU twin may; the GL
   // estimator, bound to its context's thread, may not). Then the nodes of a level are split,
   // and the nodes of a sweep's level regrouped, in parallel (TBB, in the caller's arena); the
-  // tree is the same either way. Then out_of_time too is called from several threads.
+  // tree is the same either way. Then out_of_time and progress are called from TBB's threads
+  // too, and the builder's own arithmetic runs there: like the CPU twin's, it needs the
+  // default floating-point environment (cpu_estimator.h).
   bool concurrent_estimates = false;
-  // Called often, never from two threads at once; may be empty.
+  // Called often, from any thread the search runs on but never from two at once (under a
+  // lock: it must not wait for TBB work, which could be another node's search on its thread);
+  // may be empty. With concurrent searches, `iteration` is that of the node that reported.
   std::function<void(const VariationalProgress&)> progress;
   std::function<bool()> out_of_time;  // may be empty: no budget
   // Under a budget, about how many seconds of estimates go in one estimator call (> 0): the
