@@ -82,9 +82,10 @@ void say_renderer(const vobb::GlContext& gl) {
 // From this m on, `--backend auto` builds with GL where there is a GPU. Below it the CPU twin
 // is faster even beside a GPU, because it searches the nodes of a level at once and GL's search
 // stays on one thread: an NVIDIA H200 with 16 cores built dino at depth 6 in 4.3 s (twin) against
-// 12.0 s (GL) at m = 32, and 6.5 s against 12.9 s at m = 64. At m = 128 they were level (14.0 s
-// against 12.5 s, and 27.1 s each at depth 8), and from 256 GL was faster (35.2 s against
-// 21.7 s; docs/BENCHMARKS.md). With fewer cores GL gains, so the tie goes to GL.
+// 12.0 s (GL) at m = 32, and 6.5 s against 12.9 s at m = 64. At m = 128 they were within 12 %
+// either way (twin 11.9 s, GL 13.3 s; 27.1 s each at depth 8 before the twin skipped texels),
+// and at 256 GL was faster (28.0 s against 21.0 s; docs/BENCHMARKS.md). With fewer cores the
+// twin slows and GL hardly does, so the near-tie at 128 goes to GL.
 constexpr int kAutoGlFromM = 128;
 
 // The OBV estimator that the variational builder runs in its loop. auto: the GL estimator on an
