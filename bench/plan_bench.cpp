@@ -4,9 +4,9 @@
 // boxes have a face taken as passing near the centre (centre_near_surface, which doubles the
 // bound), the median of resolution_bound / box volume at m, and microseconds per plan() and
 // per CPU twin estimate (plan and texel sums, one thread). Then the texel sums alone, over the
-// same plans: testing every texel of a span, against skipping the runs two edges provably
-// reject (sum_texel_hits' default), with the share of texels each tests; the sums must be the
-// same doubles, or the run fails.
+// same plans: testing every texel of a span, against testing only the columns where the
+// face's three edge dots may all lie on one side (sum_texel_hits' default), with the share of
+// texels that tests; the sums must be the same doubles, or the run fails.
 // Usage: vobb-bench-plan MESH [--m M] [--boxes N] [--repeat R] [--skip-from W]
 //   W: the row width from which the skipping runs (default kSkipFromWidth), to compare widths
 #include <algorithm>

@@ -33,29 +33,25 @@ double CpuObvEstimator::estimate(const Obb& box, int m) const {
   return value;
 }
 
-namespace {
-
 // Which texels of one span row may hit the face: for each side sigma = +1, -1 of the edges,
 // the run of columns where sigma f_k >= -tie_k for all three edges k, f_k the row's computed
-// dot with edge k (a superset of it; empty when lo > hi).
+// dot with edge k (cpu_estimator.h).
 // Why every hit lies in one of the two runs: texel_hit_dots, whose edge tests are exact
 // (exact_edge_side), counts a hit only where all three edges give one side sigma; the exact
 // dot E_k then has sigma E_k >= 0 (= 0 where a tie rule gives the side), and edge_tie bounds
 // |f_k - E_k| for any evaluation of the dot as a 3-term dot product, so sigma f_k >= -tie_k.
-// Why the runs are found by testing a few columns: f_k(j) = row_k + v_j E_k is monotone in j
+// Why the runs are found by testing a few columns: f_k(j) = row_k + v_j eb_k is monotone in j
 // (v_j = texel_center(j, m) is, and rounding is monotone), so {sigma f_k >= -tie_k} is a run
 // at one end of the row (or all of it, or none). Its inner end starts from a guess (solving
 // the condition in real arithmetic, with a reciprocal: it rounds) and moves until the
 // condition fails just outside it; so the guess decides only how many columns are tested,
 // never whether a hit is missed. The runs are intersected over k.
-struct Run {
-  int lo, hi;
-};
+// Each search stays within the row: a wrong guess costs tests (a few per column at worst), never a hit.
 void candidate_runs(const double* row, const double* eb, const double* inv_eb, const double* tie, int j0, int j1,
-                    int m, Run* runs) {
+                    int m, TexelRun* runs, int guess_shift) {
   for (int side = 0; side < 2; ++side) {
     const double sigma = side == 0 ? 1.0 : -1.0;
-    Run& r = runs[side];
+    TexelRun& r = runs[side];
     r = {j0, j1};
     for (int k = 0; k < 3 && r.lo <= r.hi; ++k) {
       auto holds = [&](int j) { return sigma * (row[k] + texel_center(j, m) * eb[k]) >= -tie[k]; };
@@ -65,7 +61,7 @@ void candidate_runs(const double* row, const double* eb, const double* inv_eb, c
       }
       // The column where f_k = -sigma tie_k, in real arithmetic: v = -1 + (2 j + 1) / m.
       const double v = (-sigma * tie[k] - row[k]) * inv_eb[k];
-      double guess = ((v + 1) * m - 1) / 2;
+      double guess = ((v + 1) * m - 1) / 2 + guess_shift;
       if (!(guess == guess)) guess = sigma * eb[k] > 0 ? j0 : j1;  // NaN: no guess, the whole row
       const int g = static_cast<int>(std::clamp(std::floor(guess), j0 - 1.0, j1 + 1.0));
       if (sigma * eb[k] > 0) {  // sigma f_k rises with j: the run is [a, j1]
@@ -82,8 +78,6 @@ void candidate_runs(const double* row, const double* eb, const double* inv_eb, c
     }
   }
 }
-
-}  // namespace
 
 double sum_texel_hits(const BoxPlan& plan, int m, int skip_from_width, size_t* texels_tested) {
   double sum = 0;
@@ -122,11 +116,11 @@ double sum_texel_hits(const BoxPlan& plan, int m, int skip_from_width, size_t* t
       }
       // Only the columns of the two candidate runs, in column order as above (once each where
       // they overlap), so the sum adds the same hits in the same order.
-      Run runs[2];
+      TexelRun runs[2];
       candidate_runs(row, eb, inv_eb, t.edge_tie, span.j0, span.j1, m, runs);
       if (runs[1].lo < runs[0].lo) std::swap(runs[0], runs[1]);
       int j = span.j0;
-      for (const Run& r : runs)
+      for (const TexelRun& r : runs)
         for (j = std::max(j, r.lo); j <= r.hi; ++j) visit(j);
     }
   }

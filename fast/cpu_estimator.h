@@ -55,6 +55,18 @@ inline constexpr int kSkipFromWidth = 16;
 double sum_texel_hits(const BoxPlan& plan, int m, int skip_from_width = kSkipFromWidth,
                       size_t* texels_tested = nullptr);
 
+// Which columns of one span row may hit the face (cpu_estimator.cpp says why), for
+// sum_texel_hits and its tests: for each side sigma = +1 (runs[0]) and -1 (runs[1]), a run
+// [lo, hi] of [j0, j1] (empty: lo > hi) holding every column j where
+// sigma (row[k] + texel_center(j, m) eb[k]) >= -tie[k] for k = 0, 1, 2. inv_eb[k] is 1 / eb[k]
+// (0 where eb[k] is 0); it only feeds the starting guess, as does `guess_shift` (columns added
+// to every guess, for the tests: a wrong guess costs tests, not hits).
+struct TexelRun {
+  int lo, hi;
+};
+void candidate_runs(const double* row, const double* eb, const double* inv_eb, const double* tie, int j0, int j1,
+                    int m, TexelRun* runs, int guess_shift = 0);
+
 // The CPU twin's estimate from a plan: 0 for a flat plan, else
 // scale * (constant + 4 / (3 m^2) * sum_texel_hits). The GL estimator evaluates the plans that
 // float cannot hold with it, so that theirs are the twin's values bit for bit.

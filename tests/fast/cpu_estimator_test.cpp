@@ -139,17 +139,17 @@ TEST(CpuEstimator, CullingChangesNothingButTheWork) {
   EXPECT_LT(round_culled + round_all, 1e-6 * volume(b) * 4.0 / (3.0 * 16 * 16));
 }
 
-// A batch is estimated in parallel, each box by one thread exactly as alone: its values must be
-// the single-box values bit for bit (==, no tolerance: the same operations in the same order),
-// under one thread and under several, and faces_used is the batch's total.
-// Rows of a span skip the texels two edges provably reject (sum_texel_hits). The hits, their
-// values and their order do not change, so the sum is the same double, compared with ==:
-// skipping in every row, in rows of 8 or more (the default), and in none. The cases include
-// rays through vertices and along edges (the octahedron centred in aligned boxes at odd m;
-// bipyramids whose apexes lie on a texel ray), where edge tests fall within edge_tie and are
-// decided exactly; faces seen nearly edge-on (thin boxes); and generic turned boxes, up to
-// m = 256, where rows are wide. The skipping must also skip (asserted), or the check would be
-// empty.
+// Rows of a span test only the columns where the face's edge dots may all lie on one side
+// (sum_texel_hits). The hits, their values and their order do not change, so the sum is the
+// same double, compared with ==: skipping in every row (width 1), in rows of kSkipFromWidth or
+// more (the default), and in none. The cases include rays through vertices and along edges (the
+// octahedron centred in aligned boxes at odd m; bipyramids whose apexes lie on a texel ray),
+// where edge tests fall within edge_tie and are decided exactly; tiny tetrahedra on a texel
+// ray, whose three edge dots all fall within edge_tie at a real hit, so that both sides' runs
+// hold its column (a column visited twice would add the hit twice); faces seen nearly edge-on
+// (thin boxes); and generic turned boxes, up to m = 264, where rows are wide. The skipping
+// must also skip, at width 1 and at the default, or the check would be empty; how much it
+// skips is CandidateRunsHoldEveryPossibleColumn's (the runs are exactly the possible columns).
 TEST(CpuEstimator, SkippingRejectedTexelsChangesNoBit) {
   std::vector<std::pair<Mesh, std::vector<Obb>>> cases;
   std::mt19937 rng(7);
@@ -169,7 +169,7 @@ TEST(CpuEstimator, SkippingRejectedTexelsChangesNoBit) {
   {
     std::vector<Obb> boxes;
     for (int i = 0; i < 12; ++i) {
-      const double thin = i % 3 == 0 ? 1e-3 : 1.0;  // faces seen nearly edge-on
+      const double thin = i % 3 == 0 ? 1e-8 : 1.0;  // faces seen nearly edge-on
       boxes.push_back(turned(Vec3(2 * uni(rng), 2 * uni(rng), 0.3 * uni(rng)), Vec3(0.8, 0.6 * thin, 0.5)));
     }
     cases.emplace_back(analytic::polygonal_torus().mesh, boxes);
@@ -186,7 +186,15 @@ TEST(CpuEstimator, SkippingRejectedTexelsChangesNoBit) {
   const Vec3 on_ray = cubemap_direction(0, texel_center(5, 8), texel_center(2, 8));
   for (unsigned seed = 0; seed < 10; ++seed)
     cases.emplace_back(test::bipyramid_on_ray(on_ray, 48, seed), std::vector<Obb>{aabox(Vec3::Zero(), Vec3(1, 1, 1))});
-  size_t tested_all = 0, tested_skipping = 0, plans = 0;
+  // Tiny tetrahedra (1e-9 to 1e-12) at 0.3 along the ray of a texel of m = 8 (so of m = 24 too).
+  for (int c = 0; c < 12; ++c) {
+    const int face = c % 6, ti = (3 * c) % 8, tj = (5 * c + 1) % 8;
+    const Vec3 at = 0.3 * cubemap_direction(face, texel_center(ti, 8), texel_center(tj, 8)).normalized();
+    Mesh tiny = analytic::tetrahedron(std::pow(10.0, -9 - c % 4)).mesh;
+    for (Vec3& v : tiny.vertices) v += at;
+    cases.emplace_back(tiny, std::vector<Obb>{aabox(Vec3::Zero(), Vec3(1, 1, 1))});
+  }
+  size_t tested_all = 0, tested_skipping = 0, tested_default = 0, plans = 0;
   for (const auto& [mesh, boxes] : cases) {
     const BoxPlanner planner(mesh);
     for (const Obb& box : boxes)
@@ -202,14 +210,69 @@ TEST(CpuEstimator, SkippingRejectedTexelsChangesNoBit) {
         EXPECT_EQ(one, all) << "m " << m << ", plans so far " << plans;
         EXPECT_EQ(by_default, all) << "m " << m << ", plans so far " << plans;
         EXPECT_LE(n_one, n_all);
+        EXPECT_LE(n_default, n_all);
         tested_all += n_all;
         tested_skipping += n_one;
+        tested_default += n_default;
       }
   }
   ASSERT_GT(plans, 50u);
-  // Typically half a span's texels lie outside the face's wedge of two edges.
-  EXPECT_LT(tested_skipping, tested_all * 3 / 4) << tested_skipping << " of " << tested_all << " tested";
+  EXPECT_LT(tested_skipping, tested_all);
+  EXPECT_LT(tested_default, tested_all);
 }
+
+// candidate_runs against the sets it must hold, found by testing every column: each run holds
+// every column of its side (a run may be wider, never narrower). Rows are random and adversarial
+// (eb zero, subnormal so that 1 / eb overflows, tiny against row, huge; row huge), with the
+// guess shifted by up to a whole row either way, which the searches must recover from.
+TEST(CpuEstimator, CandidateRunsHoldEveryPossibleColumn) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> uni(-1.0, 1.0);
+  const double scales[] = {0.0, 1e-310, 1e-300, 1e-17, 1e-3, 1.0, 1e3, 1e300};
+  size_t nonempty = 0, exact = 0, rows = 0;
+  for (int trial = 0; trial < 20000; ++trial) {
+    const int m = 1 + static_cast<int>(rng() % 300);
+    int j0 = static_cast<int>(rng() % m), j1 = static_cast<int>(rng() % m);
+    if (j0 > j1) std::swap(j0, j1);
+    double row[3], eb[3], inv_eb[3], tie[3];
+    for (int k = 0; k < 3; ++k) {
+      eb[k] = uni(rng) * scales[rng() % 8];
+      row[k] = uni(rng) * scales[1 + rng() % 7];
+      tie[k] = std::abs(uni(rng)) * 1e-3 * (std::abs(row[k]) + std::abs(eb[k]));
+      inv_eb[k] = eb[k] != 0 ? 1 / eb[k] : 0;
+    }
+    const int shift = trial % 3 == 0 ? 0 : static_cast<int>(rng() % (2 * m + 1)) - m;
+    TexelRun runs[2];
+    candidate_runs(row, eb, inv_eb, tie, j0, j1, m, runs, shift);
+    ++rows;
+    for (int side = 0; side < 2; ++side) {
+      const double sigma = side == 0 ? 1.0 : -1.0;
+      int lo = j1 + 1, hi = j0 - 1;  // the columns that satisfy all three, tested one by one
+      for (int j = j0; j <= j1; ++j) {
+        bool all = true;
+        for (int k = 0; k < 3; ++k) all = all && sigma * (row[k] + texel_center(j, m) * eb[k]) >= -tie[k];
+        if (all) lo = std::min(lo, j), hi = std::max(hi, j);
+      }
+      if (lo <= hi) {
+        ++nonempty;
+        ASSERT_LE(runs[side].lo, lo) << "trial " << trial << ", side " << side;
+        ASSERT_GE(runs[side].hi, hi) << "trial " << trial << ", side " << side;
+        exact += runs[side].lo == lo && runs[side].hi == hi;
+      } else {
+        EXPECT_GT(runs[side].lo, runs[side].hi) << "trial " << trial << ": a run where no column can hit";
+      }
+      ASSERT_GE(runs[side].lo, j0);
+      ASSERT_LE(runs[side].hi, j1);
+    }
+  }
+  ASSERT_GT(nonempty, rows / 4);
+  // Each condition is a run at one end of the row, so the searches find the set exactly.
+  EXPECT_EQ(exact, nonempty);
+}
+
+// A batch is estimated in parallel, each box by one thread exactly as alone: its values must be
+// the single-box values bit for bit (==, no tolerance: the same operations in the same order),
+// under one thread and under several, and faces_used is the batch's total.
 
 TEST(CpuEstimator, BatchEqualsSingleBoxesForAnyThreadCount) {
   const Mesh m = analytic::polygonal_torus().mesh;
