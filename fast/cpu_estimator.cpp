@@ -45,8 +45,8 @@ double CpuObvEstimator::estimate(const Obb& box, int m) const {
 // at one end of the row (or all of it, or none). Its inner end starts from a guess (solving
 // the condition in real arithmetic, with a reciprocal: it rounds) and moves until the
 // condition fails just outside it; so the guess decides only how many columns are tested,
-// never whether a hit is missed. The runs are intersected over k.
-// Each search stays within the row: a wrong guess costs tests (a few per column at worst), never a hit.
+// never whether a hit is missed. The runs are intersected over k. Each search stays within the
+// row: a wrong guess costs tests (a few per column at worst), never a hit.
 void candidate_runs(const double* row, const double* eb, const double* inv_eb, const double* tie, int j0, int j1,
                     int m, TexelRun* runs, int guess_shift) {
   for (int side = 0; side < 2; ++side) {

@@ -669,7 +669,7 @@ class Builder {
         if (budget_gone(*st)) return;
         NodeSplitter& splitter = splitters_.local();
         splitter.set_level(l);
-        gains[i] = regroup(*st, grand[i], &splitter);
+        gains[i] = regroup(st, grand[i], &splitter);
         std::lock_guard<std::mutex> lock(progress_mutex);
         faces_done += st->nodes[grand[i]].faces.size();
         ++progress.node;
@@ -688,8 +688,7 @@ class Builder {
   // Re-groups the grandchildren of node g among its children; returns the drop in the
   // estimated sum of OBV of its children.
   // Reads st's other nodes only where no other regrouping of the level writes (see sweep()).
-  double regroup(VariationalState& state, int32_t g, NodeSplitter* splitter) {
-    VariationalState* st = &state;
+  double regroup(VariationalState* st, int32_t g, NodeSplitter* splitter) {
     std::vector<int32_t> parents;
     for (int32_t c : st->nodes[g].children)
       if (!st->nodes[c].children.empty()) parents.push_back(c);
@@ -801,11 +800,7 @@ class Builder {
   }
 
   // Whether the time budget is spent; safe to ask from the parallel steps.
-  bool budget_gone(const VariationalState& st) {
-    if (st.budget_spent) return true;
-    if (!shared_.spent && options_.out_of_time && options_.out_of_time()) shared_.spent = true;
-    return shared_.spent;
-  }
+  bool budget_gone(const VariationalState& st) { return st.budget_spent || splitters_.local().stopped(); }
 
   // f(0) ... f(n - 1): at once where the estimator may be called from several threads, else in
   // order on this thread (the GL estimator's context is this thread's).
