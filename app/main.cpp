@@ -630,8 +630,9 @@ int main(int argc, char** argv) {
       ->capture_default_str()->check(CLI::Range(2, 64));
   build->add_option("--m", bf.m, "Cubemap resolution of the OBV estimator (variational)")
       ->capture_default_str()->check(CLI::Range(1, 4096));
-  build->add_option("--backend", bf.backend,
-                    "OBV estimator: auto (GL on a GPU from --m 128, where it was measured faster; else the CPU twin), gl, cpu")
+  const std::string backend_help = "OBV estimator: auto (GL on a GPU from --m " + std::to_string(kAutoGlFromM) +
+                                   ", where it was measured faster; else the CPU twin), gl, cpu";
+  build->add_option("--backend", bf.backend, backend_help)
       ->capture_default_str()->check(CLI::IsMember({"auto", "gl", "cpu"}));
   build->add_option("--lloyd", bf.lloyd, "Most Lloyd iterations per node (variational)")
       ->capture_default_str()->check(CLI::Range(0, 1000));

@@ -24,9 +24,9 @@ class CpuObvEstimator {
   // are estimated in parallel (TBB; as many threads as the caller's arena allows), each by one
   // thread exactly as alone, so the values do not depend on the number of threads.
   // May be called on one estimator from several threads at once (each thread plans into its
-  // own scratch). Not to be called under a
-  // changed floating-point environment (a CGAL rounding scope): TBB's workers keep the one
-  // captured when their arena started, so only the default gives the single-box values.
+  // own scratch). Not to be called under a changed floating-point environment (a CGAL rounding
+  // scope): TBB's workers keep the one captured when their arena started, so only the default
+  // gives the single-box values.
   std::vector<double> estimate(const std::vector<Obb>& boxes, int m) const;
   double estimate(const Obb& box, int m) const;
   // For the culling ablation benchmark: cast against every face.

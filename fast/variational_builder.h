@@ -46,19 +46,18 @@
 // options and estimator values give the same tree, whether the nodes of a level are searched
 // one after another on the calling thread or at once (concurrent_estimates), and whether the
 // estimator evaluates a batch in parallel, as the CPU twin does (its values do not depend on
-// the thread count). The build state after each
-// level and each sweep can be saved (checkpoint) and a build resumed from it gives the same
-// tree as an uninterrupted one.
+// the thread count). The build state after each level and each sweep can be saved
+// (checkpoint) and a build resumed from it gives the same tree as an uninterrupted one.
 // A time budget ends the search early. It is asked before every call to the estimator: under a
 // budget a batch is estimated in chunks of about budget_check_seconds at the pace measured at
-// the current level (one box per thread until that pace is known), so the search ends within the call
-// under way, not after a node's whole search. The node being searched (each of them, with
-// concurrent_estimates) keeps the best complete state found (its start if none), the nodes
-// not yet split get the baseline split, and no
-// further sweep starts; a regrouping move whose evaluation it cuts short is not applied (one
-// evaluated in full before it may be). A state saved after the budget was spent keeps it
-// spent when resumed. A budget that is not reached changes nothing: the chunks' estimates are
-// the whole batch's, so the tree is the unbudgeted one.
+// the current level (one box per thread until that pace is known), so the search ends within
+// the call under way, not after a node's whole search. The node being searched (each of them,
+// with concurrent_estimates) keeps the best complete state found (its start if none), the
+// nodes not yet split get the baseline split, and no further sweep starts; a regrouping move
+// whose evaluation it cuts short is not applied (one evaluated in full before it may be). A
+// state saved after the budget was spent keeps it spent when resumed. A budget that is not
+// reached changes nothing: the chunks' estimates are the whole batch's, so the tree is the
+// unbudgeted one.
 #pragma once
 
 #include <array>
