@@ -12,11 +12,13 @@
 #include <cerrno>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <iterator>
 #include <limits>
 #include <map>
 #include <mutex>
 #include <numeric>
+#include <optional>
 #include <queue>
 #include <random>
 #include <set>
@@ -107,6 +109,7 @@ struct SearchShared {
   std::atomic<size_t> estimates{0};
   std::atomic<size_t> adjustments{0};
   std::atomic<size_t> merges{0};
+  std::atomic<size_t> regroups_skipped{0};
   std::atomic<bool> spent{false};  // a stopped() has returned true
 };
 
@@ -548,6 +551,7 @@ class Builder {
     report->estimates = shared_.estimates;
     report->adjustments = shared_.adjustments;
     report->merges = shared_.merges;
+    report->regroups_skipped = shared_.regroups_skipped;
   }
 
   void start(VariationalState* st) {
@@ -649,6 +653,9 @@ class Builder {
   double sweep(VariationalState* st) {
     const int d = depth(*st);
     double gain = 0;
+    // Sized here, on this thread: the parallel regroupings of a level each write only their
+    // own slot.
+    settled_.resize(st->nodes.size());
     for (int l = d - 1; l >= 1 && !out_of_time(st); --l) {
       std::vector<int32_t> grand;
       for (const TreeNode& n : st->nodes)
@@ -693,6 +700,13 @@ class Builder {
     for (int32_t c : st->nodes[g].children)
       if (!st->nodes[c].children.empty()) parents.push_back(c);
     if (parents.size() < 2) return 0;
+    // A regrouping is a function of its inputs (regroup_inputs): where they are those with
+    // which it last ended by finding no move, it would find none again, so it is not run.
+    if (options_.skip_settled && settled_[g] && *settled_[g] == regroup_inputs(*st, g)) {
+      ++shared_.regroups_skipped;
+      return 0;
+    }
+    settled_[g].reset();
     std::vector<Obb> boxes;
     for (int32_t p : parents) boxes.push_back(tight_box(mesh_, st->nodes[p].faces, st->axes[p]));
     const std::vector<double> v = splitter->measure(boxes);
@@ -773,7 +787,14 @@ class Builder {
         const double gain = before - s.sum();
         if (gain > before * 1e-3 && gain > best_gain) best_gain = gain, best = &mv, best_state = s;
       }
-      if (!best) break;
+      if (!best) {
+        // No move of this pass gains: a regrouping started from this state would find the
+        // same in its first pass (the parents' boxes measured afresh are the boxes measured
+        // here: the same faces, axes and estimator values). Not so for a pass that the budget
+        // cut short.
+        if (!budget_gone(*st)) settled_[g] = regroup_inputs(*st, g);
+        break;
+      }
       apply(st, *best, best_state);
       cur[best->a] = best_state.obv[0];
       cur[best->b] = best_state.obv[1];
@@ -781,6 +802,29 @@ class Builder {
       ++shared_.merges;
     }
     return total;
+  }
+
+  // What regroup(g) reads, flattened: g's children in order, and per child its axes (their
+  // bits) and its units in order, each with its faces. (A child's own faces are its units'.)
+  // The level, and with it the orientation search's starts, is g's, which no move changes.
+  std::vector<uint64_t> regroup_inputs(const VariationalState& st, int32_t g) const {
+    std::vector<uint64_t> in;
+    for (int32_t c : st.nodes[g].children) {
+      in.push_back(static_cast<uint64_t>(c));
+      for (const Vec3& a : st.axes[c])
+        for (int k = 0; k < 3; ++k) {
+          uint64_t bits;
+          std::memcpy(&bits, &a[k], sizeof bits);
+          in.push_back(bits);
+        }
+      in.push_back(st.nodes[c].children.size());
+      for (int32_t u : st.nodes[c].children) {
+        in.push_back(static_cast<uint64_t>(u));
+        in.push_back(st.nodes[u].faces.size());
+        in.insert(in.end(), st.nodes[u].faces.begin(), st.nodes[u].faces.end());
+      }
+    }
+    return in;
   }
 
   void apply(VariationalState* st, const Move& mv, const NodeSplitter::State& s) {
@@ -826,6 +870,10 @@ class Builder {
   // the stack by a search per node; the scratch would survive it, as nodes of a level have
   // disjoint faces and partition() restores its entries).
   tbb::enumerable_thread_specific<NodeSplitter> splitters_;
+  // Per node g whose regrouping last ended by finding no move: the inputs it ended with
+  // (regroup_inputs). Not saved in a checkpoint: a resumed build runs those regroupings again
+  // and finds no move again, the same tree. About one copy of the mesh's face ids per level.
+  std::vector<std::optional<std::vector<uint64_t>>> settled_;
 };
 
 }  // namespace

@@ -108,6 +108,10 @@ struct VariationalOptions {
   bool adjust = false;       // the adjustment step (see above: measured to hurt, so off)
   bool merge = true;         // ablation: the bottom-up merging sweeps
   int max_sweeps = 3;
+  // A regrouping whose inputs are those with which it last found no move is not run again
+  // (VariationalReport::regroups_skipped); false runs every one, to check that the tree is the
+  // same (test SkippingSettledRegroupingsChangesNothing).
+  bool skip_settled = true;
   uint64_t seed = 1;         // the random starts of the orientation search
   double margin = 0;         // collider margin, world units, finite and >= 0 (see above)
   // Whether `estimate` may be called from several threads at once (the CPU twin may; the GL
@@ -136,6 +140,9 @@ struct VariationalReport {
   size_t merges = 0;          // unit swaps or moves kept by the sweeps
   size_t adjustments = 0;     // adjusted splits kept
   size_t estimates = 0;       // boxes estimated
+  // Regroupings of a sweep not run: their inputs were those with which they last found no
+  // move (see build_variational), so they would find none again.
+  size_t regroups_skipped = 0;
 };
 
 // Precondition: the mesh is a solid. Fills every field of the tree but mesh_sha256. `resume`,
