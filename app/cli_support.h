@@ -2,17 +2,23 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <fcntl.h>
 #include <nlohmann/json.hpp>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
+#include <cerrno>
 #include <filesystem>
 #include <string>
 #include <vector>
 
+#include "common/io/mesh_io.h"
 #include "common/status.h"
+#include "common/text_util.h"
 
 namespace vobb::app {
 
@@ -63,6 +69,52 @@ inline Status check_output_is_not_input(const std::string& option, const std::st
       return Status::error(option + " " + output + ": is the input file " + in + "; choose another output");
   }
   return Status::ok();
+}
+
+// An output that cannot be written is refused before the run, not after hours of it: the
+// folder that will hold it (the link's target's, for a link) must exist and take a new file,
+// which is how the output is written (common/atomic_file.h); a folder is no output. A device or
+// pipe is written in place, and a full disk shows only when writing: the run then ends with
+// could_not_finish.
+inline Status check_output_is_writable(const std::string& option, const std::string& output) {
+  namespace fs = std::filesystem;
+  if (output.empty()) return Status::ok();
+  std::error_code ec;
+  fs::path target(output);
+  const fs::file_status st = fs::status(target, ec);
+  if (fs::is_directory(st)) return Status::error(option + " " + output + ": is a folder; name a file");
+  if (fs::exists(st) && !fs::is_regular_file(st)) return Status::ok();
+  if (fs::exists(st)) {
+    const fs::path real = fs::canonical(target, ec);
+    if (!ec) target = real;
+  }
+  fs::path dir = target.parent_path();
+  if (dir.empty()) dir = ".";
+  if (!fs::is_directory(dir, ec)) return Status::error(option + " " + output + ": no such folder " + dir.string());
+  const fs::path probe = dir / (".vobb-" + std::to_string(::getpid()) + "-probe.tmp");
+  const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+  if (fd < 0) return Status::error(option + " " + output + ": cannot write in " + dir.string() + ": " + std::strerror(errno));
+  ::close(fd);
+  ::unlink(probe.c_str());
+  return Status::ok();
+}
+
+// The run could not finish for a reason that is not its input (its output could be written
+// when it started, and then could not: a full disk): one line on stderr, exit code 3.
+inline int could_not_finish(const Status& s) {
+  std::fprintf(stderr, "vobb: %s\n", one_line(s.message()).c_str());
+  return kExitCouldNotFinish;
+}
+
+// Every command that reads a mesh says on stderr when it was read in single precision
+// (through assimp: float32 coordinates, DESIGN §3), since its results are then those of the
+// rounded mesh, not of the numbers in the file.
+inline void note_precision(const std::string& path, const LoadedMesh& mesh) {
+  if (!mesh.single_precision) return;
+  std::fprintf(stderr,
+               "vobb: %s: read in single precision through assimp (%s): the results are for its coordinates rounded "
+               "to float32; OFF, OBJ, PLY and ASCII STL files are read as written\n",
+               one_line(basename_of(path)).c_str(), one_line(mesh.format).c_str());
 }
 
 // CLI::Range lets NaN through (every comparison with it is false), and an unsigned option

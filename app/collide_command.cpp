@@ -154,6 +154,7 @@ int run_collide_command(const CollideFlags& f) {
   LoadedMesh mesh;
   Status s = load_solid(f.mesh, &mesh);
   if (!s) return refuse(s);
+  note_precision(f.mesh, mesh);
   const std::string sha = mesh_sha256(mesh.mesh);
   std::vector<Tree> trees(f.trees.size());
   std::vector<collision::NamedTree> named;
@@ -187,7 +188,7 @@ int run_collide_command(const CollideFlags& f) {
     std::fputs(out.c_str(), stdout);
   } else {
     s = write_file_atomic(f.output, out);
-    if (!s) return refuse(s);
+    if (!s) return could_not_finish(s);  // its folder took a file when the run started
   }
   if (!report.brute_force_agrees) {
     std::fprintf(stderr, "vobb: collide: a tree disagrees with brute force: %s\n", one_line(report.first_disagreement).c_str());

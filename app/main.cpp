@@ -236,9 +236,15 @@ int run_build(const std::string& mesh_path, const std::string& out, const BuildF
     return refuse(vobb::Status::error("--collider-margin must be a finite length >= 0"));
   if (f.collider_margin > 0 && f.method != "variational")
     return refuse(vobb::Status::error("--collider-margin applies to --method variational only"));
+  // The baseline takes well under a second and has no search to budget or resume.
+  if (!f.checkpoint.empty() && f.method != "variational")
+    return refuse(vobb::Status::error("--checkpoint applies to --method variational only"));
+  if (f.time_budget > 0 && f.method != "variational")
+    return refuse(vobb::Status::error("--time-budget applies to --method variational only"));
   vobb::LoadedMesh loaded;
   vobb::Status s = vobb::load_solid(mesh_path, &loaded);
   if (!s) return refuse(s);
+  vobb::app::note_precision(mesh_path, loaded);
   if (f.collider_margin > 0) {
     // A margin beyond the model's size is no collider of this model, and it keeps the grown
     // boxes' volumes far from overflow.
@@ -260,7 +266,7 @@ int run_build(const std::string& mesh_path, const std::string& out, const BuildF
   if (!s) return refuse(s);
   tree.mesh_sha256 = vobb::mesh_sha256(loaded.mesh);
   s = vobb::write_tree(tree, out);
-  if (!s) return refuse(s);
+  if (!s) return vobb::app::could_not_finish(s);  // its folder took a file when the run started
   std::fprintf(stderr, "vobb: %s tree of %zu nodes, depth %d, arity %d, in %.3f s -> %s\n",
                tree.method.c_str(), tree.nodes.size(), tree.depth, tree.arity, seconds_since(t0),
                out.c_str());
@@ -286,6 +292,7 @@ vobb::Status load_mesh_and_tree(const std::string& mesh_path, const std::string&
                                 vobb::LoadedMesh* mesh, vobb::Tree* tree) {
   vobb::Status s = vobb::load_solid(mesh_path, mesh);
   if (!s) return s;
+  vobb::app::note_precision(mesh_path, *mesh);
   s = vobb::read_tree(tree_path, tree);
   if (!s) return s;
   if (tree->mesh_triangles != mesh->mesh.faces.size())
@@ -330,11 +337,13 @@ int run_certify(const std::string& mesh_path, const std::string& tree_path, bool
       if (rational) {
         jl["omv_rational"] = l.omv.get_str();
         jl["sum_obv_rational"] = l.sum_obv.get_str();
+        jl["overlap_rational"] = l.overlap().get_str();
         if (l.omv_path == "both") jl["omv_clip_rational"] = l.omv_clip.get_str();
       }
       levels.push_back(jl);
     }
     j["levels"] = levels;
+    j["mesh_single_precision"] = mesh.single_precision;
     j["weighted_error"] = vobb::to_double_nearest(c.weighted_error);
     if (rational) j["weighted_error_rational"] = c.weighted_error.get_str();
     nlohmann::ordered_json first = nlohmann::ordered_json::array();
@@ -368,6 +377,7 @@ int run_obv(const std::string& mesh_path, const std::string& boxes_path, const s
   vobb::LoadedMesh mesh;
   vobb::Status s = vobb::load_solid(mesh_path, &mesh);
   if (!s) return refuse(s);
+  vobb::app::note_precision(mesh_path, mesh);
   std::vector<vobb::Obb> boxes;
   s = vobb::read_boxes(boxes_path, &boxes);
   if (!s) return refuse(s);
@@ -499,6 +509,7 @@ int run_obv(const std::string& mesh_path, const std::string& boxes_path, const s
   if (json) {
     nlohmann::ordered_json doc;
     if (gl) doc["renderer"] = gl->renderer();
+    doc["mesh_single_precision"] = mesh.single_precision;
     doc["boxes"] = out;
     std::printf("%s\n", vobb::app::report_json(doc).c_str());
   }
@@ -506,10 +517,14 @@ int run_obv(const std::string& mesh_path, const std::string& boxes_path, const s
 }
 
 // Both builders on one mesh, both trees certified exactly; per layer the exact OMV of each and
-// the change, and each tree's weighted error e (DESIGN §1, §7).
+// the change, and each tree's weighted error e (DESIGN §1, §7). Where one tree stops sooner
+// than the other (every leaf of it holds one face, or cannot be split), its layers below its
+// last are its leaf layer again, as in its own layers, and both e are taken over the deeper
+// tree's layers with the same weights: e of trees of different depths weighs their layers
+// differently and is not to be compared.
 // With `figure_path`, also draws both trees' layers over the mesh (fast/tree_figure.h) to a PNG.
-int run_compare(const std::string& mesh_path, const BuildFlags& flags, bool json, const std::string& figure_path,
-                const std::string& figure_up) {
+int run_compare(const std::string& mesh_path, const BuildFlags& flags, bool json, bool rational,
+                const std::string& figure_path, const std::string& figure_up) {
   if (!figure_path.empty()) {
     // Checked before the long run, not after it: the figure's folder must exist.
     const std::filesystem::path dir = std::filesystem::path(figure_path).parent_path();
@@ -519,6 +534,7 @@ int run_compare(const std::string& mesh_path, const BuildFlags& flags, bool json
   vobb::LoadedMesh loaded;
   vobb::Status s = vobb::load_solid(mesh_path, &loaded);
   if (!s) return refuse(s);
+  vobb::app::note_precision(mesh_path, loaded);
   std::unique_ptr<vobb::GlObvEstimator> gl;
   std::unique_ptr<vobb::CpuObvEstimator> cpu;
   vobb::ObvEstimate estimate;
@@ -542,20 +558,39 @@ int run_compare(const std::string& mesh_path, const BuildFlags& flags, bool json
   }
   const bool ok = r[0].cert.ok() && r[1].cert.ok();
   const size_t levels = std::max(r[0].cert.layers.size(), r[1].cert.layers.size());
-  auto omv = [&](int i, size_t l) {
+  auto omv_exact = [&](int i, size_t l) -> const vobb::Rational& {
     const auto& layers = r[i].cert.layers;
-    return vobb::to_double_nearest(layers[std::min(l, layers.size() - 1)].omv);
+    return layers[std::min(l, layers.size() - 1)].omv;
   };
+  auto omv = [&](int i, size_t l) { return vobb::to_double_nearest(omv_exact(i, l)); };
   auto change = [](double a, double b) { return a == 0 ? 0.0 : 100.0 * (b - a) / a; };
-  const double e0 = vobb::to_double_nearest(r[0].cert.weighted_error), e1 = vobb::to_double_nearest(r[1].cert.weighted_error);
+  // e over layers 0 .. D of the deeper tree, with ω(l) = D - l + 1 (DESIGN §1). For a tree of
+  // depth D this is certify's e, exactly.
+  vobb::Rational e_exact[2];
+  for (int i = 0; i < 2; ++i)
+    for (size_t l = 0; l < levels; ++l) e_exact[i] += static_cast<long>(levels - l) * omv_exact(i, l);
+  const double e0 = vobb::to_double_nearest(e_exact[0]), e1 = vobb::to_double_nearest(e_exact[1]);
   if (json) {
     nlohmann::ordered_json doc, rows = nlohmann::ordered_json::array();
-    for (size_t l = 0; l < levels; ++l)
-      rows.push_back({{"level", l}, {"omv_baseline", omv(0, l)}, {"omv_variational", omv(1, l)},
-                      {"change_pct", change(omv(0, l), omv(1, l))}});
+    for (size_t l = 0; l < levels; ++l) {
+      nlohmann::ordered_json row = {{"level", l}, {"omv_baseline", omv(0, l)}, {"omv_variational", omv(1, l)},
+                                    {"change_pct", change(omv(0, l), omv(1, l))}};
+      if (rational) {
+        row["omv_baseline_rational"] = omv_exact(0, l).get_str();
+        row["omv_variational_rational"] = omv_exact(1, l).get_str();
+      }
+      rows.push_back(row);
+    }
     doc["levels"] = rows;
+    doc["mesh_single_precision"] = loaded.single_precision;
+    doc["depth_baseline"] = r[0].tree.depth;
+    doc["depth_variational"] = r[1].tree.depth;
     doc["e_baseline"] = e0;
     doc["e_variational"] = e1;
+    if (rational) {
+      doc["e_baseline_rational"] = e_exact[0].get_str();
+      doc["e_variational_rational"] = e_exact[1].get_str();
+    }
     doc["seconds_baseline"] = r[0].build_seconds;
     doc["seconds_variational"] = r[1].build_seconds;
     doc["certified"] = ok;
@@ -564,7 +599,12 @@ int run_compare(const std::string& mesh_path, const BuildFlags& flags, bool json
     std::printf("%5s %24s %24s %10s\n", "layer", "OMV obbtree", "OMV variational", "change %");
     for (size_t l = 0; l < levels; ++l)
       std::printf("%5zu %24.17g %24.17g %+10.2f\n", l, omv(0, l), omv(1, l), change(omv(0, l), omv(1, l)));
+    if (r[0].tree.depth != r[1].tree.depth)
+      std::printf("\nthe obbtree tree has depth %d and the variational one %d: the shallower one's leaf layer is repeated "
+                  "below its last, and both e are over layers 0..%zu\n",
+                  r[0].tree.depth, r[1].tree.depth, levels - 1);
     std::printf("\ne obbtree %.17g, e variational %.17g, change %+.2f %%\n", e0, e1, change(e0, e1));
+    if (rational) std::printf("e obbtree (rational): %s\ne variational (rational): %s\n", e_exact[0].get_str().c_str(), e_exact[1].get_str().c_str());
     std::printf("build seconds: obbtree %.3f, variational %.3f; both certified: %s\n", r[0].build_seconds,
                 r[1].build_seconds, ok ? "yes" : "NO");
   }
@@ -698,6 +738,8 @@ int main(int argc, char** argv) {
   cmp->add_flag("--no-merge", cf.no_merge, "Ablation: no bottom-up merging sweeps");
   cmp->add_option("--sweeps", cf.sweeps, "Most bottom-up merging sweeps")->capture_default_str()->check(CLI::Range(0, 100));
   cmp->add_flag("--json", compare_json, "Print JSON (DESIGN §7)");
+  bool compare_rational = false;
+  cmp->add_flag("--rational", compare_rational, "Also print each exact value (OMV per layer, e) as a rational");
   cmp->add_flag("--quiet", cf.quiet, "No progress on stderr");
   cmp->add_option("--threads", cf.threads, kCompareThreadsHelp)->check(CLI::Range(1, 4096));
   std::string compare_figure;
@@ -758,11 +800,13 @@ int main(int argc, char** argv) {
     vobb::Status s = vobb::Status::ok();
     if (build->parsed()) s = vobb::app::check_output_is_not_input("-o", out, {mesh});
     if (exp->parsed()) s = vobb::app::check_output_is_not_input("-o", out, {tree_path});
+    if (s && (build->parsed() || exp->parsed())) s = vobb::app::check_output_is_writable("-o", out);
     if (cmp->parsed()) s = vobb::app::check_output_is_not_input("--figure", compare_figure, {mesh});
     if (collide_cmd->parsed()) {
       std::vector<std::string> inputs = collide_flags.trees;
       inputs.push_back(collide_flags.mesh);
       s = vobb::app::check_output_is_not_input("-o", collide_flags.output, inputs);
+      if (s) s = vobb::app::check_output_is_writable("-o", collide_flags.output);
     }
     if (!s) return refuse(s);
   }
@@ -773,7 +817,7 @@ int main(int argc, char** argv) {
     if (validate_cmd->parsed()) return vobb::app::run_validate_command(validate_flags);
     if (collide_cmd->parsed()) return vobb::app::run_collide_command(collide_flags);
     if (obv->parsed()) return run_obv(mesh, boxes_path, ms, backend, json);
-    if (cmp->parsed()) return run_compare(mesh, cf, compare_json, compare_figure, compare_figure_up);
+    if (cmp->parsed()) return run_compare(mesh, cf, compare_json, compare_rational, compare_figure, compare_figure_up);
     if (cert->parsed()) return run_certify(mesh, tree_path, json, rational, omv_path, quiet);
     return kExitBadInput;
   };

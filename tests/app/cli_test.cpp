@@ -149,6 +149,139 @@ TEST(CliBadInput, OutputThatIsAnInputIsRefused) {
   EXPECT_EQ(slurp(tree), tree_bytes);
 }
 
+// An output that cannot be written is refused before the run: the mesh given here is open,
+// and the message is still about the output, so it was checked first. A folder is no output.
+// Nothing is left in the folder by the check.
+TEST(CliBadInput, UnwritableOutputIsRefusedBeforeTheRun) {
+  const std::string open_mesh = test::data_dir() + "/bad/open_cube.off";
+  const std::string mesh = write_cube("out_cube.off", 1);
+  const std::string tree = test::temp_path("out_tree.json");
+  ASSERT_EQ(vobb_cli("build " + mesh + " -o " + tree + " --method obbtree --depth 1").code, 0);
+  const std::string dir = ::testing::TempDir();
+  struct Case {
+    std::string args, says;
+  };
+  for (const Case& c : {Case{"build " + open_mesh + " -o /nonexistent/t.json --backend cpu", "no such folder /nonexistent"},
+                        Case{"build " + open_mesh + " -o " + dir + " --backend cpu", "is a folder"},
+                        Case{"export " + tree + " --level 1 -o /nonexistent/b.obj", "no such folder /nonexistent"},
+                        Case{"collide " + open_mesh + " " + tree + " --static --colliders 5 -o /nonexistent/c.json",
+                             "no such folder /nonexistent"},
+                        Case{"build " + open_mesh + " -o /proc/t.json --backend cpu", "cannot write in /proc"}}) {
+    const CliRun r = vobb_cli(c.args);
+    EXPECT_EQ(r.code, 2) << c.args << ": " << r.err;
+    EXPECT_EQ(line_count(r.err), 1u) << c.args << ": " << r.err;
+    EXPECT_NE(r.err.find(c.says), std::string::npos) << c.args << ": " << r.err;
+  }
+  // A device is written in place; one that is full shows only when written: exit 3, as for a
+  // full standard output.
+  const CliRun full = vobb_cli("build " + mesh + " -o /dev/full --method obbtree --depth 1");
+  EXPECT_EQ(full.code, 3) << full.err;
+  EXPECT_EQ(line_count(full.err), 1u) << full.err;
+  EXPECT_NE(full.err.find("No space left on device"), std::string::npos) << full.err;
+  std::remove(mesh.c_str());
+  std::remove(tree.c_str());
+}
+
+// The baseline has no search: a checkpoint or a time budget asked of it is refused, not
+// silently ignored (no checkpoint folder appeared, exit 0).
+TEST(CliBadInput, VariationalOnlyOptionsAreRefusedForTheBaseline) {
+  const std::string mesh = write_cube("only_cube.off", 1);
+  const std::string tree = test::temp_path("only_tree.json");
+  for (const std::string& flag : {std::string("--checkpoint ") + test::temp_path("only_ck"), std::string("--time-budget 1")}) {
+    const CliRun r = vobb_cli("build " + mesh + " -o " + tree + " --method obbtree " + flag);
+    EXPECT_EQ(r.code, 2) << flag;
+    EXPECT_EQ(line_count(r.err), 1u) << r.err;
+    EXPECT_NE(r.err.find("applies to --method variational only"), std::string::npos) << r.err;
+    EXPECT_FALSE(test::exists(tree));
+  }
+  EXPECT_FALSE(test::exists(test::temp_path("only_ck")));
+  std::remove(mesh.c_str());
+}
+
+// A mesh read through assimp is in float32 (DESIGN §3): every command that reads it says so on
+// stderr, and the JSON reports carry mesh_single_precision. The same cube as OFF is read as
+// written and draws no such line.
+TEST(Cli, SinglePrecisionReadsAreNamed) {
+  const std::string raw = test::temp_path("sp_cube.raw");
+  {
+    // The unit cube as RAW (one triangle per line, 9 numbers), a format only assimp reads.
+    std::ofstream f(raw);
+    const int tri[12][3] = {{0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5}, {0, 1, 5}, {0, 5, 4},
+                            {2, 6, 7}, {2, 7, 3}, {0, 2, 3}, {0, 3, 1}, {4, 5, 7}, {4, 7, 6}};
+    for (const auto& t : tri) {
+      for (int c = 0; c < 3; ++c) f << (t[c] & 1) << " " << ((t[c] >> 1) & 1) << " " << ((t[c] >> 2) & 1) << " ";
+      f << "\n";
+    }
+  }
+  const std::string off = write_cube("sp_cube.off", 1);
+  for (const std::string& mesh : {raw, off}) {
+    const bool single = mesh == raw;
+    SCOPED_TRACE(mesh);
+    const std::string tree = test::temp_path("sp_tree.json");
+    const std::string boxes = test::temp_path("sp_boxes.json");
+    CliRun r = vobb_cli("build " + mesh + " -o " + tree + " --method obbtree --depth 1");
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(r.err.find("single precision") != std::string::npos, single) << r.err;
+    Tree t;
+    ASSERT_TRUE(read_tree(tree, &t));
+    ASSERT_TRUE(write_boxes({t.nodes[0].box}, boxes));
+    for (const std::string& args : {"certify " + mesh + " " + tree + " --json --quiet",
+                                    "obv " + mesh + " --boxes " + boxes + " --backend cpu --m 4 --json",
+                                    "compare " + mesh + " --depth 1 --backend cpu --m 4 --json --quiet"}) {
+      r = vobb_cli(args);
+      ASSERT_EQ(r.code, 0) << args << ": " << r.err;
+      EXPECT_EQ(r.err.find("read in single precision through assimp") != std::string::npos, single) << args << ": " << r.err;
+      EXPECT_EQ(nlohmann::json::parse(r.out).at("mesh_single_precision").get<bool>(), single) << args;
+    }
+    r = vobb_cli("collide " + mesh + " " + tree + " --static --colliders 5 --no-fcl");
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(r.err.find("single precision") != std::string::npos, single) << r.err;
+    std::remove(tree.c_str());
+    std::remove(boxes.c_str());
+  }
+  std::remove(raw.c_str());
+  std::remove(off.c_str());
+}
+
+// Where the two builders stop at different depths (a cube: the baseline stops when its leaves
+// hold one face), compare takes both e over the deeper tree's layers, the shallower tree's leaf
+// layer repeated below its last: each e, as a rational, equals that sum of the per-layer OMV
+// it prints, and the deeper tree's equals certify's e of the same tree built alone.
+TEST(Cli, CompareWeighsTreesOfDifferentDepthsAlike) {
+  const std::string mesh = write_cube("cmp_cube.off", 1);
+  const std::string flags = " --depth 10 --m 8 --backend cpu --quiet";
+  CliRun r = vobb_cli("compare " + mesh + flags + " --json --rational");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const nlohmann::json doc = nlohmann::json::parse(r.out);
+  const int d0 = doc.at("depth_baseline"), d1 = doc.at("depth_variational");
+  ASSERT_NE(d0, d1) << "the case needs trees of different depths";
+  const size_t levels = doc.at("levels").size();
+  ASSERT_EQ(levels, static_cast<size_t>(std::max(d0, d1)) + 1);
+  Rational e[2];
+  for (size_t l = 0; l < levels; ++l) {
+    const auto& row = doc["levels"][l];
+    e[0] += static_cast<long>(levels - l) * Rational(row.at("omv_baseline_rational").get<std::string>());
+    e[1] += static_cast<long>(levels - l) * Rational(row.at("omv_variational_rational").get<std::string>());
+  }
+  EXPECT_TRUE(e[0] == Rational(doc.at("e_baseline_rational").get<std::string>()));
+  EXPECT_TRUE(e[1] == Rational(doc.at("e_variational_rational").get<std::string>()));
+  // The deeper tree alone, certified: the same e.
+  const bool variational_deeper = d1 > d0;
+  const std::string tree = test::temp_path("cmp_tree.json");
+  r = vobb_cli("build " + mesh + " -o " + tree + " --method " + (variational_deeper ? "variational" : "obbtree") + flags);
+  ASSERT_EQ(r.code, 0) << r.err;
+  r = vobb_cli("certify " + mesh + " " + tree + " --json --rational --quiet");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const Rational certified(nlohmann::json::parse(r.out).at("weighted_error_rational").get<std::string>());
+  EXPECT_TRUE(certified == e[variational_deeper ? 1 : 0]);
+  // The text report says why the layers were padded.
+  r = vobb_cli("compare " + mesh + flags);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("leaf layer is repeated"), std::string::npos) << r.out;
+  std::remove(mesh.c_str());
+  std::remove(tree.c_str());
+}
+
 // File names need not be UTF-8; a JSON report escapes what is not (U+FFFD) instead of failing
 // with exit 3.
 TEST(Cli, JsonReportsTakeFileNamesThatAreNotUtf8) {
