@@ -737,6 +737,10 @@ int main(int argc, char** argv) {
   cmp->add_flag("--adjust", cf.adjust, "Also run the adjustment step (see build --help)");
   cmp->add_flag("--no-merge", cf.no_merge, "Ablation: no bottom-up merging sweeps");
   cmp->add_option("--sweeps", cf.sweeps, "Most bottom-up merging sweeps")->capture_default_str()->check(CLI::Range(0, 100));
+  cmp->add_option("--checkpoint", cf.checkpoint, "Folder for the variational build's state after each level and sweep, "
+                  "as for build (the same flags make the same build: either command resumes the other's)");
+  cmp->add_option("--time-budget", cf.time_budget, "Seconds for the variational search, as for build")
+      ->check(vobb::app::kFinite)->check(CLI::Range(1e-3, 1e9));
   cmp->add_flag("--json", compare_json, "Print JSON (DESIGN §7)");
   bool compare_rational = false;
   cmp->add_flag("--rational", compare_rational, "Also print each exact value (OMV per layer, e) as a rational");

@@ -282,6 +282,28 @@ TEST(Cli, CompareWeighsTreesOfDifferentDepthsAlike) {
   std::remove(tree.c_str());
 }
 
+// compare's variational build takes --checkpoint as build does, with the same fingerprint: a
+// build with the same flags resumes from the state compare saved (nothing left to search) and
+// writes the bytes of a build from scratch.
+TEST(Cli, CompareAndBuildShareACheckpoint) {
+  const std::string mesh = write_cube("ck_cube.off", 1);
+  const std::string dir = test::temp_path("ck_dir");
+  const std::string flags = " --depth 3 --m 8 --backend cpu";
+  CliRun r = vobb_cli("compare " + mesh + flags + " --quiet --checkpoint " + dir);
+  ASSERT_EQ(r.code, 0) << r.err;
+  ASSERT_TRUE(test::exists(dir + "/state.json"));
+  const std::string resumed = test::temp_path("ck_resumed.json"), fresh = test::temp_path("ck_fresh.json");
+  r = vobb_cli("build " + mesh + " -o " + resumed + flags + " --checkpoint " + dir);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("resuming from"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("vobb: 0 boxes estimated"), std::string::npos) << r.err;
+  r = vobb_cli("build " + mesh + " -o " + fresh + flags + " --quiet");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(slurp(resumed), slurp(fresh));
+  for (const std::string& p : {mesh, resumed, fresh, dir + "/state.json"}) std::remove(p.c_str());
+  ::rmdir(dir.c_str());
+}
+
 // File names need not be UTF-8; a JSON report escapes what is not (U+FFFD) instead of failing
 // with exit 3.
 TEST(Cli, JsonReportsTakeFileNamesThatAreNotUtf8) {
