@@ -71,26 +71,32 @@ inline Status check_output_is_not_input(const std::string& option, const std::st
   return Status::ok();
 }
 
-// An output that cannot be written is refused before the run, not after hours of it: the
-// folder that will hold it (the link's target's, for a link) must exist and take a new file,
-// which is how the output is written (common/atomic_file.h); a folder is no output. A device or
-// pipe is written in place, and a full disk shows only when writing: the run then ends with
-// could_not_finish.
+// An output that cannot be written is refused before the run, not after hours of it. Paths
+// are resolved as write_file_atomic resolves them (common/atomic_file.h): a folder is no
+// output; a device or pipe, also through a link (/dev/stdout), is written in place and passes
+// (a full disk shows only when writing: the run then ends with could_not_finish); otherwise,
+// following a link, the folder that will hold the file must exist and take a new file (a
+// probe is made there and removed), and the file's name must fit the folder's file system.
 inline Status check_output_is_writable(const std::string& option, const std::string& output) {
   namespace fs = std::filesystem;
   if (output.empty()) return Status::ok();
   std::error_code ec;
-  fs::path target(output);
-  const fs::file_status st = fs::status(target, ec);
+  const fs::file_status st = fs::status(output, ec);
   if (fs::is_directory(st)) return Status::error(option + " " + output + ": is a folder; name a file");
   if (fs::exists(st) && !fs::is_regular_file(st)) return Status::ok();
-  if (fs::exists(st)) {
-    const fs::path real = fs::canonical(target, ec);
-    if (!ec) target = real;
+  fs::path target(output);
+  if (fs::is_symlink(fs::symlink_status(target, ec))) {
+    const fs::path resolved = fs::weakly_canonical(target, ec);
+    if (ec) return Status::error(option + " " + output + ": cannot follow the link: " + ec.message());
+    target = resolved;
   }
   fs::path dir = target.parent_path();
   if (dir.empty()) dir = ".";
   if (!fs::is_directory(dir, ec)) return Status::error(option + " " + output + ": no such folder " + dir.string());
+  const long name_max = ::pathconf(dir.c_str(), _PC_NAME_MAX);
+  if (name_max > 0 && target.filename().string().size() > static_cast<size_t>(name_max))
+    return Status::error(option + " " + output + ": file name longer than the " + std::to_string(name_max) +
+                         " bytes its folder takes");
   const fs::path probe = dir / (".vobb-" + std::to_string(::getpid()) + "-probe.tmp");
   const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
   if (fd < 0) return Status::error(option + " " + output + ": cannot write in " + dir.string() + ": " + std::strerror(errno));

@@ -281,7 +281,7 @@ int run_export(const std::string& tree_path, int level, const std::string& out) 
     return refuse(vobb::Status::error("--level " + std::to_string(level) + ": " + vobb::basename_of(tree_path) +
                                       " has levels 0 to " + std::to_string(tree.depth)));
   s = vobb::export_layer(tree, level, out);
-  if (!s) return refuse(s);
+  if (!s) return vobb::app::could_not_finish(s);  // the level and the format were checked before
   std::fprintf(stderr, "vobb: layer %d (%zu boxes) -> %s\n", level, vobb::layer(tree, level).size(),
                out.c_str());
   return kExitOk;
@@ -373,7 +373,7 @@ int run_certify(const std::string& mesh_path, const std::string& tree_path, bool
 }
 
 int run_obv(const std::string& mesh_path, const std::string& boxes_path, const std::vector<int>& ms,
-            const std::string& backend, bool json) {
+            const std::string& backend, bool json, bool rational) {
   vobb::LoadedMesh mesh;
   vobb::Status s = vobb::load_solid(mesh_path, &mesh);
   if (!s) return refuse(s);
@@ -484,7 +484,7 @@ int run_obv(const std::string& mesh_path, const std::string& boxes_path, const s
     if (unresolved[i]) jb["unresolved"] = true;
     if (want_exact) {
       jb["exact"] = exact_value[i];
-      jb["exact_rational"] = exact_rational[i];
+      if (rational) jb["exact_rational"] = exact_rational[i];
       jb["exact_seconds"] = exact_seconds[i];
     }
     nlohmann::ordered_json est = nlohmann::ordered_json::array();
@@ -512,6 +512,8 @@ int run_obv(const std::string& mesh_path, const std::string& boxes_path, const s
     doc["mesh_single_precision"] = mesh.single_precision;
     doc["boxes"] = out;
     std::printf("%s\n", vobb::app::report_json(doc).c_str());
+  } else if (rational && want_exact) {
+    for (size_t i = 0; i < n; ++i) std::printf("box %zu exact (rational): %s\n", i, exact_rational[i].c_str());
   }
   return kExitOk;
 }
@@ -525,12 +527,6 @@ int run_obv(const std::string& mesh_path, const std::string& boxes_path, const s
 // With `figure_path`, also draws both trees' layers over the mesh (fast/tree_figure.h) to a PNG.
 int run_compare(const std::string& mesh_path, const BuildFlags& flags, bool json, bool rational,
                 const std::string& figure_path, const std::string& figure_up) {
-  if (!figure_path.empty()) {
-    // Checked before the long run, not after it: the figure's folder must exist.
-    const std::filesystem::path dir = std::filesystem::path(figure_path).parent_path();
-    if (!dir.empty() && !std::filesystem::is_directory(dir))
-      return refuse(vobb::Status::error("--figure " + figure_path + ": no such folder " + dir.string()));
-  }
   vobb::LoadedMesh loaded;
   vobb::Status s = vobb::load_solid(mesh_path, &loaded);
   if (!s) return refuse(s);
@@ -623,8 +619,9 @@ int run_compare(const std::string& mesh_path, const BuildFlags& flags, bool json
     if (!s) return refuse(s);
     vobb::RgbaImage image;
     s = vobb::render_tree_figure(gl ? gl->context() : *own, loaded.mesh, rows, fo, &image);
-    if (s) s = vobb::write_png(figure_path, image);
     if (!s) return refuse(s);
+    s = vobb::write_png(figure_path, image);
+    if (!s) return vobb::app::could_not_finish(s);  // its folder took a file when the run started
     std::fprintf(stderr, "vobb: figure %s: %dx%d px; row 1 obbtree (baseline), row 2 variational; columns levels %d..%d\n",
                  figure_path.c_str(), image.width, image.height, fo.levels.front(), fo.levels.back());
   }
@@ -720,6 +717,7 @@ int main(int argc, char** argv) {
                   "(gl, else cpu with a warning)")
       ->capture_default_str()->check(CLI::IsMember({"auto", "gl", "cpu", "exact", "all"}));
   obv->add_flag("--json", json, "Print JSON");
+  obv->add_flag("--rational", rational, "With the exact backend, also print each exact OBV as a rational");
 
   bool compare_json = false;
   BuildFlags cf;
@@ -806,6 +804,12 @@ int main(int argc, char** argv) {
     if (exp->parsed()) s = vobb::app::check_output_is_not_input("-o", out, {tree_path});
     if (s && (build->parsed() || exp->parsed())) s = vobb::app::check_output_is_writable("-o", out);
     if (cmp->parsed()) s = vobb::app::check_output_is_not_input("--figure", compare_figure, {mesh});
+    if (s && cmp->parsed()) s = vobb::app::check_output_is_writable("--figure", compare_figure);
+    if (s && exp->parsed()) {
+      const std::string ext = vobb::extension_of(out);
+      if (ext != "obj" && ext != "ply")
+        s = vobb::Status::error("-o " + out + ": unknown box export format (use .obj or .ply)");
+    }
     if (collide_cmd->parsed()) {
       std::vector<std::string> inputs = collide_flags.trees;
       inputs.push_back(collide_flags.mesh);
@@ -820,7 +824,7 @@ int main(int argc, char** argv) {
     if (exp->parsed()) return run_export(tree_path, level, out);
     if (validate_cmd->parsed()) return vobb::app::run_validate_command(validate_flags);
     if (collide_cmd->parsed()) return vobb::app::run_collide_command(collide_flags);
-    if (obv->parsed()) return run_obv(mesh, boxes_path, ms, backend, json);
+    if (obv->parsed()) return run_obv(mesh, boxes_path, ms, backend, json, rational);
     if (cmp->parsed()) return run_compare(mesh, cf, compare_json, compare_rational, compare_figure, compare_figure_up);
     if (cert->parsed()) return run_certify(mesh, tree_path, json, rational, omv_path, quiet);
     return kExitBadInput;

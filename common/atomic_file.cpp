@@ -32,25 +32,28 @@ bool write_all(int fd, const std::string& content) {
 
 Status write_file_atomic(const std::string& path, const std::string& content) {
   auto fail = [&](const std::string& why) { return Status::error(path + ": cannot write: " + why); };
-  // A symbolic link is followed: its target is replaced, the link stays.
+  // Something that is not a regular file (a device such as /dev/null, a pipe), reached
+  // directly or through links (/dev/stdout), is written to in place: it cannot be replaced,
+  // and must not be. It is opened by the path given, as the kernel resolves it: a pipe's link
+  // in /proc names no folder a file could be made in.
+  struct stat st;
+  if (::stat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode)) {
+    if (S_ISDIR(st.st_mode)) return fail("is a directory");
+    const int fd = ::open(path.c_str(), O_WRONLY | O_CLOEXEC);
+    if (fd < 0) return fail(std::strerror(errno));
+    const bool ok = write_all(fd, content);
+    const std::string why = std::strerror(errno);
+    if (::close(fd) != 0 && ok) return fail(std::strerror(errno));
+    return ok ? Status::ok() : fail(why);
+  }
+  // A symbolic link to a regular file, or to nothing yet, is followed: its target is
+  // replaced, the link stays.
   std::error_code ec;
   std::string target = path;
   if (std::filesystem::is_symlink(std::filesystem::symlink_status(path, ec))) {
     const std::filesystem::path resolved = std::filesystem::weakly_canonical(path, ec);
     if (ec) return fail(ec.message());
     target = resolved.string();
-  }
-  // Something that is not a regular file (a device such as /dev/null, a pipe) is written to
-  // in place: it cannot be replaced, and must not be.
-  struct stat st;
-  if (::stat(target.c_str(), &st) == 0 && !S_ISREG(st.st_mode)) {
-    if (S_ISDIR(st.st_mode)) return fail("is a directory");
-    const int fd = ::open(target.c_str(), O_WRONLY | O_CLOEXEC);
-    if (fd < 0) return fail(std::strerror(errno));
-    const bool ok = write_all(fd, content);
-    const std::string why = std::strerror(errno);
-    if (::close(fd) != 0 && ok) return fail(std::strerror(errno));
-    return ok ? Status::ok() : fail(why);
   }
   // The temporary file's name is short whatever the target's (a name of 255 bytes is valid).
   static std::atomic<unsigned> counter{0};

@@ -792,7 +792,7 @@ class Builder {
         // same in its first pass (the parents' boxes measured afresh are the boxes measured
         // here: the same faces, axes and estimator values). Not so for a pass that the budget
         // cut short.
-        if (!budget_gone(*st)) settled_[g] = regroup_inputs(*st, g);
+        if (options_.skip_settled && !budget_gone(*st)) settled_[g] = regroup_inputs(*st, g);
         break;
       }
       apply(st, *best, best_state);
@@ -804,24 +804,30 @@ class Builder {
     return total;
   }
 
-  // What regroup(g) reads, flattened: g's children in order, and per child its axes (their
-  // bits) and its units in order, each with its faces. (A child's own faces are its units'.)
-  // The level, and with it the orientation search's starts, is g's, which no move changes.
-  std::vector<uint64_t> regroup_inputs(const VariationalState& st, int32_t g) const {
-    std::vector<uint64_t> in;
+  // What regroup(g) reads: g's children in order, and per child its axes (their bits) and its
+  // units in order, each with its faces. (A child's own faces are its units'.) The level, and
+  // with it the orientation search's starts, is g's, which no move changes.
+  struct RegroupInputs {
+    std::vector<int32_t> ids;     // per child: its id, its unit count, then per unit its id,
+                                  // its face count and its faces
+    std::vector<uint64_t> axes;   // per child: its 9 axis components' bits
+    bool operator==(const RegroupInputs& o) const { return ids == o.ids && axes == o.axes; }
+  };
+  RegroupInputs regroup_inputs(const VariationalState& st, int32_t g) const {
+    RegroupInputs in;
     for (int32_t c : st.nodes[g].children) {
-      in.push_back(static_cast<uint64_t>(c));
+      in.ids.push_back(c);
       for (const Vec3& a : st.axes[c])
         for (int k = 0; k < 3; ++k) {
           uint64_t bits;
           std::memcpy(&bits, &a[k], sizeof bits);
-          in.push_back(bits);
+          in.axes.push_back(bits);
         }
-      in.push_back(st.nodes[c].children.size());
+      in.ids.push_back(static_cast<int32_t>(st.nodes[c].children.size()));
       for (int32_t u : st.nodes[c].children) {
-        in.push_back(static_cast<uint64_t>(u));
-        in.push_back(st.nodes[u].faces.size());
-        in.insert(in.end(), st.nodes[u].faces.begin(), st.nodes[u].faces.end());
+        in.ids.push_back(u);
+        in.ids.push_back(static_cast<int32_t>(st.nodes[u].faces.size()));
+        in.ids.insert(in.ids.end(), st.nodes[u].faces.begin(), st.nodes[u].faces.end());
       }
     }
     return in;
@@ -872,8 +878,9 @@ class Builder {
   tbb::enumerable_thread_specific<NodeSplitter> splitters_;
   // Per node g whose regrouping last ended by finding no move: the inputs it ended with
   // (regroup_inputs). Not saved in a checkpoint: a resumed build runs those regroupings again
-  // and finds no move again, the same tree. About one copy of the mesh's face ids per level.
-  std::vector<std::optional<std::vector<uint64_t>>> settled_;
+  // and finds no move again, the same tree. At most one copy of the mesh's face ids per level
+  // above the last two, and none where skip_settled is off.
+  std::vector<std::optional<RegroupInputs>> settled_;
 };
 
 }  // namespace

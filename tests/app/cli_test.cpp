@@ -8,6 +8,7 @@
 #include <cstdlib>
 
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -150,8 +151,9 @@ TEST(CliBadInput, OutputThatIsAnInputIsRefused) {
 }
 
 // An output that cannot be written is refused before the run: the mesh given here is open,
-// and the message is still about the output, so it was checked first. A folder is no output.
-// Nothing is left in the folder by the check.
+// and the message is still about the output, so it was checked first. A folder is no output,
+// nor a name longer than the folder takes. The check leaves nothing in the folder, and a pipe
+// reached through /dev/stdout is written in place.
 TEST(CliBadInput, UnwritableOutputIsRefusedBeforeTheRun) {
   const std::string open_mesh = test::data_dir() + "/bad/open_cube.off";
   const std::string mesh = write_cube("out_cube.off", 1);
@@ -166,12 +168,32 @@ TEST(CliBadInput, UnwritableOutputIsRefusedBeforeTheRun) {
                         Case{"export " + tree + " --level 1 -o /nonexistent/b.obj", "no such folder /nonexistent"},
                         Case{"collide " + open_mesh + " " + tree + " --static --colliders 5 -o /nonexistent/c.json",
                              "no such folder /nonexistent"},
-                        Case{"build " + open_mesh + " -o /proc/t.json --backend cpu", "cannot write in /proc"}}) {
+                        Case{"build " + open_mesh + " -o /proc/t.json --backend cpu", "cannot write in /proc"},
+                        Case{"build " + open_mesh + " -o " + dir + "/" + std::string(300, 'a') + ".json",
+                             "file name longer than"},
+                        Case{"compare " + open_mesh + " --depth 1 --backend cpu --figure " + dir, "is a folder"},
+                        Case{"export " + tree + " --level 1 -o " + dir + "/b.stl", "unknown box export format"}}) {
     const CliRun r = vobb_cli(c.args);
     EXPECT_EQ(r.code, 2) << c.args << ": " << r.err;
     EXPECT_EQ(line_count(r.err), 1u) << c.args << ": " << r.err;
     EXPECT_NE(r.err.find(c.says), std::string::npos) << c.args << ": " << r.err;
   }
+  const std::string empty = test::temp_path("out_empty_dir");
+  std::filesystem::remove_all(empty);
+  ASSERT_TRUE(std::filesystem::create_directory(empty));
+  CliRun ok = vobb_cli("build " + mesh + " -o " + empty + "/t.json --method obbtree --depth 1");
+  ASSERT_EQ(ok.code, 0) << ok.err;
+  std::vector<std::string> left;
+  for (const auto& e : std::filesystem::directory_iterator(empty)) left.push_back(e.path().filename().string());
+  EXPECT_EQ(left, std::vector<std::string>{"t.json"});
+  std::filesystem::remove_all(empty);
+  ok = vobb_cli("build " + mesh + " -o /dev/stdout --method obbtree --depth 1");  // stdout is popen's pipe
+  ASSERT_EQ(ok.code, 0) << ok.err;
+  Tree piped;
+  const std::string piped_path = test::temp_path("out_piped.json");
+  { std::ofstream(piped_path) << ok.out; }
+  EXPECT_TRUE(read_tree(piped_path, &piped)) << ok.out;
+  std::remove(piped_path.c_str());
   // A device is written in place; one that is full shows only when written: exit 3, as for a
   // full standard output.
   const CliRun full = vobb_cli("build " + mesh + " -o /dev/full --method obbtree --depth 1");
@@ -265,6 +287,29 @@ TEST(Cli, CompareWeighsTreesOfDifferentDepthsAlike) {
   }
   EXPECT_TRUE(e[0] == Rational(doc.at("e_baseline_rational").get<std::string>()));
   EXPECT_TRUE(e[1] == Rational(doc.at("e_variational_rational").get<std::string>()));
+  // The shallower tree's rows below its depth d repeat its row d.
+  const int d = std::min(d0, d1), deep = std::max(d0, d1);
+  const char* shallow_key = d0 < d1 ? "omv_baseline_rational" : "omv_variational_rational";
+  for (int l = d + 1; l <= deep; ++l)
+    EXPECT_EQ(doc["levels"][l].at(shallow_key), doc["levels"][d].at(shallow_key)) << l;
+  // And its e over D = deep layers, from its own certificate over d layers (e_d, OMV_l):
+  // e_D = e_d + (D - d) sum_{l <= d} OMV_l + (D - d)(D - d + 1) / 2 OMV_d.
+  {
+    const std::string shallow_tree = test::temp_path("cmp_shallow.json");
+    r = vobb_cli("build " + mesh + " -o " + shallow_tree + " --method " + (d0 < d1 ? "obbtree" : "variational") + flags);
+    ASSERT_EQ(r.code, 0) << r.err;
+    r = vobb_cli("certify " + mesh + " " + shallow_tree + " --json --rational --quiet");
+    ASSERT_EQ(r.code, 0) << r.err;
+    const nlohmann::json c = nlohmann::json::parse(r.out);
+    ASSERT_EQ(c.at("levels").size(), static_cast<size_t>(d) + 1);
+    Rational sum;
+    for (const auto& l : c["levels"]) sum += Rational(l.at("omv_rational").get<std::string>());
+    const Rational last(c["levels"][d].at("omv_rational").get<std::string>());
+    const long k = deep - d;
+    const Rational expected = Rational(c.at("weighted_error_rational").get<std::string>()) + k * sum + (k * (k + 1) / 2) * last;
+    EXPECT_TRUE(expected == e[d0 < d1 ? 0 : 1]);
+    std::remove(shallow_tree.c_str());
+  }
   // The deeper tree alone, certified: the same e.
   const bool variational_deeper = d1 > d0;
   const std::string tree = test::temp_path("cmp_tree.json");
@@ -445,7 +490,7 @@ TEST(Cli, BuildExportAndInfoOnAnAnalyticMesh) {
     ASSERT_TRUE(read_tree(tree, &t));
     const std::string boxes = test::temp_path("boxes.json");
     ASSERT_TRUE(write_boxes({t.nodes[0].box}, boxes));
-    r = vobb_cli("obv " + mesh + " --boxes " + boxes + " --m 4,8 --backend all --json");
+    r = vobb_cli("obv " + mesh + " --boxes " + boxes + " --m 4,8 --backend all --json --rational");
     ASSERT_EQ(r.code, 0) << r.err;
     for (const char* key : {"\"index\"", "\"box_volume\"", "\"exact\"", "\"estimates\"", "\"backend\": \"cpu\"",
                             "\"backend\": \"gl\"", "\"m\": 8", "\"obv\"", "\"seconds\"", "\"renderer\""})
@@ -460,6 +505,15 @@ TEST(Cli, BuildExportAndInfoOnAnAnalyticMesh) {
       for (const auto& e : box["estimates"])
         EXPECT_LE(std::abs(e["obv"].get<double>() - box["exact"].get<double>()), e["bound"].get<double>()) << e;
     }
+    // The rationals only when asked for (they run to thousands of digits); in text, one line
+    // per box after the table, the same value.
+    r = vobb_cli("obv " + mesh + " --boxes " + boxes + " --m 4 --backend exact --json");
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_FALSE(nlohmann::json::parse(r.out)["boxes"][0].contains("exact_rational")) << r.out;
+    r = vobb_cli("obv " + mesh + " --boxes " + boxes + " --backend exact --rational");
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.out.find("box 0 exact (rational): " + doc["boxes"][0]["exact_rational"].get<std::string>() + "\n"),
+              std::string::npos) << r.out;
     // Without a GL context: gl is refused in one line, auto falls back to the CPU twin and warns.
     ::setenv("VOBB_GL", "off", 1);
     r = vobb_cli("obv " + mesh + " --boxes " + boxes + " --backend gl");

@@ -69,5 +69,20 @@ TEST(WriteFileAtomic, WritesIntoAPipeInPlace) {
   std::filesystem::remove(fifo);
 }
 
+// An anonymous pipe reached through its link in /proc, as `-o /dev/stdout` reaches the pipe
+// of `vobb build ... | cat`: the link resolves to "pipe:[N]", in no folder a file could be
+// made in, so it must be opened as given and written in place.
+TEST(WriteFileAtomic, WritesIntoAPipeThroughItsProcLink) {
+  int fds[2];
+  ASSERT_EQ(::pipe(fds), 0);
+  const std::string link = "/proc/self/fd/" + std::to_string(fds[1]);
+  EXPECT_TRUE(write_file_atomic(link, "down the pipe"));  // fits the pipe's buffer
+  ::close(fds[1]);
+  char buf[64] = {};
+  const ssize_t n = ::read(fds[0], buf, sizeof buf - 1);
+  ::close(fds[0]);
+  EXPECT_EQ(std::string(buf, n > 0 ? n : 0), "down the pipe");
+}
+
 }  // namespace
 }  // namespace vobb
