@@ -223,9 +223,9 @@ vobb::Status build_tree(const vobb::Mesh& mesh, const BuildFlags& f, const vobb:
   if (!f.quiet && last >= 0 && tty) std::fprintf(stderr, "\n");
   if (!f.quiet)
     std::fprintf(stderr,
-                 "vobb: %zu boxes estimated, %zu adjusted splits and %zu merges kept, %d sweeps (%zu regroupings "
-                 "unchanged since they found no move, not run again)%s\n",
-                 report.estimates, report.adjustments, report.merges, report.sweeps, report.regroups_skipped,
+                 "vobb: %zu boxes estimated (%zu more measured again, from the search's record), %zu adjusted splits "
+                 "and %zu merges kept, %d sweeps (%zu regroupings unchanged since they found no move, not run again)%s\n",
+                 report.estimates, report.reused, report.adjustments, report.merges, report.sweeps, report.regroups_skipped,
                  report.budget_spent ? "; time budget spent: the rest got the baseline split" : "");
   return vobb::Status::ok();
 }

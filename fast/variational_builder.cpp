@@ -23,6 +23,7 @@
 #include <random>
 #include <set>
 #include <tuple>
+#include <unordered_map>
 
 #include "common/atomic_file.h"
 #include "common/sha256.h"
@@ -107,6 +108,7 @@ constexpr int kAdjustLevels = 4;
 // spent for all.
 struct SearchShared {
   std::atomic<size_t> estimates{0};
+  std::atomic<size_t> reused{0};  // boxes of a search measured again, answered from its record
   std::atomic<size_t> adjustments{0};
   std::atomic<size_t> merges{0};
   std::atomic<size_t> regroups_skipped{0};
@@ -132,8 +134,17 @@ class NodeSplitter {
   // on every thread's splitter, between parallel steps.
   void forget_pace() { pace_ = 0; }
 
+  // A new search (a node's split, the root's, a regrouping) begins: the boxes measured so far
+  // are forgotten. Within one search a box is often measured again (a group that a Lloyd
+  // iteration left as it was gets the same orientation starts; a regrouping's passes screen the
+  // same groups), and its value is the one measured before: an estimate depends on the box
+  // alone. Kept per search, the record stays small, and what it saves does not depend on
+  // which thread ran which search.
+  void begin_search() { measured_.clear(); }
+
   // The root: one group, its axes optimised like any child's.
   std::array<Vec3, 3> optimise_single(const std::vector<int32_t>& faces) {
+    begin_search();
     State s;
     s.groups = {faces};
     s.axes = {covariance_axes(mesh_, faces)};
@@ -143,6 +154,7 @@ class NodeSplitter {
 
   // Splits `faces` into at most `arity` groups; returns the groups and their axes.
   State split(const std::vector<int32_t>& faces, const std::function<void(int, double)>& report) {
+    begin_search();
     State state;
     state.groups = split_into_groups(mesh_, faces, options_.arity);
     for (const auto& g : state.groups) state.axes.push_back(covariance_axes(mesh_, g));
@@ -244,10 +256,34 @@ class NodeSplitter {
       grown = boxes;
       for (Obb& b : grown) b.half.array() += options_.margin;
     }
-    const std::vector<Obb>& in = options_.margin > 0 ? grown : boxes;
+    const std::vector<Obb>& all = options_.margin > 0 ? grown : boxes;
+    // Boxes this search measured before take their recorded value; the rest are estimated.
+    std::vector<double> out(all.size(), std::numeric_limits<double>::infinity());
+    std::vector<Obb> in;
+    std::vector<size_t> at;
+    std::vector<BoxBits> keys;
+    for (size_t i = 0; i < all.size(); ++i) {
+      BoxBits key = bits_of(all[i]);
+      const auto hit = options_.reuse_known ? measured_.find(key) : measured_.end();
+      if (hit != measured_.end()) {
+        out[i] = hit->second;
+        continue;
+      }
+      in.push_back(all[i]);
+      at.push_back(i);
+      keys.push_back(key);
+    }
+    shared_->reused += all.size() - in.size();
+    auto keep = [&](size_t j, double v) {
+      out[at[j]] = v;
+      if (options_.reuse_known) measured_.emplace(keys[j], v);
+    };
+    if (in.empty()) return out;
     if (!options_.out_of_time) {
       shared_->estimates += in.size();
-      return call(in);
+      const std::vector<double> v = call(in);
+      for (size_t j = 0; j < in.size(); ++j) keep(j, v[j]);
+      return out;
     }
     const size_t threads = static_cast<size_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
     auto chunk_at = [&](double per_box, size_t left) {
@@ -255,12 +291,12 @@ class NodeSplitter {
       const double t = options_.budget_check_seconds;
       return per_box * left <= t ? left : std::max(threads, static_cast<size_t>(t / per_box));
     };
-    std::vector<double> out(in.size(), std::numeric_limits<double>::infinity());
+    // Boxes not reached before the budget ran out keep +inf, and are not recorded.
     for (size_t i = 0; i < in.size() && !stopped();) {
       const size_t n = std::min(chunk_at(pace_, in.size() - i), in.size() - i);
       const auto t0 = std::chrono::steady_clock::now();
       const std::vector<double> v = call(std::vector<Obb>(in.begin() + i, in.begin() + i + n));
-      std::copy(v.begin(), v.end(), out.begin() + i);
+      for (size_t j = 0; j < n; ++j) keep(i + j, v[j]);
       shared_->estimates += n;
       i += n;
       // Never 0 once measured (a call too quick for the clock counts as 1 ns a box).
@@ -514,6 +550,27 @@ class NodeSplitter {
   // own: the nodes searched at once differ in size, and a chunk's length is this thread's.
   double pace_ = 0;
   std::vector<int32_t> local_;   // mesh face -> index in the node being partitioned, else -1
+  // A box's bits: centre, axes and half extents, as the estimator sees them.
+  using BoxBits = std::array<uint64_t, 15>;
+  struct BoxBitsHash {
+    size_t operator()(const BoxBits& b) const {
+      uint64_t h = 0x9e3779b97f4a7c15ull;
+      for (uint64_t w : b) h = (h ^ w) * 0x100000001b3ull + (h >> 29);
+      return static_cast<size_t>(h);
+    }
+  };
+  static BoxBits bits_of(const Obb& b) {
+    BoxBits k;
+    auto put = [&k](size_t at, const Vec3& v) {
+      for (int c = 0; c < 3; ++c) std::memcpy(&k[at + c], &v[c], sizeof(uint64_t));
+    };
+    put(0, b.center);
+    for (int a = 0; a < 3; ++a) put(3 + 3 * a, b.axes[a]);
+    put(12, b.half);
+    return k;
+  }
+  // The current search's boxes and their values (begin_search()).
+  std::unordered_map<BoxBits, double, BoxBitsHash> measured_;
 };
 
 std::vector<int32_t> merged(const std::vector<int32_t>& a, const std::vector<int32_t>& b) {
@@ -549,6 +606,7 @@ class Builder {
 
   void count(VariationalReport* report) const {
     report->estimates = shared_.estimates;
+    report->reused = shared_.reused;
     report->adjustments = shared_.adjustments;
     report->merges = shared_.merges;
     report->regroups_skipped = shared_.regroups_skipped;
@@ -638,7 +696,9 @@ class Builder {
     std::vector<Obb> boxes;
     for (size_t i = 0; i < st.nodes.size(); ++i) boxes.push_back(tight_box(mesh_, st.nodes[i].faces, st.axes[i]));
     forget_pace();  // the root first, then ever smaller boxes
-    const std::vector<double> v = splitters_.local().measure(boxes);
+    NodeSplitter& splitter = splitters_.local();
+    splitter.begin_search();  // this thread's last search: which one it was depends on timing
+    const std::vector<double> v = splitter.measure(boxes);
     double e = 0;
     for (size_t i = 0; i < st.nodes.size(); ++i) {
       const TreeNode& n = st.nodes[i];
@@ -702,11 +762,12 @@ class Builder {
     if (parents.size() < 2) return 0;
     // A regrouping is a function of its inputs (regroup_inputs): where they are those with
     // which it last ended by finding no move, it would find none again, so it is not run.
-    if (options_.skip_settled && settled_[g] && *settled_[g] == regroup_inputs(*st, g)) {
+    if (options_.reuse_known && settled_[g] && *settled_[g] == regroup_inputs(*st, g)) {
       ++shared_.regroups_skipped;
       return 0;
     }
     settled_[g].reset();
+    splitter->begin_search();
     std::vector<Obb> boxes;
     for (int32_t p : parents) boxes.push_back(tight_box(mesh_, st->nodes[p].faces, st->axes[p]));
     const std::vector<double> v = splitter->measure(boxes);
@@ -792,7 +853,7 @@ class Builder {
         // same in its first pass (the parents' boxes measured afresh are the boxes measured
         // here: the same faces, axes and estimator values). Not so for a pass that the budget
         // cut short.
-        if (options_.skip_settled && !budget_gone(*st)) settled_[g] = regroup_inputs(*st, g);
+        if (options_.reuse_known && !budget_gone(*st)) settled_[g] = regroup_inputs(*st, g);
         break;
       }
       apply(st, *best, best_state);
@@ -879,7 +940,7 @@ class Builder {
   // Per node g whose regrouping last ended by finding no move: the inputs it ended with
   // (regroup_inputs). Not saved in a checkpoint: a resumed build runs those regroupings again
   // and finds no move again, the same tree. At most one copy of the mesh's face ids per level
-  // above the last two, and none where skip_settled is off.
+  // above the last two, and none where reuse_known is off.
   std::vector<std::optional<RegroupInputs>> settled_;
 };
 

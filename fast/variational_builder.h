@@ -108,10 +108,12 @@ struct VariationalOptions {
   bool adjust = false;       // the adjustment step (see above: measured to hurt, so off)
   bool merge = true;         // ablation: the bottom-up merging sweeps
   int max_sweeps = 3;
-  // A regrouping whose inputs are those with which it last found no move is not run again
-  // (VariationalReport::regroups_skipped); false runs every one, to check that the tree is the
-  // same (test SkippingSettledRegroupingsChangesNothing).
-  bool skip_settled = true;
+  // What the search already knows is not worked out again: a regrouping whose inputs are those
+  // with which it last found no move is not run (VariationalReport::regroups_skipped), and a
+  // box measured before in the same search takes the value it got (VariationalReport::reused).
+  // false works everything out, to check that the tree is the same (test
+  // ReusingWhatIsKnownChangesNothing).
+  bool reuse_known = true;
   uint64_t seed = 1;         // the random starts of the orientation search
   double margin = 0;         // collider margin, world units, finite and >= 0 (see above)
   // Whether `estimate` may be called from several threads at once (the CPU twin may; the GL
@@ -140,6 +142,7 @@ struct VariationalReport {
   size_t merges = 0;          // unit swaps or moves kept by the sweeps
   size_t adjustments = 0;     // adjusted splits kept
   size_t estimates = 0;       // boxes estimated
+  size_t reused = 0;          // boxes a search measured again, given the value it had (not estimated)
   // Regroupings of a sweep not run: their inputs were those with which they last found no
   // move (see build_variational), so they would find none again.
   size_t regroups_skipped = 0;

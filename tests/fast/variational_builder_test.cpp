@@ -155,18 +155,22 @@ Mesh rippled_torus(int nu, int nv) {
   return m;
 }
 
-// A sweep does not run a regrouping again whose inputs (its node's children, their axes, their
-// units and the units' faces) are those with which it last found no move. Running every one
-// instead must give the same bytes, the same merges and the same number of sweeps: the skip
-// only saves estimates. Skipping every regrouping that once found no move, whatever changed
-// since, gives another tree of dino here. Sweeps after the first that move units are asserted,
-// so that some regroupings see their inputs change after they settled; synthetic meshes of
-// 64-1,000 faces settled in one sweep at arity 2-4 and depth 3-6, even with an estimator made
-// rugged by a hash of the box, so the case that has them is dino. (The finer ways to get the
-// inputs wrong, leaving out the units' faces or recording a regrouping that ended on a move,
-// changed no count on dino, triceratops, elephant or knot1 at depth 3-5: what they would skip
-// did not occur. That they must not be skipped rests on regroup()'s comments.)
-TEST(VariationalBuilder, SkippingSettledRegroupingsChangesNothing) {
+// What the search already knows is not worked out again: a sweep does not run a regrouping
+// whose inputs (its node's children, their axes, their units and the units' faces) are those
+// with which it last found no move, and a box measured before in the same search takes the
+// value it got. Working everything out instead must give the same bytes, the same merges and
+// the same number of sweeps: reuse only saves estimates. Skipping every regrouping that once
+// found no move, whatever changed since, gives another tree of dino here. Sweeps after the
+// first that move units are asserted, so that some regroupings see their inputs change after
+// they settled; synthetic meshes of 64-1,000 faces settled in one sweep at arity 2-4 and
+// depth 3-6, even with an estimator made rugged by a hash of the box, so the case that has
+// them is dino. (The finer ways to get the inputs wrong, leaving out the units' faces or
+// recording a regrouping that ended on a move, changed no count on dino, triceratops,
+// elephant or knot1 at depth 3-5: what they would skip did not occur. That they must not be
+// skipped rests on regroup()'s comments.) A record of boxes keyed by their axes alone gives
+// other trees in every case; keyed without the centre, or without the half extents, it gave
+// the same trees: within one search no two boxes measured shared the rest of their bits.
+TEST(VariationalBuilder, ReusingWhatIsKnownChangesNothing) {
   VOBB_REQUIRE_REAL_MESH("dino");
   LoadedMesh dino;
   ASSERT_TRUE(load_mesh(test::real_mesh("dino"), &dino));
@@ -195,7 +199,7 @@ TEST(VariationalBuilder, SkippingSettledRegroupingsChangesNothing) {
     tbb::task_arena arena(2);
     arena.execute([&] { with_skip = tree_to_json(build_variational(*c.mesh, o, cpu_at(cpu, 8), nullptr, &skip)); });
     o.checkpoint = nullptr;
-    o.skip_settled = false;
+    o.reuse_known = false;
     arena.execute([&] { without = tree_to_json(build_variational(*c.mesh, o, cpu_at(cpu, 8), nullptr, &full)); });
     EXPECT_TRUE(with_skip == without) << "the trees differ";  // not printed: a megabyte of JSON
     EXPECT_EQ(skip.merges, full.merges);
@@ -203,6 +207,8 @@ TEST(VariationalBuilder, SkippingSettledRegroupingsChangesNothing) {
     EXPECT_GE(skip.sweeps, 2);
     EXPECT_GT(skip.regroups_skipped, 0u);
     EXPECT_EQ(full.regroups_skipped, 0u);
+    EXPECT_GT(skip.reused, 0u);
+    EXPECT_EQ(full.reused, 0u);
     EXPECT_LT(skip.estimates, full.estimates);
     // Sweeps after the first that moved units: the states saved before and after them differ.
     for (size_t k = 1; k < saved.size(); ++k)
