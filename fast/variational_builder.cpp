@@ -556,7 +556,10 @@ class NodeSplitter {
     size_t operator()(const BoxBits& b) const {
       uint64_t h = 0x9e3779b97f4a7c15ull;
       for (uint64_t w : b) h = (h ^ w) * 0x100000001b3ull + (h >> 29);
-      return static_cast<size_t>(h);
+      // splitmix64's finaliser, so that the last words' high bits reach the low bits too
+      h = (h ^ (h >> 30)) * 0xbf58476d1ce4e5b9ull;
+      h = (h ^ (h >> 27)) * 0x94d049bb133111ebull;
+      return static_cast<size_t>(h ^ (h >> 31));
     }
   };
   static BoxBits bits_of(const Obb& b) {

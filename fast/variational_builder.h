@@ -73,7 +73,10 @@
 
 namespace vobb {
 
-// Estimated OBV of each box, in world volume units.
+// Estimated OBV of each box, in world volume units. A function of the box alone: the same
+// bits give the same value whatever batch they arrive in and whenever they are asked (the CPU
+// twin and the GL estimator are; fast/cpu_estimator.h, fast/gl_estimator.h). The builder
+// relies on it: it does not ask again for a box its search measured before (reuse_known).
 using ObvEstimate = std::function<std::vector<double>(const std::vector<Obb>&)>;
 
 struct VariationalProgress {
@@ -112,7 +115,8 @@ struct VariationalOptions {
   // with which it last found no move is not run (VariationalReport::regroups_skipped), and a
   // box measured before in the same search takes the value it got (VariationalReport::reused).
   // false works everything out, to check that the tree is the same (test
-  // ReusingWhatIsKnownChangesNothing).
+  // ReusingWhatIsKnownChangesNothing), or for an estimator that is not a function of the box
+  // alone (see ObvEstimate).
   bool reuse_known = true;
   uint64_t seed = 1;         // the random starts of the orientation search
   double margin = 0;         // collider margin, world units, finite and >= 0 (see above)
