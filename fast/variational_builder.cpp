@@ -700,7 +700,9 @@ class Builder {
     for (size_t i = 0; i < st.nodes.size(); ++i) boxes.push_back(tight_box(mesh_, st.nodes[i].faces, st.axes[i]));
     forget_pace();  // the root first, then ever smaller boxes
     NodeSplitter& splitter = splitters_.local();
-    splitter.begin_search();  // this thread's last search: which one it was depends on timing
+    // Not this thread's last search's boxes: which search that was depends on timing, and the
+    // counts must not.
+    splitter.begin_search();
     const std::vector<double> v = splitter.measure(boxes);
     double e = 0;
     for (size_t i = 0; i < st.nodes.size(); ++i) {
