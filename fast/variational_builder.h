@@ -30,8 +30,12 @@
 // them, with the changed parents' orientations searched again. A move is kept only when the
 // estimated sum of OBV of the changed parents drops by 0.1 % or more, i.e. when the estimated
 // e drops: only layer l changes, and it weighs ω(l) = D - l + 1 in e. Each move's candidates are
-// screened with fixed orientations; the two best get the full search. Sweeps repeat while the estimated e drops by 0.1 % or
-// more, at most `max_sweeps` times.
+// screened with fixed orientations; the two best get the full search. Sweeps repeat while the
+// estimated e drops by 0.1 % or more, at most `max_sweeps` times.
+// What a search already knows is not worked out again (`reuse_known`): a regrouping is not run
+// while its inputs are those with which it last found no move, and a box measured before in
+// the same search (a node's split, the root's, a regrouping) takes the value it got. Both rest
+// on the estimator being a function of the box alone (ObvEstimate), and change no tree.
 //
 // Collider margin (off by default, `margin` > 0): every box the builder measures is first
 // grown by `margin` on each side, so the search minimises the sum of OBV(O ⊕ cube(margin))
