@@ -740,8 +740,7 @@ int main(int argc, char** argv) {
   cmp->add_option("--time-budget", cf.time_budget, "Seconds for the variational search, as for build")
       ->check(vobb::app::kFinite)->check(CLI::Range(1e-3, 1e9));
   cmp->add_flag("--json", compare_json, "Print JSON (DESIGN §7)");
-  bool compare_rational = false;
-  cmp->add_flag("--rational", compare_rational, "Also print each exact value (OMV per layer, e) as a rational");
+  cmp->add_flag("--rational", rational, "Also print each exact value (OMV per layer, e) as a rational");
   cmp->add_flag("--quiet", cf.quiet, "No progress on stderr");
   cmp->add_option("--threads", cf.threads, kCompareThreadsHelp)->check(CLI::Range(1, 4096));
   std::string compare_figure;
@@ -805,11 +804,7 @@ int main(int argc, char** argv) {
     if (s && (build->parsed() || exp->parsed())) s = vobb::app::check_output_is_writable("-o", out);
     if (cmp->parsed()) s = vobb::app::check_output_is_not_input("--figure", compare_figure, {mesh});
     if (s && cmp->parsed()) s = vobb::app::check_output_is_writable("--figure", compare_figure);
-    if (s && exp->parsed()) {
-      const std::string ext = vobb::extension_of(out);
-      if (ext != "obj" && ext != "ply")
-        s = vobb::Status::error("-o " + out + ": unknown box export format (use .obj or .ply)");
-    }
+    if (s && exp->parsed()) s = vobb::check_box_export_path(out);
     if (collide_cmd->parsed()) {
       std::vector<std::string> inputs = collide_flags.trees;
       inputs.push_back(collide_flags.mesh);
@@ -825,7 +820,7 @@ int main(int argc, char** argv) {
     if (validate_cmd->parsed()) return vobb::app::run_validate_command(validate_flags);
     if (collide_cmd->parsed()) return vobb::app::run_collide_command(collide_flags);
     if (obv->parsed()) return run_obv(mesh, boxes_path, ms, backend, json, rational);
-    if (cmp->parsed()) return run_compare(mesh, cf, compare_json, compare_rational, compare_figure, compare_figure_up);
+    if (cmp->parsed()) return run_compare(mesh, cf, compare_json, rational, compare_figure, compare_figure_up);
     if (cert->parsed()) return run_certify(mesh, tree_path, json, rational, omv_path, quiet);
     return kExitBadInput;
   };

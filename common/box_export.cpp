@@ -4,8 +4,16 @@
 #include "common/text_util.h"
 
 namespace vobb {
+Status check_box_export_path(const std::string& path) {
+  const std::string ext = extension_of(path);
+  if (ext == "obj" || ext == "ply") return Status::ok();
+  return Status::error(path + ": unknown box export format (use .obj or .ply)");
+}
+
 Status export_boxes(const std::vector<Obb>& boxes, const std::vector<std::string>& names,
                     const std::string& path) {
+  Status known = check_box_export_path(path);
+  if (!known) return known;
   const std::string ext = extension_of(path);
   std::string s;
   if (ext == "obj") {
@@ -23,7 +31,7 @@ Status export_boxes(const std::vector<Obb>& boxes, const std::vector<std::string
         s += '\n';
       }
     }
-  } else if (ext == "ply") {
+  } else {  // ply
     s = "ply\nformat ascii 1.0\ncomment vobb boxes\nelement vertex " + std::to_string(8 * boxes.size()) +
         "\nproperty double x\nproperty double y\nproperty double z\nelement face " +
         std::to_string(6 * boxes.size()) + "\nproperty list uchar int vertex_indices\nend_header\n";
@@ -38,8 +46,6 @@ Status export_boxes(const std::vector<Obb>& boxes, const std::vector<std::string
         for (int c : q) s += " " + std::to_string(8 * b + c);
         s += '\n';
       }
-  } else {
-    return Status::error(path + ": unknown box export format (use .obj or .ply)");
   }
   return write_file_atomic(path, s);
 }

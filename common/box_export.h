@@ -12,6 +12,10 @@
 
 namespace vobb {
 
+// Whether `path` names a format this writer knows (.obj or .ply): the command line asks before
+// its run, and export_boxes again.
+Status check_box_export_path(const std::string& path);
+
 // `names` labels each box (OBJ object names); may be empty.
 Status export_boxes(const std::vector<Obb>& boxes, const std::vector<std::string>& names,
                     const std::string& path);
