@@ -80,12 +80,12 @@ void say_renderer(const vobb::GlContext& gl) {
 }
 
 // From this m on, `--backend auto` builds with GL where there is a GPU. Below it the CPU twin
-// is faster even beside a GPU, because it searches the nodes of a level at once and GL's search
-// stays on one thread: an NVIDIA H200 with 16 cores built dino at depth 6 in 4.3 s (twin) against
-// 12.0 s (GL) at m = 32, and 6.5 s against 12.9 s at m = 64. At m = 128 they were within 12 %
-// either way (twin 11.9 s, GL 13.3 s; 27.1 s each at depth 8 before the twin skipped texels),
-// and at 256 GL was faster (28.0 s against 21.0 s; docs/BENCHMARKS.md). With fewer cores the
-// twin slows and GL hardly does, so the near-tie at 128 goes to GL.
+// is as fast or faster even beside a GPU. With both searching the nodes of a level at once, an
+// NVIDIA H100 with 16 cores built dino at depth 8 and m = 32 in 3.8 s (twin) against 4.9 s
+// (GL), and at depth 6 and m = 64 in 3.3 s against 3.7 s; at m = 128 GL took 4.5 s against
+// 7.0 s, and at 256 8.0 s against 15.7 s (docs/BENCHMARKS.md; the twin's times come from
+// another machine of that kind, so the small gaps are rough). With fewer cores the twin slows
+// and GL hardly does.
 constexpr int kAutoGlFromM = 128;
 
 // The OBV estimator that the variational builder runs in its loop. auto: the GL estimator on an
@@ -145,7 +145,7 @@ vobb::Status build_tree(const vobb::Mesh& mesh, const BuildFlags& f, const vobb:
   opt.max_sweeps = f.sweeps;
   opt.seed = f.seed;
   opt.margin = f.collider_margin;
-  opt.concurrent_estimates = gl == nullptr;  // the CPU twin may be called from any thread; GL may not
+  opt.concurrent_estimates = true;  // both estimators may be called from several threads at once
   const auto t0 = std::chrono::steady_clock::now();
   if (f.time_budget > 0) opt.out_of_time = [&] { return seconds_since(t0) > f.time_budget; };
   // On a terminal the line is redrawn in place twice a second; into a file or a pipe it is
@@ -631,17 +631,17 @@ int run_compare(const std::string& mesh_path, const BuildFlags& flags, bool json
 }  // namespace
 
 constexpr const char* kThreadsHelp =
-    "Threads of a variational build: with the CPU twin, the nodes of a level searched at once and "
-    "each batch's estimates; with GL, the estimator's plans (default: every core this process may "
-    "use); the tree is the same for any number. No effect on obbtree";
+    "Threads of a variational build: the nodes of a level searched at once, and each batch's "
+    "estimates (CPU twin) or plans (GL) (default: every core this process may use); the tree is "
+    "the same for any number. No effect on obbtree";
 constexpr const char* kCertifyThreadsHelp =
     "Threads for the boxes' OBV and for the layers, one layer per thread at a time (default: every "
     "core this process may use); the values are exact, so the same for any number. Each thread "
     "that computes a union holds its own Nef polyhedron of the mesh";
 constexpr const char* kCompareThreadsHelp =
-    "Threads for the estimator's batches of boxes (the CPU twin's estimates, or the GL estimator's "
-    "plans) and for certifying both trees (default: every core this process may use); trees and "
-    "values are the same for any number. No effect on obbtree's build";
+    "Threads for the variational search (the nodes of a level at once, and each batch's estimates "
+    "or GL plans) and for certifying both trees (default: every core this process may use); trees "
+    "and values are the same for any number. No effect on obbtree's build";
 
 int main(int argc, char** argv) {
   CLI::App app{"vobb: tight oriented-bounding-box trees for solid meshes, with exact outer volumes"};

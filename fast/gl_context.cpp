@@ -133,7 +133,14 @@ GlContext::~GlContext() {
   // handle, and terminating it would pull it from under another live context.
 }
 
-void GlContext::make_current() const { eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, context_); }
+void GlContext::make_current() const {
+  if (eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, context_) == EGL_TRUE) return;
+  const std::string why = "eglMakeCurrent failed, EGL error " + std::to_string(eglGetError()) +
+                          " (12290 = EGL_BAD_ACCESS: the context is current on another thread)";
+  VOBB_ASSERT(false, why.c_str());
+}
+
+void GlContext::release() const { eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT); }
 
 unsigned gl_program(std::initializer_list<std::pair<unsigned, const char*>> stages, std::string* log) {
   auto one_line = [](std::string text) {

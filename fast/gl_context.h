@@ -27,7 +27,23 @@ class GlContext {
   GlContext(const GlContext&) = delete;
   GlContext& operator=(const GlContext&) = delete;
 
+  // A context is current on at most one thread at a time (EGL): make_current() binds it to the
+  // calling thread, and fails (an assertion) while another thread holds it; release() unbinds
+  // whatever context the calling thread holds. create() returns with the context current on the
+  // calling thread.
   void make_current() const;
+  void release() const;
+  // Binds the context to the calling thread for the guard's lifetime.
+  class Current {
+   public:
+    explicit Current(const GlContext& c) : c_(c) { c_.make_current(); }
+    ~Current() { c_.release(); }
+    Current(const Current&) = delete;
+    Current& operator=(const Current&) = delete;
+
+   private:
+    const GlContext& c_;
+  };
   const std::string& renderer() const { return renderer_; }
   const std::string& platform() const { return platform_; }  // "device" or "surfaceless"
   const std::string& version() const { return version_; }    // GL_VERSION

@@ -3,11 +3,16 @@
 //
 // Per box the CPU makes the shared plan (texel_plan.h: box frame in double, exact centre class,
 // culled faces in box-normalized coordinates, texel spans); the boxes of a call are planned in
-// parallel (TBB, as many threads as the caller's arena allows) and packed in box order, so the
-// values do not depend on the number of threads. Each span becomes one instanced
+// parallel (TBB, as many threads as the caller's arena allows). Each span becomes one instanced
 // quad in an R32F atlas, one 3m x 2m tile per box; the fragment shader runs the ray test of
 // texel_hit() in float and blends the hit's value additively; a compute pass sums each tile,
 // and one float per box is read back. Boxes whose plan draws nothing take no GPU work.
+// Calls may come from several threads at once (the variational builder searches nodes in
+// parallel): each plans its boxes on its own thread, and the estimator's own drawing thread
+// draws the GL work of the calls waiting at that moment in one batch, holding the context only
+// while it draws. A box's value does not depend on which tile it gets or what else shares its
+// batch (its spans are blended in their order within its own tile, and its tile is summed
+// alone), so the values are a function of the box alone, as ObvEstimate requires.
 // Shaders: shaders/texel_spans.{vert,frag}, shaders/reduce_tiles.comp, embedded at build time.
 //
 // Agreement with the CPU twin: gl_deviation_bound() bounds |GL - CPU| for one box from the
@@ -21,6 +26,7 @@
 // the CPU twin's, bit for bit, and its deviation bound is 0.
 #pragma once
 
+#include <atomic>
 #include <memory>
 #include <string>
 #include <vector>
@@ -41,12 +47,12 @@ class GlObvEstimator {
   static Status create(const Mesh& mesh, std::unique_ptr<GlObvEstimator>* out, bool device_only = false);
   ~GlObvEstimator();
 
-  // OBV estimate of each box at resolution m, 1 <= m <= max_m(), in world volume units. Makes
-  // the context current on the calling thread: not to be called on one estimator from several
-  // threads at once, nor from a TBB task that another task may call it from (the call waits
-  // on its planning tasks, and a waiting thread may take such a task). Like the CPU twin's, not
-  // under a changed floating-point environment (a CGAL rounding scope): the planning workers
-  // keep the one captured when their arena started.
+  // OBV estimate of each box at resolution m, 1 <= m <= max_m(), in world volume units. May be
+  // called from several threads at once (above). The context is bound only by the drawing
+  // thread, and only while it draws, so that another thread (one drawing a figure, say) can
+  // take it between calls, though not during one. Like the CPU twin's, not under a changed
+  // floating-point environment (a CGAL rounding scope): the planning workers keep the one
+  // captured when their arena started.
   std::vector<double> estimate(const std::vector<Obb>& boxes, int m);
   double estimate(const Obb& box, int m);
   int max_m() const;
@@ -58,22 +64,35 @@ class GlObvEstimator {
   const BoxPlanner& planner() const { return planner_; }
 
   const std::string& renderer() const { return context_->renderer(); }
-  // The estimator's GL context, for other drawing in the same process (tree_figure.h).
+  // The estimator's GL context, for other drawing in the same process (tree_figure.h), between
+  // estimate() calls.
   const GlContext& context() const { return *context_; }
   size_t round_trips() const { return round_trips_; }  // since construction
   size_t cpu_fallbacks() const { return cpu_fallbacks_; }  // boxes evaluated in double, since construction
+  // Rounds of the drawing thread that held the boxes of more than one call (calls from several
+  // threads at once).
+  size_t shared_round_trips() const { return shared_round_trips_; }
+  // For tests: while held, the drawing thread takes no call, so that the calls made meanwhile
+  // are drawn together once released; queued_calls() counts the calls' requests waiting.
+  void hold_draws(bool hold);
+  size_t queued_calls() const;
 
  private:
   struct Gl;
+  struct Request;
   explicit GlObvEstimator(const Mesh& mesh);
+  void draw(Request* request);
+  void drawing_loop();
+  void draw_round(const std::vector<Request*>& round);
   void flush(int m);
 
   BoxPlanner planner_;
   std::unique_ptr<GlContext> context_;
   std::unique_ptr<Gl> gl_;
   bool batching_ = true;
-  size_t round_trips_ = 0;
-  size_t cpu_fallbacks_ = 0;
+  std::atomic<size_t> round_trips_{0};
+  std::atomic<size_t> cpu_fallbacks_{0};
+  std::atomic<size_t> shared_round_trips_{0};
 };
 
 // An upper bound on |GL estimate - CPU twin estimate| for a box with this plan at resolution

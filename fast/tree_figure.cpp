@@ -295,7 +295,7 @@ Status render_tree_figure(const GlContext& context, const Mesh& mesh, const std:
   const long long width = static_cast<long long>(n_cols) * options.panel_px + (n_cols + 1LL) * options.gap_px;
   const long long height = static_cast<long long>(n_rows) * options.panel_px + (n_rows + 1LL) * options.gap_px;
 
-  context.make_current();
+  GlContext::Current bound(context);  // released after g's objects are deleted
   drain_errors();
   GlObjects g;
   GLint max_rb = 0, max_samples = 0;

@@ -71,8 +71,9 @@ PanelRect figure_panel(const FigureOptions& options, int row, int column);
 // Preconditions (checked, an error Status): rows non-empty, each tree non-null and built for
 // this mesh (faces < mesh size), each level in [0, 30], panel_px >= 16, the image within the
 // renderer's framebuffer limits, a mesh with at least one face and finite vertices. A level
-// deeper than a tree's depth shows that tree's leaves. Makes `context` current; leaves it
-// current. GL errors come back as a one-line Status.
+// deeper than a tree's depth shows that tree's leaves. Binds `context` to the calling thread
+// for the render and releases it after; it must not be current on another thread (a GL
+// estimator's context is not, between its calls). GL errors come back as a one-line Status.
 Status render_tree_figure(const GlContext& context, const Mesh& mesh, const std::vector<FigureRow>& rows,
                           const FigureOptions& options, RgbaImage* out);
 

@@ -919,7 +919,7 @@ class Builder {
   bool budget_gone(const VariationalState& st) { return st.budget_spent || splitters_.local().stopped(); }
 
   // f(0) ... f(n - 1): at once where the estimator may be called from several threads, else in
-  // order on this thread (the GL estimator's context is this thread's).
+  // order on this thread.
   template <class F>
   void for_each_node(size_t n, const F& f) {
     if (!options_.concurrent_estimates || n < 2) {

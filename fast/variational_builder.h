@@ -124,9 +124,9 @@ struct VariationalOptions {
   bool reuse_known = true;
   uint64_t seed = 1;         // the random starts of the orientation search
   double margin = 0;         // collider margin, world units, finite and >= 0 (see above)
-  // Whether `estimate` may be called from several threads at once (the CPU twin may; the GL
-  // estimator, bound to its context's thread, may not). Then the nodes of a level are split,
-  // and the nodes of a sweep's level regrouped, in parallel (TBB, in the caller's arena); the
+  // Whether `estimate` may be called from several threads at once (the CPU twin and the GL
+  // estimator may: GL draws the calls waiting at once together). Then the nodes of a level are
+  // split, and the nodes of a sweep's level regrouped, in parallel (TBB, in the caller's arena); the
   // tree is the same either way. Then out_of_time and progress are called from TBB's threads
   // too, and the builder's own arithmetic runs there: like the CPU twin's, it needs the
   // default floating-point environment (cpu_estimator.h).

@@ -3,9 +3,12 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <random>
+#include <string>
+#include <thread>
 
 #include <tbb/task_arena.h>
 
@@ -266,6 +269,73 @@ TEST(GlEstimator, ThreadsChangeNothing) {
       EXPECT_GT(gl->round_trips() - trips, 1u);
     }
   }
+}
+
+// Whether the estimator draws a box with this plan (gl_estimator.cpp, plan_box): not flat,
+// evaluable in float, and with a span that covers a texel centre.
+bool gl_draws(const BoxPlan& plan) {
+  if (plan.flat || !gl_evaluates_in_float(plan)) return false;
+  for (const TexelSpan& s : plan.spans)
+    if (s.i0 <= s.i1 && s.j0 <= s.j1) return true;
+  return false;
+}
+
+// Calls from several threads at once (the builder's parallel node search) are drawn together
+// by the estimator's drawing thread (gl_estimator.cpp): each box still gets the value it gets
+// alone, whatever tile it takes and whatever shares its batch, and calls at another m wait for
+// a round of their own. The drawing thread is held until six calls are queued, three at m = 8
+// and three at m = 192 (an atlas of 70 tiles), each of 45 to 64 boxes (the mixed boxes of
+// ThreadsChangeNothing), then released: it must draw them in exactly two rounds, one per m,
+// and at m = 192 the three calls' drawn boxes fill the atlas, so that a call's boxes span two
+// batches. Three such rounds, each with other slices.
+TEST(GlEstimator, CallsFromSeveralThreadsAtOnceGiveEachBoxItsOwnValue) {
+  const Mesh m = analytic::polygonal_torus().mesh;
+  VOBB_MAKE_GL(gl, m);
+  std::vector<Obb> boxes = random_boxes(m, 120, 17);
+  boxes.insert(boxes.begin() + 30, aabox(Vec3::Zero(), Vec3(1, 1, 0)));           // flat
+  boxes.insert(boxes.begin() + 60, aabox(Vec3(1e3, 0, 0), Vec3(1, 1, 1)));        // far
+  boxes.insert(boxes.begin() + 90, aabox(Vec3::Zero(), Vec3(1e38, 1e38, 1e38)));  // beyond float
+  const int resolutions[2] = {8, 192};
+  std::vector<double> alone[2];
+  for (int r = 0; r < 2; ++r)
+    for (const Obb& b : boxes) alone[r].push_back(gl->estimate(b, resolutions[r]));
+  constexpr int kThreads = 6;
+  for (int round = 0; round < 3; ++round) {
+    const size_t shared_before = gl->shared_round_trips(), trips_before = gl->round_trips();
+    gl->hold_draws(true);
+    std::vector<std::string> wrong(kThreads);
+    std::vector<size_t> drawn(kThreads, 0);
+    std::vector<std::thread> threads;
+    for (int t = 0; t < kThreads; ++t)
+      threads.emplace_back([&, t] {
+        const int r = t % 2;
+        // Thread t takes boxes [first, first + count), other slices each round.
+        const size_t count = 45 + (7 * t + 5 * round) % 20;
+        const size_t first = (31 * t + 17 * round) % (boxes.size() - count + 1);
+        const std::vector<Obb> slice(boxes.begin() + first, boxes.begin() + first + count);
+        const std::vector<double> got = gl->estimate(slice, resolutions[r]);
+        for (size_t i = 0; i < count && wrong[t].empty(); ++i)
+          if (got[i] != alone[r][first + i])
+            wrong[t] = "box " + std::to_string(first + i) + " at m " + std::to_string(resolutions[r]);
+        for (size_t i = 0; i < count; ++i) drawn[t] += gl_draws(gl->planner().plan(slice[i], resolutions[r])) ? 1 : 0;
+      });
+    // Each call is one request (at most 64 boxes, under either atlas's capacity).
+    const auto t0 = std::chrono::steady_clock::now();
+    while (gl->queued_calls() < kThreads && std::chrono::steady_clock::now() - t0 < std::chrono::seconds(120))
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    EXPECT_EQ(gl->queued_calls(), static_cast<size_t>(kThreads)) << "round " << round;
+    gl->hold_draws(false);
+    for (std::thread& th : threads) th.join();
+    for (int t = 0; t < kThreads; ++t) EXPECT_EQ(wrong[t], "") << "thread " << t << ", round " << round;
+    EXPECT_EQ(gl->shared_round_trips() - shared_before, 2u) << "round " << round;
+    const size_t drawn_192 = drawn[1] + drawn[3] + drawn[5];
+    ASSERT_GT(drawn_192, 70u) << "the m = 192 calls do not fill an atlas, round " << round;
+    // m = 8: one batch (capacity 4096); m = 192: ceil(drawn / 70) batches.
+    EXPECT_EQ(gl->round_trips() - trips_before, 1 + (drawn_192 + 69) / 70) << "round " << round;
+  }
+  // The drawing thread released the context after its last round: this thread can take it.
+  { GlContext::Current bound(gl->context()); }
+  EXPECT_EQ(gl->estimate(boxes[0], 8), alone[0][0]);
 }
 
 // As RaysThroughVerticesAreClaimedOnce (cpu_estimator_test.cpp), on the GL side: the shader's

@@ -6,9 +6,11 @@
 #include <cstring>
 #include <memory>
 #include <set>
+#include <thread>
 
 #include "common/png_io.h"
 #include "data/analytic_meshes.h"
+#include "fast/gl_estimator.h"
 #include "fast/obbtree_builder.h"
 #include "test_common.h"
 
@@ -242,6 +244,35 @@ TEST(PngIo, RejectsMalformedImagesAndFiles) {
   std::remove(path.c_str());
   EXPECT_FALSE(s);
   EXPECT_TRUE(back.rgba.empty());
+}
+
+// The command line draws a figure with the GL estimator's context after a build whose calls
+// came from several threads (compare --backend gl --figure): the estimator's drawing thread
+// holds the context only while it draws, so the figure can bind it between calls, and the
+// estimator draws again after it (render_tree_figure releases it). The figure is the one drawn
+// with a context of its own, pixel for pixel: the same renderer and drawing.
+TEST(TreeFigure, DrawsWithAGlEstimatorsContextBetweenItsCalls) {
+  VOBB_MAKE_CONTEXT(own);
+  const Fixture f;
+  std::unique_ptr<GlObvEstimator> gl;
+  ASSERT_TRUE(GlObvEstimator::create(f.mesh, &gl));
+  std::vector<Obb> boxes;
+  for (const TreeNode& n : f.binary.nodes) boxes.push_back(n.box);
+  std::vector<double> first[2];
+  std::thread a([&] { first[0] = gl->estimate(boxes, 8); });
+  std::thread b([&] { first[1] = gl->estimate(boxes, 8); });
+  a.join();
+  b.join();
+  EXPECT_EQ(first[0], first[1]);
+  const FigureOptions o = small_options();
+  RgbaImage shared, alone;
+  Status s = render_tree_figure(gl->context(), f.mesh, f.rows(), o, &shared);
+  ASSERT_TRUE(s) << s.message();
+  s = render_tree_figure(*own, f.mesh, f.rows(), o, &alone);
+  ASSERT_TRUE(s) << s.message();
+  EXPECT_EQ(shared.rgba, alone.rgba);
+  EXPECT_EQ(gl->estimate(boxes, 8), first[0]);
+  gl.reset();  // joins the drawing thread, which deletes the GL objects in the context
 }
 
 }  // namespace
