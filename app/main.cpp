@@ -304,7 +304,7 @@ vobb::Status load_mesh_and_tree(const std::string& mesh_path, const std::string&
 }
 
 int run_certify(const std::string& mesh_path, const std::string& tree_path, bool json, bool rational,
-                const std::string& path, bool quiet) {
+                const std::string& path, const std::string& checkpoint, bool quiet) {
   vobb::LoadedMesh mesh;
   vobb::Tree tree;
   vobb::Status s = load_mesh_and_tree(mesh_path, tree_path, &mesh, &tree);
@@ -315,6 +315,40 @@ int run_certify(const std::string& mesh_path, const std::string& tree_path, bool
              : path == "both" ? vobb::exact::OmvPath::kBoth
                               : vobb::exact::OmvPath::kAuto;
   if (!quiet) opt.progress = [](const std::string& line) { std::fprintf(stderr, "certify: %s\n", line.c_str()); };
+  vobb::exact::CertifyState resume;
+  std::unique_ptr<vobb::exact::CertifyCheckpoint> saved;
+  bool warned = false;
+  if (!checkpoint.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(checkpoint, ec);
+    if (ec) return refuse(vobb::Status::error(checkpoint + ": cannot make the checkpoint folder: " + ec.message()));
+    // What the certificate depends on: a state saved under another fingerprint is refused.
+    const std::string tree_json = vobb::tree_to_json(tree);
+    saved = std::make_unique<vobb::exact::CertifyCheckpoint>(
+        checkpoint, "certify 1; mesh " + vobb::mesh_sha256(mesh.mesh) + "; tree " +
+                        vobb::sha256_hex(tree_json.data(), tree_json.size()) + "; path " + path);
+    bool resuming = false;
+    s = saved->load(tree, &resume, &resuming);
+    if (!s) return refuse(s);
+    if (resuming) {
+      opt.resume = &resume;
+      if (!quiet)
+        std::fprintf(stderr, "vobb: resuming from %s (the boxes' OBV, %zu of %d layers done)\n", checkpoint.c_str(),
+                     resume.layers.size(), tree.depth + 1);
+    }
+    // Test hook: VOBB_TEST_KILL_AFTER_CERTIFIED_LAYERS=N kills the process (SIGKILL, as an
+    // outside kill would) right after the state with N finished layers is saved.
+    const char* kill_env = std::getenv("VOBB_TEST_KILL_AFTER_CERTIFIED_LAYERS");
+    const long kill_at = kill_env != nullptr ? std::atol(kill_env) : -1;
+    opt.checkpoint = [&, kill_at](const vobb::exact::CertifyState& st) {
+      const vobb::Status w = saved->save(st);
+      if (!w && !warned) {
+        warned = true;
+        std::fprintf(stderr, "vobb: warning: checkpoint not saved: %s\n", one_line(w.message()).c_str());
+      }
+      if (w && !st.obv.empty() && static_cast<long>(st.layers.size()) == kill_at) ::raise(SIGKILL);
+    };
+  }
   const vobb::exact::Certificate c = vobb::exact::certify(mesh.mesh, tree, opt);
   if (json) {
     nlohmann::ordered_json j;
@@ -703,6 +737,10 @@ int main(int argc, char** argv) {
   cert->add_option("--path", omv_path, "Exact path for OMV: auto, clip, nef, or both (and compare)")
       ->capture_default_str()->check(CLI::IsMember({"auto", "clip", "nef", "both"}));
   cert->add_flag("--quiet", quiet, "No per-layer progress on stderr");
+  std::string certify_checkpoint;
+  cert->add_option("--checkpoint", certify_checkpoint,
+                   "Folder for what is certified so far (obv.json: the boxes' OBV; layers.json: each finished "
+                   "layer); a run started again with the same folder resumes it and prints the same certificate");
   int certify_threads = 0;
   cert->add_option("--threads", certify_threads, kCertifyThreadsHelp)->check(CLI::Range(1, 4096));
 
@@ -821,7 +859,7 @@ int main(int argc, char** argv) {
     if (collide_cmd->parsed()) return vobb::app::run_collide_command(collide_flags);
     if (obv->parsed()) return run_obv(mesh, boxes_path, ms, backend, json, rational);
     if (cmp->parsed()) return run_compare(mesh, cf, compare_json, rational, compare_figure, compare_figure_up);
-    if (cert->parsed()) return run_certify(mesh, tree_path, json, rational, omv_path, quiet);
+    if (cert->parsed()) return run_certify(mesh, tree_path, json, rational, omv_path, certify_checkpoint, quiet);
     return kExitBadInput;
   };
   // Bad input never throws (it is a Status); what can is running out of memory, or a library's

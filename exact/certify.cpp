@@ -6,15 +6,24 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cctype>
+#include <cerrno>
 #include <exception>
 #include <chrono>
 #include <cstdio>
 #include <memory>
 #include <mutex>
-#include <numeric>
+#include <map>
+#include <set>
+#include <sys/stat.h>
 
-#include "exact/outer_volume.h"
+#include <nlohmann/json.hpp>
+
+#include "common/atomic_file.h"
+#include "common/sha256.h"
 #include "common/stopwatch.h"
+#include "common/text_util.h"
+#include "exact/outer_volume.h"
 
 // Threads share no CGAL object: each builds its own NefSolver (nef_solver.cpp checks that CGAL
 // is built thread-aware). ClipSolver's const members read shared rationals and write nothing.
@@ -41,27 +50,59 @@ Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& op
   say("containment: " + std::to_string(cert.containment.violations) + " violations in " +
       std::to_string(cert.containment.checked_pairs) + " (node, face) pairs");
 
+  // What is finished, for the checkpoint callback; saved one call at a time.
+  CertifyState done;
+  std::mutex done_mutex;
+  auto finished = [&](const LayerCertificate* lc) {
+    if (!options.checkpoint) return;
+    std::lock_guard<std::mutex> lock(done_mutex);
+    if (lc) done.layers.push_back(*lc);
+    options.checkpoint(done);
+  };
+  const CertifyState* resume = options.resume;
+  VOBB_ASSERT(!resume || resume->obv.empty() || resume->obv.size() == tree.nodes.size(),
+              "a resumed state fits the tree (read_certify_state checks it)");
+
   // OBV once per node (a leaf above level i belongs to every later layer too), by clipping,
   // one node per task: every node belongs to the layer of its own level.
   const ClipSolver clip(mesh);
-  const auto tobv = std::chrono::steady_clock::now();
   std::vector<Rational> obv(tree.nodes.size());
-  tbb::parallel_for(size_t{0}, tree.nodes.size(), [&](size_t id) { obv[id] = clip.obv(tree.nodes[id].box); });
-  {
+  if (resume && !resume->obv.empty()) {
+    obv = resume->obv;
+    say("OBV of " + std::to_string(tree.nodes.size()) + " boxes: from the checkpoint");
+  } else {
+    const auto tobv = std::chrono::steady_clock::now();
+    tbb::parallel_for(size_t{0}, tree.nodes.size(), [&](size_t id) { obv[id] = clip.obv(tree.nodes[id].box); });
     char buf[96];
     std::snprintf(buf, sizeof buf, "OBV of %zu boxes in %.2f s", tree.nodes.size(), seconds_since(tobv));
     say(buf);
   }
+  if (options.checkpoint) done.obv = obv;
 
   // One task per layer, the layers with most boxes (the costly unions) first, each taken by
-  // the next free thread. A thread builds its own Nef(X) when a layer first needs it.
+  // the next free thread. A thread builds its own Nef(X) when a layer first needs it. Layers
+  // a resumed state finished are taken from it.
   const int levels = tree.depth + 1;
   cert.layers.resize(levels);
-  std::vector<int> order(levels);
+  std::vector<char> resumed(levels, 0);
+  if (resume)
+    for (const LayerCertificate& lc : resume->layers) {
+      VOBB_ASSERT(lc.level >= 0 && lc.level < levels && !resumed[lc.level], "a resumed state fits the tree");
+      cert.layers[lc.level] = lc;
+      resumed[lc.level] = 1;
+      if (options.checkpoint) done.layers.push_back(lc);
+    }
+  if (resume && !resume->layers.empty())
+    say(std::to_string(resume->layers.size()) + " of " + std::to_string(levels) + " layers: from the checkpoint");
+  finished(nullptr);
+  std::vector<int> order;
   std::vector<std::vector<int32_t>> ids(levels);
-  for (int level = 0; level < levels; ++level) ids[level] = layer(tree, level);
-  std::iota(order.begin(), order.end(), 0);
+  for (int level = 0; level < levels; ++level) {
+    ids[level] = layer(tree, level);
+    if (!resumed[level]) order.push_back(level);
+  }
   std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return ids[a].size() > ids[b].size(); });
+  const int todo = static_cast<int>(order.size());
   std::atomic<int> next{0};
   auto certify_layers = [&]() {
     std::unique_ptr<NefSolver> nef;  // this thread's own
@@ -122,15 +163,16 @@ Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& op
                     level, tree.depth, lc.boxes, lc.overlapping_boxes, format_nearest(lc.omv).c_str(),
                     format_nearest(lc.sum_obv).c_str(), disagree.c_str(), lc.seconds);
       say(buf);
+      finished(&lc);
     };
     try {
-      for (int k; (k = next.fetch_add(1)) < levels;) certify_layer(order[k]);
+      for (int k; (k = next.fetch_add(1)) < todo;) certify_layer(order[k]);
     } catch (...) {
-      next = levels;  // a failure: the other threads take no further layer
-      throw;          // task_group passes it on to the caller
+      next = todo;  // a failure: the other threads take no further layer
+      throw;        // task_group passes it on to the caller
     }
   };
-  const int workers = std::min(levels, tbb::this_task_arena::max_concurrency());
+  const int workers = std::max(1, std::min(todo, tbb::this_task_arena::max_concurrency()));
   tbb::task_group group;
   for (int w = 1; w < workers; ++w) group.run(certify_layers);
   // This thread takes layers too. Its failure is held until the workers have stopped: the
@@ -150,6 +192,211 @@ Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& op
   cert.weighted_error = sum_pairwise(weighted);
   cert.seconds = seconds_since(t0);
   return cert;
+}
+
+namespace {
+
+constexpr const char* kObvFormat = "vobb-certify-obv";
+constexpr const char* kLayersFormat = "vobb-certify-layers";
+
+std::string checksum(nlohmann::json j) {
+  j.erase("sha256");
+  const std::string body = j.dump();
+  return sha256_hex(body.data(), body.size());
+}
+
+// "p/q" (or "p") in base 10, q > 0, as mpq_class writes it; false for anything else, and for a
+// zero denominator, which mpq would divide by.
+bool parse_rational(const nlohmann::json& v, Rational* out) {
+  if (!v.is_string()) return false;
+  const std::string& text = v.get_ref<const std::string&>();
+  const size_t slash = text.find('/');
+  mpz_class num, den(1);
+  auto whole = [](const std::string& digits, mpz_class* z, bool sign_ok) {
+    if (digits.empty()) return false;
+    for (size_t i = 0; i < digits.size(); ++i)
+      if (!(std::isdigit(static_cast<unsigned char>(digits[i])) || (sign_ok && i == 0 && digits[i] == '-' && digits.size() > 1)))
+        return false;
+    return z->set_str(digits, 10) == 0;
+  };
+  if (!whole(text.substr(0, slash), &num, true)) return false;
+  if (slash != std::string::npos && !whole(text.substr(slash + 1), &den, false)) return false;
+  if (den == 0) return false;
+  *out = Rational(num, den);
+  out->canonicalize();
+  return true;
+}
+
+bool exists(const std::string& path) {
+  struct stat st;
+  return ::stat(path.c_str(), &st) == 0 || !(errno == ENOENT || errno == ENOTDIR);
+}
+
+// Reads one of the two files: JSON object, format, known fields, checksum, fingerprint.
+// *text gets the file's bytes.
+Status read_checkpoint_file(const std::string& path, const char* format, const std::set<std::string>& known,
+                            const std::string& fingerprint, nlohmann::json* j, std::string* text) {
+  const Status read = read_regular_file(path, path, "checkpoint file", text);
+  if (!read) return read;
+  auto bad = [&](const std::string& why) { return Status::error(path + ": damaged certify checkpoint: " + why); };
+  *j = nlohmann::json::parse(*text, nullptr, /*allow_exceptions=*/false);
+  if (j->is_discarded() || !j->is_object()) return bad("not JSON");
+  if (j->value("format", "") != format || j->value("version", 0) != 1) return bad("not a vobb certify checkpoint");
+  for (const auto& item : j->items())
+    if (!known.count(item.key())) return bad("unknown field '" + item.key().substr(0, 40) + "'");
+  if (!j->contains("sha256") || !(*j)["sha256"].is_string() || (*j)["sha256"].get<std::string>() != checksum(*j))
+    return bad("checksum does not match the contents");
+  if (!j->contains("fingerprint") || !(*j)["fingerprint"].is_string() || (*j)["fingerprint"].get<std::string>() != fingerprint)
+    return Status::error(path + ": checkpoint of another certification (mesh, tree or --path differ); "
+                         "use another --checkpoint folder or remove it");
+  return Status::ok();
+}
+
+}  // namespace
+
+struct CertifyCheckpoint::Written {
+  std::map<int, nlohmann::json> layers;
+};
+
+CertifyCheckpoint::CertifyCheckpoint(std::string folder, std::string fingerprint)
+    : folder_(std::move(folder)), fingerprint_(std::move(fingerprint)), written_(new Written) {}
+
+CertifyCheckpoint::~CertifyCheckpoint() = default;
+
+std::string CertifyCheckpoint::obv_path() const { return folder_ + "/obv.json"; }
+std::string CertifyCheckpoint::layers_path() const { return folder_ + "/layers.json"; }
+
+Status CertifyCheckpoint::save(const CertifyState& state) {
+  if (!state.obv.empty() && obv_sha256_.empty()) {
+    nlohmann::json j;
+    j["format"] = kObvFormat;
+    j["version"] = 1;
+    j["fingerprint"] = fingerprint_;
+    nlohmann::json obv = nlohmann::json::array();
+    for (const Rational& q : state.obv) obv.push_back(q.get_str());
+    j["obv"] = std::move(obv);
+    j["sha256"] = checksum(j);
+    const std::string text = j.dump() + "\n";
+    const Status w = write_file_atomic(obv_path(), text);
+    if (!w) return w;
+    obv_sha256_ = j["sha256"].get<std::string>();
+  }
+  if (obv_sha256_.empty()) return Status::ok();  // nothing finished yet
+  nlohmann::json j;
+  j["format"] = kLayersFormat;
+  j["version"] = 1;
+  j["fingerprint"] = fingerprint_;
+  j["obv_sha256"] = obv_sha256_;
+  nlohmann::json layers = nlohmann::json::array();
+  for (const LayerCertificate& l : state.layers) {
+    // A finished layer does not change: its decimal strings (up to some 10^5 digits each) are
+    // made once, not at every save.
+    auto cached = written_->layers.find(l.level);
+    if (cached != written_->layers.end()) {
+      layers.push_back(cached->second);
+      continue;
+    }
+    nlohmann::json jl = {{"level", l.level},
+                         {"boxes", l.boxes},
+                         {"overlapping_boxes", l.overlapping_boxes},
+                         {"omv", l.omv.get_str()},
+                         {"sum_obv", l.sum_obv.get_str()},
+                         {"omv_path", l.omv_path},
+                         {"seconds", l.seconds}};
+    if (l.omv_path == "both") {
+      jl["paths_agree"] = l.paths_agree;
+      jl["omv_clip"] = l.omv_clip.get_str();
+    }
+    layers.push_back(jl);
+    written_->layers.emplace(l.level, std::move(jl));
+  }
+  j["layers"] = std::move(layers);
+  j["sha256"] = checksum(j);
+  return write_file_atomic(layers_path(), j.dump() + "\n");
+}
+
+Status CertifyCheckpoint::load(const Tree& tree, CertifyState* state, bool* found) {
+  *found = false;
+  const std::string obv_file = obv_path(), layers_file = layers_path();
+  const bool has_obv = exists(obv_file), has_layers = exists(layers_file);
+  if (!has_obv && !has_layers) return Status::ok();
+  *found = true;
+  if (!has_obv) return Status::error(layers_file + ": damaged certify checkpoint: layers without the boxes' OBV (" + obv_file + ")");
+  CertifyState s;
+  std::string current;  // the file being read, for the messages
+  auto bad = [&](const std::string& why) { return Status::error(current + ": damaged certify checkpoint: " + why); };
+  try {
+    nlohmann::json j;
+    std::string text;
+    current = obv_file;
+    Status r = read_checkpoint_file(obv_file, kObvFormat, {"format", "version", "fingerprint", "obv", "sha256"},
+                                    fingerprint_, &j, &text);
+    if (!r) return r;
+    const std::string obv_sha = j["sha256"].get<std::string>();  // checked: the checksum of its contents
+    const nlohmann::json& obv = j.at("obv");
+    if (!obv.is_array() || obv.size() != tree.nodes.size())
+      return bad("OBV of " + std::to_string(obv.size()) + " boxes for a tree of " + std::to_string(tree.nodes.size()));
+    for (size_t i = 0; i < obv.size(); ++i) {
+      Rational q;
+      if (!parse_rational(obv[i], &q)) return bad("OBV of node " + std::to_string(i) + " is not a rational");
+      s.obv.push_back(q);
+    }
+    if (has_layers) {
+      current = layers_file;
+      r = read_checkpoint_file(layers_file, kLayersFormat,
+                               {"format", "version", "fingerprint", "obv_sha256", "layers", "sha256"}, fingerprint_, &j,
+                               &text);
+      if (!r) return r;
+      if (j.at("obv_sha256").get<std::string>() != obv_sha) return bad("its layers belong to another obv.json");
+      const nlohmann::json& layers = j.at("layers");
+      if (!layers.is_array()) return bad("layers is not a list");
+      std::vector<char> seen(tree.depth + 1, 0);
+      for (const nlohmann::json& jl : layers) {
+        LayerCertificate l;
+        const nlohmann::json& level = jl.at("level");
+        if (!level.is_number_integer() || level.get<int64_t>() < 0 || level.get<int64_t>() > tree.depth)
+          return bad("a layer's level is outside 0.." + std::to_string(tree.depth));
+        l.level = static_cast<int>(level.get<int64_t>());
+        const std::string at = "layer " + std::to_string(l.level) + ": ";
+        if (seen[l.level]) return bad(at + "given twice");
+        seen[l.level] = 1;
+        const std::vector<int32_t> ids = layer(tree, l.level);
+        const nlohmann::json& boxes = jl.at("boxes");
+        const nlohmann::json& overlapping = jl.at("overlapping_boxes");
+        if (!boxes.is_number_unsigned() || boxes.get<uint64_t>() != ids.size())
+          return bad(at + "box count is not the tree's");
+        if (!overlapping.is_number_unsigned() || overlapping.get<uint64_t>() > ids.size())
+          return bad(at + "overlapping boxes are not a count up to its boxes");
+        l.boxes = ids.size();
+        l.overlapping_boxes = overlapping.get<uint64_t>();
+        if (!parse_rational(jl.at("omv"), &l.omv) || !parse_rational(jl.at("sum_obv"), &l.sum_obv))
+          return bad(at + "OMV or sum of OBV is not a rational");
+        std::vector<Rational> obvs;
+        for (int32_t id : ids) obvs.push_back(s.obv[id]);
+        if (sum_pairwise(obvs) != l.sum_obv) return bad(at + "sum of OBV is not the sum of its boxes' OBV");
+        l.omv_path = jl.at("omv_path").get<std::string>();
+        if (l.omv_path == "none") {
+          if (l.omv != l.sum_obv || l.overlapping_boxes != 0)
+            return bad(at + "path none, but OMV is not the sum of OBV or boxes overlap");
+        } else if (l.omv_path == "both") {
+          if (!parse_rational(jl.at("omv_clip"), &l.omv_clip)) return bad(at + "clipping's OMV is not a rational");
+          l.paths_agree = jl.at("paths_agree").get<bool>();
+          if (l.paths_agree != (l.omv == l.omv_clip)) return bad(at + "paths_agree contradicts the two OMV");
+        } else if (l.omv_path != "nef" && l.omv_path != "clip") {
+          return bad(at + "unknown path '" + l.omv_path.substr(0, 20) + "'");
+        }
+        const nlohmann::json& seconds = jl.at("seconds");
+        if (!seconds.is_number() || !(seconds.get<double>() >= 0)) return bad(at + "seconds is not a time");
+        l.seconds = seconds.get<double>();
+        s.layers.push_back(std::move(l));
+      }
+    }
+    obv_sha256_ = obv_sha;
+  } catch (const nlohmann::json::exception& e) {
+    return bad(e.what());  // nlohmann's messages are one line
+  }
+  *state = std::move(s);
+  return Status::ok();
 }
 
 }  // namespace vobb::exact

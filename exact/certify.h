@@ -5,11 +5,13 @@
 #pragma once
 
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "common/exact_predicates.h"
 #include "common/mesh.h"
+#include "common/status.h"
 #include "common/tree.h"
 
 namespace vobb::exact {
@@ -46,11 +48,26 @@ struct Certificate {
   bool ok() const;  // containment, every upper bound, and (kBoth) path agreement
 };
 
+// What a certification has finished, for a checkpoint: the boxes' OBV once all are computed,
+// and each finished layer (in the order they finished).
+struct CertifyState {
+  std::vector<Rational> obv;              // per node id; empty until all are computed
+  std::vector<LayerCertificate> layers;   // finished layers
+};
+
 struct CertifyOptions {
   OmvPath path = OmvPath::kAuto;
   // Called with one line per finished stage (per layer, in the order they finish), so long
   // runs show they are alive.
   std::function<void(const std::string&)> progress;
+  // Called with everything finished so far after the boxes' OBV and after each layer, from any
+  // of the threads, one call at a time; may be empty.
+  std::function<void(const CertifyState&)> checkpoint;
+  // A state saved by `checkpoint` of a certification of the same mesh and tree with the same
+  // path (CertifyCheckpoint::load checks it against the tree): its OBV and layers are taken as they
+  // are, and only the rest is computed. The certificate is the uninterrupted one, rational
+  // for rational (a resumed layer keeps the seconds it took).
+  const CertifyState* resume = nullptr;
 };
 
 // Precondition: the mesh is solid and the tree validated against it (validate_tree, same
@@ -61,5 +78,35 @@ struct CertifyOptions {
 // The result is the same rationals for any number of threads; only `seconds` and the order of
 // the progress lines vary. `progress` is called from any of the threads, one call at a time.
 Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& options);
+
+// A certification's checkpoint, in a folder of two JSON files: obv.json, the boxes' OBV, written
+// once; and layers.json, the finished layers, rewritten after each and naming obv.json's
+// checksum, so that the large rationals are written once. Each file carries a `fingerprint`
+// naming what the certification depends on (the caller's: mesh, tree and path), the
+// rationals as exact "p/q" strings, and in `sha256` the SHA-256 of its compact JSON without
+// that field. Writes are atomic (temporary file, then rename).
+class CertifyCheckpoint {
+ public:
+  CertifyCheckpoint(std::string folder, std::string fingerprint);
+  ~CertifyCheckpoint();
+  // The saved state. Neither file there: ok with *found = false. Refused, with one line naming
+  // the file: a damaged file (bad checksum, unknown field, a rational that does not parse or
+  // has a zero denominator), another certification's (fingerprint), layers.json without
+  // obv.json or naming another one, and a state that does not fit `tree`: an OBV count other
+  // than its nodes', a layer outside 0..depth or given twice, a box count or a sum of OBV
+  // other than the layer's, or a path's result that contradicts itself.
+  Status load(const Tree& tree, CertifyState* state, bool* found);
+  // Writes obv.json the first time `state` has OBV (not again once loaded or written), then
+  // layers.json.
+  Status save(const CertifyState& state);
+  std::string obv_path() const;
+  std::string layers_path() const;
+
+ private:
+  struct Written;  // finished layers as written, by level (certify.cpp)
+  std::string folder_, fingerprint_;
+  std::string obv_sha256_;  // of obv.json as written or loaded; empty: none yet
+  std::unique_ptr<Written> written_;
+};
 
 }  // namespace vobb::exact

@@ -624,5 +624,54 @@ TEST(Cli, KilledBuildResumesToTheSameTree) {
   for (const std::string& p : {whole, resumed}) std::remove(p.c_str());
 }
 
+// The JSON report without its timings ("seconds", which a resumed run keeps for its resumed
+// layers but not for the whole run).
+nlohmann::json without_seconds(nlohmann::json j) {
+  if (j.is_object()) {
+    j.erase("seconds");
+    for (auto& item : j.items()) item.value() = without_seconds(item.value());
+  } else if (j.is_array()) {
+    for (auto& v : j) v = without_seconds(v);
+  }
+  return j;
+}
+
+// A certification killed (SIGKILL, through a test hook) once its checkpoint holds two finished
+// layers, then started again with the same folder, prints the uninterrupted certificate, the
+// rationals included, certifying only the layers left; another --path refuses that folder.
+TEST(Cli, KilledCertifyResumesToTheSameCertificate) {
+  const std::string mesh = test::real_mesh("dino");
+  VOBB_REQUIRE_REAL_MESH("dino");
+  const std::string dir = test::temp_path("cert_ckpt"), state = dir + "/layers.json";
+  const std::string tree = test::temp_path("cert_tree.json");
+  std::system(("rm -rf " + dir).c_str());
+  ASSERT_EQ(vobb_cli("build " + mesh + " -o " + tree + " --method obbtree --depth 4 --quiet").code, 0);
+  const CliRun whole = vobb_cli("certify " + mesh + " " + tree + " --json --rational --quiet");
+  ASSERT_EQ(whole.code, 0) << whole.err;
+  const int status = std::system(("VOBB_TEST_KILL_AFTER_CERTIFIED_LAYERS=2 " + std::string(VOBB_CLI) + " certify " +
+                                  mesh + " " + tree + " --json --rational --quiet --checkpoint " + dir +
+                                  " >/dev/null 2>&1").c_str());
+  const bool killed = (WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL) ||
+                      (WIFEXITED(status) && WEXITSTATUS(status) == 128 + SIGKILL);
+  EXPECT_TRUE(killed) << "certify was not killed at its two-layer checkpoint (status " << status << ")";
+  const nlohmann::json saved = nlohmann::json::parse(slurp(state), nullptr, false);
+  ASSERT_TRUE(saved.is_object()) << "no checkpoint was saved";
+  EXPECT_EQ(saved.at("layers").size(), 2u);
+  const CliRun again = vobb_cli("certify " + mesh + " " + tree + " --json --rational --checkpoint " + dir);
+  ASSERT_EQ(again.code, 0) << again.err;
+  EXPECT_NE(again.err.find("resuming from"), std::string::npos) << again.err;
+  EXPECT_NE(again.err.find("2 of 5 layers done"), std::string::npos) << again.err;
+  EXPECT_NE(again.err.find("OBV of 31 boxes: from the checkpoint"), std::string::npos) << again.err;
+  size_t layer_lines = 0;
+  for (size_t at = 0; (at = again.err.find("certify: layer ", at)) != std::string::npos; ++at) ++layer_lines;
+  EXPECT_EQ(layer_lines, 3u) << again.err;
+  EXPECT_EQ(without_seconds(nlohmann::json::parse(again.out)), without_seconds(nlohmann::json::parse(whole.out)));
+  const CliRun other = vobb_cli("certify " + mesh + " " + tree + " --path clip --quiet --checkpoint " + dir);
+  EXPECT_EQ(other.code, 2);
+  EXPECT_NE(other.err.find("checkpoint of another certification"), std::string::npos) << other.err;
+  std::system(("rm -rf " + dir).c_str());
+  std::remove(tree.c_str());
+}
+
 }  // namespace
 }  // namespace vobb

@@ -4,10 +4,20 @@
 #include <tbb/task_arena.h>
 
 #include <atomic>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <functional>
 #include <stdexcept>
 #include <string>
 
+#include <nlohmann/json.hpp>
+
 #include "common/io/mesh_io.h"
+#include "common/sha256.h"
 #include "common/tree.h"
 #include "data/analytic_meshes.h"
 #include "fast/cpu_estimator.h"
@@ -189,6 +199,172 @@ TEST_F(CertifyTorus, FailureOnAnyThreadReachesTheCaller) {
   const Certificate c = certify(m, t, both_paths());
   EXPECT_EQ(c.layers.size(), 5u);
   EXPECT_TRUE(c.ok());
+}
+
+// A certification resumed from any state it saved (after the boxes' OBV, then after each of the
+// 5 layers; through the checkpoint's files, as the command line keeps them) gives the
+// uninterrupted certificate, rational for rational, and computes only what the state lacks:
+// its progress reports 5 - k layers for a state with k, and no OBV. Resumed layers keep the
+// seconds they took.
+TEST_F(CertifyTorus, ResumingFromAnyCheckpointGivesTheSameCertificate) {
+  CertifyOptions co = both_paths();
+  std::vector<CertifyState> saved;
+  co.checkpoint = [&](const CertifyState& st) { saved.push_back(st); };
+  const Certificate full = certify(m, t, co);
+  ASSERT_EQ(full.layers.size(), 5u);
+  ASSERT_EQ(saved.size(), 6u);
+  const std::string dir = test::temp_path("certify_state");
+  ASSERT_EQ(::mkdir(dir.c_str(), 0755), 0);
+  for (size_t k = 0; k < saved.size(); ++k) {
+    EXPECT_EQ(saved[k].layers.size(), k);
+    ASSERT_EQ(saved[k].obv.size(), t.nodes.size());
+    CertifyCheckpoint writer(dir, "fingerprint");
+    ASSERT_TRUE(writer.save(saved[k]));
+    CertifyState back;
+    bool found = false;
+    CertifyCheckpoint reader(dir, "fingerprint");
+    const Status read = reader.load(t, &back, &found);
+    ASSERT_TRUE(read) << read.message();
+    ASSERT_TRUE(found);
+    CertifyOptions r = both_paths();
+    r.resume = &back;
+    int layer_lines = 0, obv_lines = 0;
+    r.progress = [&](const std::string& line) {
+      layer_lines += line.rfind("layer ", 0) == 0 ? 1 : 0;
+      obv_lines += line.rfind("OBV of", 0) == 0 && line.find("from the checkpoint") == std::string::npos ? 1 : 0;
+    };
+    const Certificate c = certify(m, t, r);
+    EXPECT_EQ(layer_lines, static_cast<int>(5 - k)) << "state with " << k << " layers";
+    EXPECT_EQ(obv_lines, 0) << "the boxes' OBV were computed again, state with " << k << " layers";
+    ASSERT_EQ(c.layers.size(), full.layers.size());
+    for (size_t i = 0; i < c.layers.size(); ++i) {
+      const LayerCertificate &a = full.layers[i], &b = c.layers[i];
+      EXPECT_EQ(b.level, a.level);
+      EXPECT_EQ(b.boxes, a.boxes);
+      EXPECT_EQ(b.overlapping_boxes, a.overlapping_boxes);
+      EXPECT_EQ(b.omv, a.omv) << "layer " << i << ", state with " << k << " layers";
+      EXPECT_EQ(b.sum_obv, a.sum_obv) << "layer " << i;
+      EXPECT_EQ(b.omv_clip, a.omv_clip) << "layer " << i;
+      EXPECT_EQ(b.omv_path, a.omv_path);
+      EXPECT_EQ(b.paths_agree, a.paths_agree);
+    }
+    for (const LayerCertificate& l : saved[k].layers) EXPECT_EQ(c.layers[l.level].seconds, l.seconds);
+    EXPECT_EQ(c.weighted_error, full.weighted_error);
+    EXPECT_EQ(c.containment.violations, full.containment.violations);
+    EXPECT_EQ(c.containment.checked_pairs, full.containment.checked_pairs);
+    EXPECT_TRUE(c.ok());
+  }
+  // A checkpoint that loaded the OBV does not write obv.json again: the layers alone change.
+  {
+    CertifyCheckpoint again(dir, "fingerprint");
+    CertifyState back;
+    bool found = false;
+    ASSERT_TRUE(again.load(t, &back, &found));
+    ASSERT_EQ(::unlink(again.obv_path().c_str()), 0);
+    ASSERT_TRUE(again.save(back));
+    EXPECT_FALSE(test::exists(again.obv_path()));
+  }
+  std::system(("rm -rf " + dir).c_str());
+}
+
+void write_text(const std::string& path, const std::string& text) { std::ofstream(path, std::ios::binary) << text; }
+
+// A file's checksum is the SHA-256 of its compact JSON without the field (certify.h); a test
+// that edits a file signs it again, so that the structure checks, not the checksum, refuse it.
+void sign(nlohmann::json* j) {
+  j->erase("sha256");
+  const std::string body = j->dump();
+  (*j)["sha256"] = sha256_hex(body.data(), body.size());
+}
+
+// A state of another certification, a damaged file, and signed files that do not fit the tree,
+// contradict themselves or each other are refused with one line naming the file; none is
+// resumed.
+TEST_F(CertifyTorus, DamagedOrForeignCheckpointsAreRefused) {
+  CertifyOptions co = both_paths();
+  CertifyState two;
+  co.checkpoint = [&](const CertifyState& st) {
+    if (st.layers.size() == 2) two = st;
+  };
+  certify(m, t, co);
+  ASSERT_EQ(two.layers.size(), 2u);
+  const std::string dir = test::temp_path("certify_damaged");
+  ASSERT_EQ(::mkdir(dir.c_str(), 0755), 0);
+  CertifyCheckpoint ck(dir, "fp");
+  CertifyState back;
+  bool found = true;
+  ASSERT_TRUE(ck.load(t, &back, &found));
+  EXPECT_FALSE(found) << "no files: nothing to resume";
+  ASSERT_TRUE(ck.save(two));
+  Status s = CertifyCheckpoint(dir, "another fp").load(t, &back, &found);
+  EXPECT_FALSE(s);
+  EXPECT_NE(s.message().find("another certification"), std::string::npos) << s.message();
+  const std::string obv_file = ck.obv_path(), layers_file = ck.layers_path();
+  const nlohmann::json obv = nlohmann::json::parse(test::slurp(obv_file));
+  const nlohmann::json layers = nlohmann::json::parse(test::slurp(layers_file));
+  auto restore = [&] {
+    write_text(obv_file, obv.dump());
+    write_text(layers_file, layers.dump());
+  };
+  auto refused = [&](const std::string& why, const std::string& file) {
+    const Status r = CertifyCheckpoint(dir, "fp").load(t, &back, &found);
+    EXPECT_FALSE(r) << why;
+    EXPECT_NE(r.message().find(why), std::string::npos) << r.message();
+    EXPECT_NE(r.message().find(file), std::string::npos) << r.message();
+    EXPECT_EQ(r.message().find('\n'), std::string::npos) << r.message();
+  };
+  // A digit changed and not signed: the checksum refuses it.
+  {
+    nlohmann::json j = layers;
+    j["layers"][0]["omv"] = "7/3";
+    write_text(layers_file, j.dump());
+    refused("checksum", layers_file);
+    restore();
+  }
+  struct Edit {
+    const char* why;  // what the message must name
+    bool in_obv;      // the file edited: obv.json, else layers.json
+    std::function<void(nlohmann::json&)> edit;
+  };
+  const std::vector<Edit> edits = {
+      {"unknown field", false, [](nlohmann::json& j) { j["extra"] = 1; }},
+      {"unknown field", true, [](nlohmann::json& j) { j["extra"] = 1; }},
+      {"boxes for a tree", true, [](nlohmann::json& j) { j["obv"].erase(j["obv"].size() - 1); }},
+      {"not a rational", true, [](nlohmann::json& j) { j["obv"][0] = "1/0"; }},
+      {"not a rational", true, [](nlohmann::json& j) { j["obv"][0] = "0x10"; }},
+      // A valid obv.json of other values: layers.json names the one it was saved with.
+      {"another obv.json", true, [](nlohmann::json& j) { j["obv"][0] = "12345/7"; }},
+      {"outside 0..4", false, [](nlohmann::json& j) { j["layers"][0]["level"] = 5; }},
+      {"given twice", false, [](nlohmann::json& j) { j["layers"][1] = j["layers"][0]; }},
+      {"box count", false, [](nlohmann::json& j) { j["layers"][0]["boxes"] = j["layers"][0]["boxes"].get<int>() + 1; }},
+      {"sum of OBV is not the sum", false, [](nlohmann::json& j) {
+         j["layers"][0]["sum_obv"] = Rational(Rational(j["layers"][0]["sum_obv"].get<std::string>()) + 1).get_str();
+       }},
+      {"contradicts", false, [](nlohmann::json& j) { j["layers"][0]["paths_agree"] = false; }},
+      {"unknown path", false, [](nlohmann::json& j) { j["layers"][0]["omv_path"] = "guess"; }},
+      {"seconds", false, [](nlohmann::json& j) { j["layers"][0]["seconds"] = -1; }},
+  };
+  for (const Edit& e : edits) {
+    nlohmann::json j = e.in_obv ? obv : layers;
+    e.edit(j);
+    sign(&j);
+    write_text(e.in_obv ? obv_file : layers_file, j.dump());
+    refused(e.why, e.why == std::string("another obv.json") || !e.in_obv ? layers_file : obv_file);
+    restore();
+  }
+  ASSERT_EQ(::unlink(obv_file.c_str()), 0);
+  refused("without the boxes' OBV", layers_file);
+  restore();
+  // The unedited files, signed the same way, are read: the edits, not the signing, were refused.
+  {
+    nlohmann::json j = layers;
+    sign(&j);
+    write_text(layers_file, j.dump());
+    s = CertifyCheckpoint(dir, "fp").load(t, &back, &found);
+    EXPECT_TRUE(s) << s.message();
+    EXPECT_EQ(back.layers.size(), 2u);
+  }
+  std::system(("rm -rf " + dir).c_str());
 }
 
 TEST(Certify, RootLayerOfTheCubeIsExact) {
