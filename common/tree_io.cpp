@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common/atomic_file.h"
+#include "common/json_parse.h"
 #include "common/solidity.h"
 #include "common/text_util.h"
 
@@ -91,8 +92,8 @@ Status write_tree(const Tree& tree, const std::string& path) {
 
 Status parse_tree(const std::string& text, const std::string& display, Tree* tree) {
   auto fail = [&](const std::string& why) { return Status::error(display + ": " + why); };
-  const Json j = Json::parse(text, nullptr, /*allow_exceptions=*/false);
-  if (j.is_discarded()) return fail("not valid JSON");
+  Json j;  // a tree nests 5 deep (file, nodes, node, box, axes' rows); 8 leaves room
+  if (!parse_json_within(text, 8, &j)) return fail("not valid JSON, or nested deeper than a tree file");
   if (!j.is_object() || !j.contains("format") || j["format"] != "vobb-tree")
     return fail("not a vobb tree file (\"format\" is not \"vobb-tree\")");
   long long version, arity, depth, triangles;
@@ -182,8 +183,8 @@ Status read_boxes(const std::string& path, std::vector<Obb>* boxes) {
   Status s = read_regular_file(path, basename_of(path), "box file", &text);
   if (!s) return s;
   const std::string display = basename_of(path);
-  const Json j = Json::parse(text, nullptr, false);
-  if (j.is_discarded()) return Status::error(display + ": not valid JSON");
+  Json j;  // a box file nests 4 deep (file, boxes, box, axes' rows); 8 leaves room
+  if (!parse_json_within(text, 8, &j)) return Status::error(display + ": not valid JSON, or nested deeper than a box file");
   if (!j.is_object() || !j.contains("boxes") || !j["boxes"].is_array())
     return Status::error(display + ": no \"boxes\" array");
   boxes->clear();

@@ -26,6 +26,7 @@
 #include <unordered_map>
 
 #include "common/atomic_file.h"
+#include "common/json_parse.h"
 #include "common/sha256.h"
 #include "common/status.h"
 #include "common/text_util.h"
@@ -1062,8 +1063,9 @@ Status read_variational_state(const std::string& path, const std::string& finger
   const Status read = read_regular_file(path, path, "checkpoint file", &text);
   if (!read) return read;
   auto bad = [&](const std::string& why) { return Status::error(path + ": damaged checkpoint: " + why); };
-  nlohmann::json j = nlohmann::json::parse(text, nullptr, /*allow_exceptions=*/false);
-  if (j.is_discarded() || !j.is_object()) return bad("not JSON");
+  // A state nests 5 deep (file, nodes, node, axes, axis); 8 leaves room.
+  nlohmann::json j;
+  if (!parse_json_within(text, 8, &j) || !j.is_object()) return bad("not JSON, or nested deeper than a checkpoint");
   try {
     if (j.value("format", "") != kCheckpointFormat || j.value("version", 0) != 1) return bad("not a vobb checkpoint");
     // Every top-level key must be one this builder writes: a damaged key name (a "sha256"

@@ -371,19 +371,5 @@ TEST(GlEstimator, CullingChangesNothingButTheWork) {
   }
 }
 
-TEST(GlContext, SwitchedOffGivesAClearOneLineError) {
-  const char* old = std::getenv("VOBB_GL");
-  const std::string saved = old ? old : "";
-  ::setenv("VOBB_GL", "off", 1);
-  std::unique_ptr<GlContext> ctx;
-  const Status s = GlContext::create(&ctx);
-  if (old) ::setenv("VOBB_GL", saved.c_str(), 1);
-  else ::unsetenv("VOBB_GL");
-  EXPECT_FALSE(s);
-  EXPECT_EQ(ctx, nullptr);
-  EXPECT_NE(s.message().find("VOBB_GL=off"), std::string::npos) << s.message();
-  EXPECT_EQ(s.message().find('\n'), std::string::npos);
-}
-
 }  // namespace
 }  // namespace vobb

@@ -397,6 +397,17 @@ TEST(VariationalBuilder, CheckpointOfAnotherBuildOrDamagedIsRefused) {
   EXPECT_NE(other.message().find("another build"), std::string::npos) << other.message();
   // Faces beyond the mesh: a damaged state, refused rather than crashed on.
   EXPECT_FALSE(read_variational_state(path, "build A", mesh.faces.size() / 2, o.arity, o.depth, &back, &found));
+  // Nodes nested 10^5 deep: refused as the file is parsed. The checksum over such a document
+  // overflowed the stack (a segmentation fault) before the parse limited the depth.
+  {
+    const std::string deep = test::temp_path("deep_state.json");
+    std::ofstream(deep) << R"({"format":"vobb-variational-state","version":1,"sha256":"x","nodes":)"
+                        << std::string(100000, '[') << std::string(100000, ']') << "}";
+    const Status d = read_variational_state(deep, "build A", mesh.faces.size(), o.arity, o.depth, &back, &found);
+    EXPECT_FALSE(d);
+    EXPECT_NE(d.message().find("nested deeper"), std::string::npos) << d.message();
+    std::remove(deep.c_str());
+  }
   // Axes that are not orthonormal, and levels beyond split_levels: refused too.
   VariationalState skew = last;
   skew.axes[0][1] = skew.axes[0][0];
