@@ -303,6 +303,47 @@ vobb::Status load_mesh_and_tree(const std::string& mesh_path, const std::string&
   return vobb::Status::ok();
 }
 
+// A certification's checkpoint in `folder` (certify --checkpoint, and compare's per tree):
+// loads what is saved into *resume and points `opt` at it, and saves after each stage. The
+// fingerprint names the mesh, the tree and the path.
+struct CertifySaver {
+  vobb::exact::CertifyState resume;
+  std::unique_ptr<vobb::exact::CertifyCheckpoint> files;
+  bool warned = false;
+
+  vobb::Status attach(const std::string& folder, const vobb::Mesh& mesh, const vobb::Tree& tree,
+                      const std::string& path, vobb::exact::CertifyOptions* opt) {
+    std::error_code ec;
+    std::filesystem::create_directories(folder, ec);
+    if (ec) return vobb::Status::error(folder + ": cannot make the checkpoint folder: " + ec.message());
+    const std::string tree_json = vobb::tree_to_json(tree);
+    files = std::make_unique<vobb::exact::CertifyCheckpoint>(
+        folder, std::string(vobb::exact::kCertifyVersion) + "; mesh " + vobb::mesh_sha256(mesh) + "; tree " +
+                    vobb::sha256_hex(tree_json.data(), tree_json.size()) + "; path " + path);
+    bool resuming = false;
+    vobb::Status s = files->load(tree, &resume, &resuming);
+    if (!s) return s;
+    opt->resume = resuming ? &resume : nullptr;
+    // Said even with --quiet: it is what the certificate rests on, not progress.
+    if (resuming)
+      std::fprintf(stderr, "vobb: resuming from %s (the boxes' OBV, %zu of %d layers done)\n", folder.c_str(),
+                   resume.layers.size(), tree.depth + 1);
+    // Test hook: VOBB_TEST_KILL_AFTER_CERTIFIED_LAYERS=N kills the process (SIGKILL, as an
+    // outside kill would) right after a state with N finished layers is saved.
+    const char* kill_env = std::getenv("VOBB_TEST_KILL_AFTER_CERTIFIED_LAYERS");
+    const long kill_at = kill_env != nullptr ? std::atol(kill_env) : -1;
+    opt->checkpoint = [this, kill_at](const vobb::exact::CertifyState& st) {
+      const vobb::Status w = files->save(st);
+      if (!w && !warned) {
+        warned = true;
+        std::fprintf(stderr, "vobb: warning: checkpoint not saved: %s\n", one_line(w.message()).c_str());
+      }
+      if (w && !st.obv.empty() && static_cast<long>(st.layers.size()) == kill_at) ::raise(SIGKILL);
+    };
+    return vobb::Status::ok();
+  }
+};
+
 int run_certify(const std::string& mesh_path, const std::string& tree_path, bool json, bool rational,
                 const std::string& path, const std::string& checkpoint, bool quiet) {
   vobb::LoadedMesh mesh;
@@ -315,39 +356,10 @@ int run_certify(const std::string& mesh_path, const std::string& tree_path, bool
              : path == "both" ? vobb::exact::OmvPath::kBoth
                               : vobb::exact::OmvPath::kAuto;
   if (!quiet) opt.progress = [](const std::string& line) { std::fprintf(stderr, "certify: %s\n", line.c_str()); };
-  vobb::exact::CertifyState resume;
-  std::unique_ptr<vobb::exact::CertifyCheckpoint> saved;
-  bool warned = false;
+  CertifySaver saver;
   if (!checkpoint.empty()) {
-    std::error_code ec;
-    std::filesystem::create_directories(checkpoint, ec);
-    if (ec) return refuse(vobb::Status::error(checkpoint + ": cannot make the checkpoint folder: " + ec.message()));
-    // What the certificate depends on: a state saved under another fingerprint is refused.
-    const std::string tree_json = vobb::tree_to_json(tree);
-    saved = std::make_unique<vobb::exact::CertifyCheckpoint>(
-        checkpoint, "certify 1; mesh " + vobb::mesh_sha256(mesh.mesh) + "; tree " +
-                        vobb::sha256_hex(tree_json.data(), tree_json.size()) + "; path " + path);
-    bool resuming = false;
-    s = saved->load(tree, &resume, &resuming);
+    s = saver.attach(checkpoint, mesh.mesh, tree, path, &opt);
     if (!s) return refuse(s);
-    if (resuming) {
-      opt.resume = &resume;
-      if (!quiet)
-        std::fprintf(stderr, "vobb: resuming from %s (the boxes' OBV, %zu of %d layers done)\n", checkpoint.c_str(),
-                     resume.layers.size(), tree.depth + 1);
-    }
-    // Test hook: VOBB_TEST_KILL_AFTER_CERTIFIED_LAYERS=N kills the process (SIGKILL, as an
-    // outside kill would) right after the state with N finished layers is saved.
-    const char* kill_env = std::getenv("VOBB_TEST_KILL_AFTER_CERTIFIED_LAYERS");
-    const long kill_at = kill_env != nullptr ? std::atol(kill_env) : -1;
-    opt.checkpoint = [&, kill_at](const vobb::exact::CertifyState& st) {
-      const vobb::Status w = saved->save(st);
-      if (!w && !warned) {
-        warned = true;
-        std::fprintf(stderr, "vobb: warning: checkpoint not saved: %s\n", one_line(w.message()).c_str());
-      }
-      if (w && !st.obv.empty() && static_cast<long>(st.layers.size()) == kill_at) ::raise(SIGKILL);
-    };
   }
   const vobb::exact::Certificate c = vobb::exact::certify(mesh.mesh, tree, opt);
   if (json) {
@@ -584,7 +596,15 @@ int run_compare(const std::string& mesh_path, const BuildFlags& flags, bool json
     s = build_tree(loaded.mesh, f, estimate, gl.get(), &r[i].tree);
     if (!s) return refuse(s);
     r[i].build_seconds = seconds_since(t0);
-    r[i].cert = vobb::exact::certify(loaded.mesh, r[i].tree, copt);
+    // With --checkpoint, each tree's certification keeps its own folder beside the build's state.
+    CertifySaver saver;
+    vobb::exact::CertifyOptions o = copt;
+    if (!flags.checkpoint.empty()) {
+      s = saver.attach((std::filesystem::path(flags.checkpoint) / ("certify-" + f.method)).string(), loaded.mesh,
+                       r[i].tree, "auto", &o);
+      if (!s) return refuse(s);
+    }
+    r[i].cert = vobb::exact::certify(loaded.mesh, r[i].tree, o);
   }
   const bool ok = r[0].cert.ok() && r[1].cert.ok();
   const size_t levels = std::max(r[0].cert.layers.size(), r[1].cert.layers.size());
@@ -774,7 +794,8 @@ int main(int argc, char** argv) {
   cmp->add_flag("--no-merge", cf.no_merge, "Ablation: no bottom-up merging sweeps");
   cmp->add_option("--sweeps", cf.sweeps, "Most bottom-up merging sweeps")->capture_default_str()->check(CLI::Range(0, 100));
   cmp->add_option("--checkpoint", cf.checkpoint, "Folder for the variational build's state after each level and sweep, "
-                  "as for build (the same flags make the same build: either command resumes the other's)");
+                  "as for build (the same flags make the same build: either command resumes the other's), and "
+                  "for each tree's certification as for certify (certify-obbtree/, certify-variational/)");
   cmp->add_option("--time-budget", cf.time_budget, "Seconds for the variational search, as for build")
       ->check(vobb::app::kFinite)->check(CLI::Range(1e-3, 1e9));
   cmp->add_flag("--json", compare_json, "Print JSON (DESIGN §7)");

@@ -20,6 +20,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common/atomic_file.h"
+#include "common/json_parse.h"
 #include "common/sha256.h"
 #include "common/stopwatch.h"
 #include "common/text_util.h"
@@ -36,6 +37,20 @@ bool Certificate::ok() const {
     if (!l.upper_bound_holds() || !l.paths_agree) return false;
   return true;
 }
+
+namespace {
+
+// The path a layer takes: "none" for boxes that overlap nothing (OMV = sum of OBV) unless both
+// paths are asked for; auto takes Nef for layers with overlaps (measured on dino,
+// docs/BENCHMARKS.md: Nef's union beats the clipping path's overlap cells on every
+// overlapping layer of baseline trees).
+std::string layer_path(OmvPath path, size_t overlapping_boxes) {
+  if (path == OmvPath::kBoth) return "both";
+  if (overlapping_boxes == 0) return "none";
+  return path == OmvPath::kClip ? "clip" : "nef";
+}
+
+}  // namespace
 
 Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& options) {
   const auto t0 = std::chrono::steady_clock::now();
@@ -61,7 +76,7 @@ Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& op
   };
   const CertifyState* resume = options.resume;
   VOBB_ASSERT(!resume || resume->obv.empty() || resume->obv.size() == tree.nodes.size(),
-              "a resumed state fits the tree (read_certify_state checks it)");
+              "a resumed state fits the tree (CertifyCheckpoint::load checks it)");
 
   // OBV once per node (a leaf above level i belongs to every later layer too), by clipping,
   // one node per task: every node belongs to the layer of its own level.
@@ -80,27 +95,51 @@ Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& op
   if (options.checkpoint) done.obv = obv;
 
   // One task per layer, the layers with most boxes (the costly unions) first, each taken by
-  // the next free thread. A thread builds its own Nef(X) when a layer first needs it. Layers
-  // a resumed state finished are taken from it.
+  // the next free thread. A thread builds its own Nef(X) when a layer first needs it. A layer
+  // a resumed state finished is taken from it when its boxes, their overlap count (bounds
+  // alone: cheap), its sum of OBV and its path are what this run would give; its OMV is taken
+  // as saved (the costly part). Any other is certified again.
   const int levels = tree.depth + 1;
   cert.layers.resize(levels);
+  std::vector<std::vector<int32_t>> ids(levels);
+  for (int level = 0; level < levels; ++level) ids[level] = layer(tree, level);
+  auto layer_boxes = [&](int level) {
+    std::vector<Obb> boxes;
+    for (int32_t id : ids[level]) boxes.push_back(tree.nodes[id].box);
+    return boxes;
+  };
+  auto layer_sum_obv = [&](int level) {
+    std::vector<Rational> obvs;
+    for (int32_t id : ids[level]) obvs.push_back(obv[id]);
+    return sum_pairwise(obvs);
+  };
   std::vector<char> resumed(levels, 0);
+  size_t taken = 0, again = 0;
   if (resume)
     for (const LayerCertificate& lc : resume->layers) {
-      VOBB_ASSERT(lc.level >= 0 && lc.level < levels && !resumed[lc.level], "a resumed state fits the tree");
+      VOBB_ASSERT(lc.level >= 0 && lc.level < levels && !resumed[lc.level],
+                  "a resumed state fits the tree (CertifyCheckpoint::load checks it)");
+      size_t overlapping = 0;
+      for (char o : clip.may_overlap(layer_boxes(lc.level))) overlapping += o ? 1 : 0;
+      if (lc.boxes != ids[lc.level].size() || lc.overlapping_boxes != overlapping ||
+          lc.omv_path != layer_path(options.path, overlapping) || lc.sum_obv != layer_sum_obv(lc.level) ||
+          (lc.omv_path == "none" && lc.omv != lc.sum_obv) ||
+          (lc.omv_path == "both" && lc.paths_agree != (lc.omv == lc.omv_clip))) {
+        ++again;
+        continue;
+      }
       cert.layers[lc.level] = lc;
       resumed[lc.level] = 1;
+      ++taken;
       if (options.checkpoint) done.layers.push_back(lc);
     }
   if (resume && !resume->layers.empty())
-    say(std::to_string(resume->layers.size()) + " of " + std::to_string(levels) + " layers: from the checkpoint");
+    say(std::to_string(taken) + " of " + std::to_string(levels) + " layers: from the checkpoint" +
+        (again > 0 ? "; " + std::to_string(again) + " saved layers do not match this run, certified again" : ""));
   finished(nullptr);
   std::vector<int> order;
-  std::vector<std::vector<int32_t>> ids(levels);
-  for (int level = 0; level < levels; ++level) {
-    ids[level] = layer(tree, level);
+  for (int level = 0; level < levels; ++level)
     if (!resumed[level]) order.push_back(level);
-  }
   std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return ids[a].size() > ids[b].size(); });
   const int todo = static_cast<int>(order.size());
   std::atomic<int> next{0};
@@ -125,35 +164,23 @@ Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& op
       LayerCertificate& lc = cert.layers[level];
       lc.level = level;
       lc.boxes = ids[level].size();
-      std::vector<Obb> boxes;
-      std::vector<Rational> obvs;
-      for (int32_t id : ids[level]) {
-        boxes.push_back(tree.nodes[id].box);
-        obvs.push_back(obv[id]);
-      }
-      lc.sum_obv = sum_pairwise(obvs);
+      const std::vector<Obb> boxes = layer_boxes(level);
+      lc.sum_obv = layer_sum_obv(level);
       // Which boxes may meet another one (conservative bounds): boxes that overlap nothing
       // skip the union work.
       std::vector<char> overlapped = clip.may_overlap(boxes);
       for (char o : overlapped) lc.overlapping_boxes += o ? 1 : 0;
-      OmvPath path = options.path;
-      // Auto: Nef for layers with overlaps. Measured on dino (docs/BENCHMARKS.md), Nef's union
-      // beats the clipping path's overlap cells on every overlapping layer of baseline trees.
-      if (path == OmvPath::kAuto) path = OmvPath::kNef;
-      if (lc.overlapping_boxes == 0 && path != OmvPath::kBoth) {
+      lc.omv_path = layer_path(options.path, lc.overlapping_boxes);
+      if (lc.omv_path == "none") {
         lc.omv = lc.sum_obv;  // disjoint boxes: the union's outer volume is the sum
-        lc.omv_path = "none";
-      } else if (path == OmvPath::kNef) {
+      } else if (lc.omv_path == "nef") {
         lc.omv = need_nef().omv(boxes);
-        lc.omv_path = "nef";
-      } else if (path == OmvPath::kClip) {
+      } else if (lc.omv_path == "clip") {
         lc.omv = clip.omv(boxes, lc.sum_obv);
-        lc.omv_path = "clip";
       } else {  // both: Nef is the arbiter, and a disagreement fails the certificate
         lc.omv_clip = clip.omv(boxes, lc.sum_obv);
         lc.omv = need_nef().omv(boxes);
         lc.paths_agree = lc.omv == lc.omv_clip;
-        lc.omv_path = "both";
       }
       lc.seconds = seconds_since(tl) - nef_build_seconds;
       const std::string disagree =
@@ -239,8 +266,8 @@ Status read_checkpoint_file(const std::string& path, const char* format, const s
   const Status read = read_regular_file(path, path, "checkpoint file", text);
   if (!read) return read;
   auto bad = [&](const std::string& why) { return Status::error(path + ": damaged certify checkpoint: " + why); };
-  *j = nlohmann::json::parse(*text, nullptr, /*allow_exceptions=*/false);
-  if (j->is_discarded() || !j->is_object()) return bad("not JSON");
+  // Our files nest 3 deep (layers.json: file, layers, layer); 8 leaves room.
+  if (!parse_json_within(*text, 8, j) || !j->is_object()) return bad("not JSON, or nested deeper than a checkpoint");
   if (j->value("format", "") != format || j->value("version", 0) != 1) return bad("not a vobb certify checkpoint");
   for (const auto& item : j->items())
     if (!known.count(item.key())) return bad("unknown field '" + item.key().substr(0, 40) + "'");
@@ -353,13 +380,22 @@ Status CertifyCheckpoint::load(const Tree& tree, CertifyState* state, bool* foun
       std::vector<char> seen(tree.depth + 1, 0);
       for (const nlohmann::json& jl : layers) {
         LayerCertificate l;
+        if (!jl.is_object()) return bad("a layer is not an object");
         const nlohmann::json& level = jl.at("level");
         if (!level.is_number_integer() || level.get<int64_t>() < 0 || level.get<int64_t>() > tree.depth)
-          return bad("a layer's level is outside 0.." + std::to_string(tree.depth));
+          return bad("a layer's level is not an integer in 0.." + std::to_string(tree.depth));
         l.level = static_cast<int>(level.get<int64_t>());
         const std::string at = "layer " + std::to_string(l.level) + ": ";
         if (seen[l.level]) return bad(at + "given twice");
         seen[l.level] = 1;
+        // Every field must be one the writer puts there for the layer's path.
+        const bool both = jl.contains("omv_path") && jl["omv_path"] == "both";
+        for (const auto& item : jl.items()) {
+          static const std::set<std::string> kLayerFields{"level", "boxes",    "overlapping_boxes", "omv",
+                                                          "sum_obv", "omv_path", "seconds"};
+          if (!kLayerFields.count(item.key()) && !(both && (item.key() == "paths_agree" || item.key() == "omv_clip")))
+            return bad(at + "unknown field '" + item.key().substr(0, 40) + "'");
+        }
         const std::vector<int32_t> ids = layer(tree, l.level);
         const nlohmann::json& boxes = jl.at("boxes");
         const nlohmann::json& overlapping = jl.at("overlapping_boxes");

@@ -64,9 +64,13 @@ struct CertifyOptions {
   // of the threads, one call at a time; may be empty.
   std::function<void(const CertifyState&)> checkpoint;
   // A state saved by `checkpoint` of a certification of the same mesh and tree with the same
-  // path (CertifyCheckpoint::load checks it against the tree): its OBV and layers are taken as they
-  // are, and only the rest is computed. The certificate is the uninterrupted one, rational
-  // for rational (a resumed layer keeps the seconds it took).
+  // path (CertifyCheckpoint::load checks it against the tree), and the same kCertifyVersion.
+  // Its OBV are taken as they are. A finished layer is taken when its boxes, their overlap
+  // count, its sum of OBV and its path are the ones this run gives, its OMV as saved (the
+  // costly part); another is certified again. Only the rest is computed, and the certificate
+  // is the uninterrupted one, rational for rational (a resumed layer keeps the seconds it
+  // took). The files' checksums guard against damage, not against a forged state: certify
+  // trusts its own checkpoints.
   const CertifyState* resume = nullptr;
 };
 
@@ -79,6 +83,10 @@ struct CertifyOptions {
 // the progress lines vary. `progress` is called from any of the threads, one call at a time.
 Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& options);
 
+// What a checkpoint's fingerprint names as certify's own: bump it when certify's arithmetic or
+// choices change, so that checkpoints of the older code are refused.
+inline constexpr const char* kCertifyVersion = "certify 1";
+
 // A certification's checkpoint, in a folder of two JSON files: obv.json, the boxes' OBV, written
 // once; and layers.json, the finished layers, rewritten after each and naming obv.json's
 // checksum, so that the large rationals are written once. Each file carries a `fingerprint`
@@ -90,8 +98,9 @@ class CertifyCheckpoint {
   CertifyCheckpoint(std::string folder, std::string fingerprint);
   ~CertifyCheckpoint();
   // The saved state. Neither file there: ok with *found = false. Refused, with one line naming
-  // the file: a damaged file (bad checksum, unknown field, a rational that does not parse or
-  // has a zero denominator), another certification's (fingerprint), layers.json without
+  // the file: a damaged file (not JSON or nested too deep, bad checksum, unknown field, a
+  // rational that does not parse or has a zero denominator), another certification's
+  // (fingerprint), layers.json without
   // obv.json or naming another one, and a state that does not fit `tree`: an OBV count other
   // than its nodes', a layer outside 0..depth or given twice, a box count or a sum of OBV
   // other than the layer's, or a path's result that contradicts itself.

@@ -624,11 +624,11 @@ TEST(Cli, KilledBuildResumesToTheSameTree) {
   for (const std::string& p : {whole, resumed}) std::remove(p.c_str());
 }
 
-// The JSON report without its timings ("seconds", which a resumed run keeps for its resumed
-// layers but not for the whole run).
+// The JSON report without its timings (fields named "seconds" or "..._seconds": a resumed
+// run keeps those of its resumed layers, not the whole run's).
 nlohmann::json without_seconds(nlohmann::json j) {
   if (j.is_object()) {
-    j.erase("seconds");
+    for (auto it = j.begin(); it != j.end();) it = it.key().find("seconds") != std::string::npos ? j.erase(it) : std::next(it);
     for (auto& item : j.items()) item.value() = without_seconds(item.value());
   } else if (j.is_array()) {
     for (auto& v : j) v = without_seconds(v);
@@ -671,6 +671,33 @@ TEST(Cli, KilledCertifyResumesToTheSameCertificate) {
   EXPECT_NE(other.err.find("checkpoint of another certification"), std::string::npos) << other.err;
   std::system(("rm -rf " + dir).c_str());
   std::remove(tree.c_str());
+}
+
+// compare --checkpoint keeps each tree's certification beside the build's state: killed during
+// the baseline's certification, after two of its layers, and started again, it resumes that
+// certification and prints the uninterrupted report.
+TEST(Cli, KilledCompareResumesItsCertification) {
+  const std::string mesh = test::real_mesh("dino");
+  VOBB_REQUIRE_REAL_MESH("dino");
+  const std::string dir = test::temp_path("cmp_ckpt");
+  std::system(("rm -rf " + dir).c_str());
+  const std::string args = " --depth 3 --m 8 --lloyd 1 --backend cpu --json --quiet";
+  const CliRun whole = vobb_cli("compare " + mesh + args);
+  ASSERT_EQ(whole.code, 0) << whole.err;
+  const int status = std::system(("VOBB_TEST_KILL_AFTER_CERTIFIED_LAYERS=2 " + std::string(VOBB_CLI) + " compare " +
+                                  mesh + args + " --checkpoint " + dir + " >/dev/null 2>&1").c_str());
+  const bool killed = (WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL) ||
+                      (WIFEXITED(status) && WEXITSTATUS(status) == 128 + SIGKILL);
+  EXPECT_TRUE(killed) << "compare was not killed at its two-layer checkpoint (status " << status << ")";
+  EXPECT_TRUE(test::exists(dir + "/certify-obbtree/layers.json"));
+  EXPECT_FALSE(test::exists(dir + "/certify-variational")) << "killed in the baseline's certification";
+  const CliRun again = vobb_cli("compare " + mesh + " --depth 3 --m 8 --lloyd 1 --backend cpu --json --checkpoint " + dir);
+  ASSERT_EQ(again.code, 0) << again.err;
+  EXPECT_NE(again.err.find("resuming from " + dir + "/certify-obbtree (the boxes' OBV, 2 of 4 layers done)"),
+            std::string::npos) << again.err;
+  EXPECT_EQ(without_seconds(nlohmann::json::parse(again.out)), without_seconds(nlohmann::json::parse(whole.out)));
+  EXPECT_TRUE(test::exists(dir + "/certify-variational/layers.json"));
+  std::system(("rm -rf " + dir).c_str());
 }
 
 }  // namespace

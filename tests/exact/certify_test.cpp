@@ -334,15 +334,31 @@ TEST_F(CertifyTorus, DamagedOrForeignCheckpointsAreRefused) {
       {"not a rational", true, [](nlohmann::json& j) { j["obv"][0] = "0x10"; }},
       // A valid obv.json of other values: layers.json names the one it was saved with.
       {"another obv.json", true, [](nlohmann::json& j) { j["obv"][0] = "12345/7"; }},
-      {"outside 0..4", false, [](nlohmann::json& j) { j["layers"][0]["level"] = 5; }},
+      {"not an integer in 0..4", false, [](nlohmann::json& j) { j["layers"][0]["level"] = 5; }},
       {"given twice", false, [](nlohmann::json& j) { j["layers"][1] = j["layers"][0]; }},
       {"box count", false, [](nlohmann::json& j) { j["layers"][0]["boxes"] = j["layers"][0]["boxes"].get<int>() + 1; }},
       {"sum of OBV is not the sum", false, [](nlohmann::json& j) {
          j["layers"][0]["sum_obv"] = Rational(Rational(j["layers"][0]["sum_obv"].get<std::string>()) + 1).get_str();
        }},
       {"contradicts", false, [](nlohmann::json& j) { j["layers"][0]["paths_agree"] = false; }},
-      {"unknown path", false, [](nlohmann::json& j) { j["layers"][0]["omv_path"] = "guess"; }},
+      {"unknown path", false, [](nlohmann::json& j) {
+         j["layers"][0]["omv_path"] = "guess";
+         j["layers"][0].erase("omv_clip");  // fields of "both" alone, refused first otherwise
+         j["layers"][0].erase("paths_agree");
+       }},
       {"seconds", false, [](nlohmann::json& j) { j["layers"][0]["seconds"] = -1; }},
+      {"unknown field 'extra'", false, [](nlohmann::json& j) { j["layers"][0]["extra"] = 1; }},
+      {"not an object", false, [](nlohmann::json& j) { j["layers"][0] = 5; }},
+      {"not an integer", false, [](nlohmann::json& j) { j["layers"][0]["level"] = "1"; }},
+      {"type must be boolean", false, [](nlohmann::json& j) { j["layers"][0]["paths_agree"] = "yes"; }},
+      {"unknown field 'omv_clip'", false, [](nlohmann::json& j) { j["layers"][0]["omv_path"] = "nef"; }},
+      {"'paths_agree' not found", false, [](nlohmann::json& j) { j["layers"][0].erase("paths_agree"); }},
+      // Nested past the limit (8; a file is 3 deep): refused as it is parsed, so that 10^5
+      // levels cannot overflow the stack in the checksum (JsonParse tests the depth itself).
+      {"nested deeper", true, [](nlohmann::json& j) {
+         j["obv"] = nlohmann::json::array();
+         for (int i = 0; i < 8; ++i) j["obv"] = nlohmann::json::array({j["obv"]});  // depth 9: limit 8
+       }},
   };
   for (const Edit& e : edits) {
     nlohmann::json j = e.in_obv ? obv : layers;
@@ -365,6 +381,61 @@ TEST_F(CertifyTorus, DamagedOrForeignCheckpointsAreRefused) {
     EXPECT_EQ(back.layers.size(), 2u);
   }
   std::system(("rm -rf " + dir).c_str());
+}
+
+// A resumed layer is taken only when its boxes, overlap count, sum of OBV and path are what
+// this run gives; its OMV is taken as saved. A saved layer whose path this run would not take
+// (a layer with overlaps saved as "none", its OMV the sum of OBV: consistent on its own, and
+// read without complaint), or a state of auto resumed by a run of the clipping path, is
+// certified again, and the certificate is the uninterrupted run's.
+TEST_F(CertifyTorus, ResumedLayersThatDoNotMatchThisRunAreCertifiedAgain) {
+  CertifyOptions automatic;
+  CertifyState all;
+  automatic.checkpoint = [&](const CertifyState& st) { all = st; };
+  const Certificate full = certify(m, t, automatic);
+  ASSERT_EQ(all.layers.size(), 5u);
+  size_t forged = all.layers.size();
+  for (size_t i = 0; i < all.layers.size(); ++i)
+    if (all.layers[i].omv_path == "nef") forged = i;
+  ASSERT_LT(forged, all.layers.size()) << "no layer with overlaps";
+  CertifyState state = all;
+  LayerCertificate& f = state.layers[forged];
+  f.omv_path = "none";
+  f.overlapping_boxes = 0;
+  f.omv = f.sum_obv;
+  ASSERT_NE(f.omv, all.layers[forged].omv) << "the forged OMV must differ for the test to mean anything";
+  auto resumed = [&](CertifyOptions o, const CertifyState& st, int* layer_lines, std::string* note) {
+    o.resume = &st;
+    o.progress = [&](const std::string& line) {
+      *layer_lines += line.rfind("layer ", 0) == 0 ? 1 : 0;
+      if (line.find("from the checkpoint") != std::string::npos && line.find("layers") != std::string::npos) *note = line;
+    };
+    return certify(m, t, o);
+  };
+  int lines = 0;
+  std::string note;
+  const Certificate c = resumed(automatic, state, &lines, &note);
+  EXPECT_EQ(lines, 1);
+  EXPECT_NE(note.find("4 of 5 layers: from the checkpoint; 1 saved layers do not match this run"), std::string::npos) << note;
+  ASSERT_EQ(c.layers.size(), full.layers.size());
+  for (size_t i = 0; i < c.layers.size(); ++i) {
+    EXPECT_EQ(c.layers[i].omv, full.layers[i].omv) << "layer " << i;
+    EXPECT_EQ(c.layers[i].omv_path, full.layers[i].omv_path) << "layer " << i;
+    EXPECT_EQ(c.layers[i].overlapping_boxes, full.layers[i].overlapping_boxes) << "layer " << i;
+  }
+  EXPECT_EQ(c.weighted_error, full.weighted_error);
+  // The clipping path resumes auto's state: layers with overlaps (auto took Nef) again.
+  CertifyOptions clip;
+  clip.path = OmvPath::kClip;
+  lines = 0;
+  const Certificate k = resumed(clip, all, &lines, &note);
+  size_t with_overlaps = 0;
+  for (const LayerCertificate& l : full.layers) with_overlaps += l.omv_path == "nef" ? 1 : 0;
+  EXPECT_EQ(lines, static_cast<int>(with_overlaps));
+  for (size_t i = 0; i < k.layers.size(); ++i) {
+    EXPECT_EQ(k.layers[i].omv, full.layers[i].omv) << "layer " << i;  // the two paths agree exactly
+    EXPECT_EQ(k.layers[i].omv_path, full.layers[i].omv_path == "nef" ? "clip" : "none") << "layer " << i;
+  }
 }
 
 TEST(Certify, RootLayerOfTheCubeIsExact) {
