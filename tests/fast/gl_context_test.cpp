@@ -10,19 +10,10 @@
 #include <string>
 #include <thread>
 
+#include "fast/gl_test_util.h"
+
 namespace vobb {
 namespace {
-
-// Every machine here has Mesa's llvmpipe, so a missing context is a failure, unless GL was
-// switched off on purpose (VOBB_GL=off), which skips.
-#define VOBB_MAKE_CONTEXT(ctx)                                                            \
-  std::unique_ptr<GlContext> ctx;                                                         \
-  do {                                                                                    \
-    const Status made = GlContext::create(&ctx);                                          \
-    const char* env = std::getenv("VOBB_GL");                                             \
-    if (!made && env != nullptr && std::string(env) == "off") GTEST_SKIP() << made.message(); \
-    ASSERT_TRUE(made) << made.message();                                                  \
-  } while (0)
 
 // What the renderer calls itself, through whichever context is current on this thread ("" with
 // none).

@@ -16,21 +16,11 @@
 #include "data/analytic_meshes.h"
 #include "fast/cpu_estimator.h"
 #include "fast/estimator_test_util.h"
+#include "fast/gl_test_util.h"
 #include "test_common.h"
 
 namespace vobb {
 namespace {
-
-// Every machine here has Mesa's llvmpipe, so a missing context is a failure, unless GL was
-// switched off on purpose (VOBB_GL=off), which skips.
-#define VOBB_MAKE_GL(est, mesh)                                                   \
-  std::unique_ptr<GlObvEstimator> est;                                            \
-  do {                                                                            \
-    const Status made = GlObvEstimator::create((mesh), &est);                     \
-    const char* env = std::getenv("VOBB_GL");                                     \
-    if (!made && env != nullptr && std::string(env) == "off") GTEST_SKIP() << made.message(); \
-    ASSERT_TRUE(made) << made.message();                                          \
-  } while (0)
 
 Obb aabox(const Vec3& c, const Vec3& h) {
   Obb b;
@@ -58,6 +48,18 @@ std::vector<Obb> random_boxes(const Mesh& mesh, int n, uint64_t seed) {
     out.push_back(b);
   }
   return out;
+}
+
+// `boxes` with three odd ones put in at a quarter, a half and three quarters of the n + 3
+// (the flat box at 50, the far one at 100 and the one beyond float at 150 for n = 197): a flat
+// box (OBV 0, no plan drawn), a box far from the mesh (no record), and a box float cannot
+// evaluate (the CPU twin's code).
+std::vector<Obb> with_odd_boxes(std::vector<Obb> boxes) {
+  const size_t q = (boxes.size() + 3) / 4;
+  boxes.insert(boxes.begin() + q, aabox(Vec3::Zero(), Vec3(1, 1, 0)));
+  boxes.insert(boxes.begin() + 2 * q, aabox(Vec3(1e3, 0, 0), Vec3(1, 1, 1)));
+  boxes.insert(boxes.begin() + 3 * q, aabox(Vec3::Zero(), Vec3(1e38, 1e38, 1e38)));
+  return boxes;
 }
 
 // GL against the CPU twin: every box within gl_deviation_bound (gl_estimator.cpp derives it
@@ -244,10 +246,7 @@ TEST(GlEstimator, BatchingChangesNothingButTheRoundTrips) {
 TEST(GlEstimator, ThreadsChangeNothing) {
   const Mesh m = analytic::polygonal_torus().mesh;
   VOBB_MAKE_GL(gl, m);
-  std::vector<Obb> boxes = random_boxes(m, 200, 13);
-  boxes.insert(boxes.begin() + 50, aabox(Vec3::Zero(), Vec3(1, 1, 0)));                // flat
-  boxes.insert(boxes.begin() + 100, aabox(Vec3(1e3, 0, 0), Vec3(1, 1, 1)));             // far
-  boxes.insert(boxes.begin() + 150, aabox(Vec3::Zero(), Vec3(1e38, 1e38, 1e38)));       // beyond float
+  const std::vector<Obb> boxes = with_odd_boxes(random_boxes(m, 197, 13));  // odd ones at 50, 100, 150
   for (int res : {8, 192}) {
     ASSERT_FALSE(gl_evaluates_in_float(gl->planner().plan(boxes[150], res)));
     std::vector<double> alone;
@@ -291,10 +290,7 @@ bool gl_draws(const BoxPlan& plan) {
 TEST(GlEstimator, CallsFromSeveralThreadsAtOnceGiveEachBoxItsOwnValue) {
   const Mesh m = analytic::polygonal_torus().mesh;
   VOBB_MAKE_GL(gl, m);
-  std::vector<Obb> boxes = random_boxes(m, 120, 17);
-  boxes.insert(boxes.begin() + 30, aabox(Vec3::Zero(), Vec3(1, 1, 0)));           // flat
-  boxes.insert(boxes.begin() + 60, aabox(Vec3(1e3, 0, 0), Vec3(1, 1, 1)));        // far
-  boxes.insert(boxes.begin() + 90, aabox(Vec3::Zero(), Vec3(1e38, 1e38, 1e38)));  // beyond float
+  const std::vector<Obb> boxes = with_odd_boxes(random_boxes(m, 117, 17));
   const int resolutions[2] = {8, 192};
   std::vector<double> alone[2];
   for (int r = 0; r < 2; ++r)

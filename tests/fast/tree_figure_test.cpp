@@ -11,22 +11,12 @@
 #include "common/png_io.h"
 #include "data/analytic_meshes.h"
 #include "fast/gl_estimator.h"
+#include "fast/gl_test_util.h"
 #include "fast/obbtree_builder.h"
 #include "test_common.h"
 
 namespace vobb {
 namespace {
-
-// Every machine here has Mesa's llvmpipe, so a missing context is a failure, unless GL was
-// switched off on purpose (VOBB_GL=off), which skips.
-#define VOBB_MAKE_CONTEXT(ctx)                                                            \
-  std::unique_ptr<GlContext> ctx;                                                         \
-  do {                                                                                    \
-    const Status made = GlContext::create(&ctx);                                          \
-    const char* env = std::getenv("VOBB_GL");                                             \
-    if (!made && env != nullptr && std::string(env) == "off") GTEST_SKIP() << made.message(); \
-    ASSERT_TRUE(made) << made.message();                                                  \
-  } while (0)
 
 bool same_rgba(const uint8_t* p, const std::array<uint8_t, 4>& c) { return std::memcmp(p, c.data(), 4) == 0; }
 
@@ -254,8 +244,7 @@ TEST(PngIo, RejectsMalformedImagesAndFiles) {
 TEST(TreeFigure, DrawsWithAGlEstimatorsContextBetweenItsCalls) {
   VOBB_MAKE_CONTEXT(own);
   const Fixture f;
-  std::unique_ptr<GlObvEstimator> gl;
-  ASSERT_TRUE(GlObvEstimator::create(f.mesh, &gl));
+  VOBB_MAKE_GL(gl, f.mesh);
   std::vector<Obb> boxes;
   for (const TreeNode& n : f.binary.nodes) boxes.push_back(n.box);
   std::vector<double> first[2];

@@ -12,6 +12,7 @@
 #include "common/tree_io.h"
 #include "data/analytic_meshes.h"
 #include "fast/gl_estimator.h"
+#include "fast/gl_test_util.h"
 #include "fast/variational_builder.h"
 #include "test_common.h"
 
@@ -27,11 +28,7 @@ namespace {
 // build whose calls never met would mean the nodes were not searched at once.
 TEST(VariationalBuilderGl, NodesSearchedAtOnceGiveTheSameTree) {
   const Mesh mesh = analytic::polygonal_torus().mesh;
-  std::unique_ptr<GlObvEstimator> gl;
-  const Status made = GlObvEstimator::create(mesh, &gl);
-  const char* env = std::getenv("VOBB_GL");
-  if (!made && env != nullptr && std::string(env) == "off") GTEST_SKIP() << made.message();
-  ASSERT_TRUE(made) << made.message();
+  VOBB_MAKE_GL(gl, mesh);
   const ObvEstimate estimate = [&](const std::vector<Obb>& boxes) { return gl->estimate(boxes, 8); };
   VariationalOptions o;
   o.depth = 4;
