@@ -8,11 +8,13 @@
 // texel_hit() in float and blends the hit's value additively; a compute pass sums each tile,
 // and one float per box is read back. Boxes whose plan draws nothing take no GPU work.
 // Calls may come from several threads at once (the variational builder searches nodes in
-// parallel): each plans its boxes on its own thread, and the estimator's own drawing thread
-// draws the GL work of the calls waiting at that moment in one batch, holding the context only
-// while it draws. A box's value does not depend on which tile it gets or what else shares its
-// batch (its spans are blended in their order within its own tile, and its tile is summed
-// alone), so the values are a function of the box alone, as ObvEstimate requires.
+// parallel). Each plans its boxes on its own thread and gathers their span records into
+// requests of up to an atlas of boxes; the estimator's own drawing thread draws the requests
+// waiting at that moment together, holding the context only while it draws (and is the only
+// thread that binds it after create()). A box's value does not depend on which tile it gets
+// or what else shares its batch (its spans are blended in their order within its own tile,
+// and its tile is summed alone), so the values are a function of the box alone, as
+// ObvEstimate requires, whatever the number of threads.
 // Shaders: shaders/texel_spans.{vert,frag}, shaders/reduce_tiles.comp, embedded at build time.
 //
 // Agreement with the CPU twin: gl_deviation_bound() bounds |GL - CPU| for one box from the
@@ -48,9 +50,9 @@ class GlObvEstimator {
   ~GlObvEstimator();
 
   // OBV estimate of each box at resolution m, 1 <= m <= max_m(), in world volume units. May be
-  // called from several threads at once (above). The context is bound only by the drawing
-  // thread, and only while it draws, so that another thread (one drawing a figure, say) can
-  // take it between calls, though not during one. Like the CPU twin's, not under a changed
+  // called from several threads at once (above). The drawing thread binds the context only
+  // while it draws, so that another thread (one drawing a figure, say) can take it between
+  // calls, though not during one. Like the CPU twin's, not under a changed
   // floating-point environment (a CGAL rounding scope): the planning workers keep the one
   // captured when their arena started.
   std::vector<double> estimate(const std::vector<Obb>& boxes, int m);
