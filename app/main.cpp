@@ -307,6 +307,9 @@ vobb::Status load_mesh_and_tree(const std::string& mesh_path, const std::string&
 // loads what is saved into *resume and points `opt` at it, and saves after each stage. The
 // fingerprint names the mesh, the tree and the path.
 struct CertifySaver {
+  CertifySaver() = default;
+  CertifySaver(const CertifySaver&) = delete;  // opt's resume pointer and callback point into it
+  CertifySaver& operator=(const CertifySaver&) = delete;
   vobb::exact::CertifyState resume;
   std::unique_ptr<vobb::exact::CertifyCheckpoint> files;
   bool warned = false;

@@ -1,32 +1,57 @@
 // JSON read from files, parsed without letting a document nest deeper than its format can.
 #pragma once
 
+#include <cstddef>
 #include <string>
 
 #include <nlohmann/json.hpp>
 
 namespace vobb {
 
-// Parses `text` into *out. False when it is not JSON, or when arrays and objects nest deeper
-// than `max_depth` (the top level is depth 0): no file of ours nests deeper than a few levels,
-// and a document nested some 10^5 deep, though parsed and freed without recursion, overflows
-// the stack when copied or written out (a checksum over it, say). Its nested values are left
-// out of *out as they are parsed, so *out itself never gets deep.
+// Parses `text` into *out. False, with *out reset, when it is not JSON or when arrays and
+// objects nest deeper than `max_depth` (the top level is depth 0; *too_deep, when given, says
+// which). No file of ours nests deeper than a few levels, and a document nested some 10^5
+// deep, though nlohmann parses and frees it without recursion, overflows the stack when
+// copied or written out (a checksum over it, say). The depth is checked first by a SAX pass
+// that stops at the first container too deep; both passes take time linear in the text
+// (nlohmann's callback parser, the other way to cut depth, searches a container for
+// discarded values after each object in it: quadratic in an array of objects).
 template <class Json>
-bool parse_json_within(const std::string& text, int max_depth, Json* out) {
-  bool too_deep = false;
-  *out = Json::parse(
-      text,
-      [&](int depth, typename Json::parse_event_t event, Json&) {
-        if ((event == Json::parse_event_t::object_start || event == Json::parse_event_t::array_start) &&
-            depth > max_depth) {
-          too_deep = true;
-          return false;  // keep none of it
-        }
-        return true;
-      },
-      /*allow_exceptions=*/false);
-  return !too_deep && !out->is_discarded();
+bool parse_json_within(const std::string& text, int max_depth, Json* out, bool* too_deep = nullptr) {
+  struct DepthCheck : nlohmann::json_sax<Json> {
+    int max_depth = 0, depth = 0;
+    bool deep = false;
+    bool open() {
+      if (depth > max_depth) {
+        deep = true;
+        return false;  // stops the parse
+      }
+      ++depth;
+      return true;
+    }
+    bool null() override { return true; }
+    bool boolean(bool) override { return true; }
+    bool number_integer(typename Json::number_integer_t) override { return true; }
+    bool number_unsigned(typename Json::number_unsigned_t) override { return true; }
+    bool number_float(typename Json::number_float_t, const typename Json::string_t&) override { return true; }
+    bool string(typename Json::string_t&) override { return true; }
+    bool binary(typename Json::binary_t&) override { return true; }
+    bool start_object(std::size_t) override { return open(); }
+    bool key(typename Json::string_t&) override { return true; }
+    bool end_object() override { return --depth, true; }
+    bool start_array(std::size_t) override { return open(); }
+    bool end_array() override { return --depth, true; }
+    bool parse_error(std::size_t, const std::string&, const nlohmann::detail::exception&) override { return false; }
+  } check;
+  check.max_depth = max_depth;
+  const bool parsed = Json::sax_parse(text, &check);
+  if (too_deep) *too_deep = check.deep;
+  if (!parsed || check.deep) {
+    *out = Json();
+    return false;
+  }
+  *out = Json::parse(text, nullptr, /*allow_exceptions=*/false);
+  return !out->is_discarded();
 }
 
 }  // namespace vobb

@@ -92,8 +92,11 @@ Status write_tree(const Tree& tree, const std::string& path) {
 
 Status parse_tree(const std::string& text, const std::string& display, Tree* tree) {
   auto fail = [&](const std::string& why) { return Status::error(display + ": " + why); };
-  Json j;  // a tree nests 5 deep (file, nodes, node, box, axes' rows); 8 leaves room
-  if (!parse_json_within(text, 8, &j)) return fail("not valid JSON, or nested deeper than a tree file");
+  // A tree's deepest values are at depth 4 (file, nodes, node, axes, a row); 8 leaves room.
+  Json j;
+  bool too_deep = false;
+  if (!parse_json_within(text, 8, &j, &too_deep))
+    return fail(too_deep ? "nested deeper than a tree file can be" : "not valid JSON");
   if (!j.is_object() || !j.contains("format") || j["format"] != "vobb-tree")
     return fail("not a vobb tree file (\"format\" is not \"vobb-tree\")");
   long long version, arity, depth, triangles;
@@ -183,8 +186,11 @@ Status read_boxes(const std::string& path, std::vector<Obb>* boxes) {
   Status s = read_regular_file(path, basename_of(path), "box file", &text);
   if (!s) return s;
   const std::string display = basename_of(path);
-  Json j;  // a box file nests 4 deep (file, boxes, box, axes' rows); 8 leaves room
-  if (!parse_json_within(text, 8, &j)) return Status::error(display + ": not valid JSON, or nested deeper than a box file");
+  // A box file's deepest values are at depth 4 (file, boxes, box, axes, a row); 8 leaves room.
+  Json j;
+  bool too_deep = false;
+  if (!parse_json_within(text, 8, &j, &too_deep))
+    return Status::error(display + (too_deep ? ": nested deeper than a box file can be" : ": not valid JSON"));
   if (!j.is_object() || !j.contains("boxes") || !j["boxes"].is_array())
     return Status::error(display + ": no \"boxes\" array");
   boxes->clear();

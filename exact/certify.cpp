@@ -266,15 +266,17 @@ Status read_checkpoint_file(const std::string& path, const char* format, const s
   const Status read = read_regular_file(path, path, "checkpoint file", text);
   if (!read) return read;
   auto bad = [&](const std::string& why) { return Status::error(path + ": damaged certify checkpoint: " + why); };
-  // Our files nest 3 deep (layers.json: file, layers, layer); 8 leaves room.
-  if (!parse_json_within(*text, 8, j) || !j->is_object()) return bad("not JSON, or nested deeper than a checkpoint");
+  // The deepest values are at depth 2 (layers.json: file, layers, a layer); 8 leaves room.
+  bool too_deep = false;
+  if (!parse_json_within(*text, 8, j, &too_deep) || !j->is_object())
+    return bad(too_deep ? "nested deeper than a checkpoint can be" : "not JSON");
   if (j->value("format", "") != format || j->value("version", 0) != 1) return bad("not a vobb certify checkpoint");
   for (const auto& item : j->items())
     if (!known.count(item.key())) return bad("unknown field '" + item.key().substr(0, 40) + "'");
   if (!j->contains("sha256") || !(*j)["sha256"].is_string() || (*j)["sha256"].get<std::string>() != checksum(*j))
     return bad("checksum does not match the contents");
   if (!j->contains("fingerprint") || !(*j)["fingerprint"].is_string() || (*j)["fingerprint"].get<std::string>() != fingerprint)
-    return Status::error(path + ": checkpoint of another certification (mesh, tree or --path differ); "
+    return Status::error(path + ": checkpoint of another certification (mesh, tree, path or certify version differ); "
                          "use another --checkpoint folder or remove it");
   return Status::ok();
 }

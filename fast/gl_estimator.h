@@ -9,9 +9,9 @@
 // and one float per box is read back. Boxes whose plan draws nothing take no GPU work.
 // Calls may come from several threads at once (the variational builder searches nodes in
 // parallel). Each plans its boxes on its own thread and gathers their span records into
-// requests of up to an atlas of boxes; the estimator's own drawing thread draws the requests
-// waiting at that moment together, holding the context only while it draws (and is the only
-// thread that binds it after create()). A box's value does not depend on which tile it gets
+// requests of up to an atlas of boxes (or 64 MiB of records); the estimator's own drawing
+// thread draws the requests waiting at that moment together, holding the context only while
+// it draws (the only one of the estimator's threads that binds it after create()). A box's value does not depend on which tile it gets
 // or what else shares its batch (its spans are blended in their order within its own tile,
 // and its tile is summed alone), so the values are a function of the box alone, as
 // ObvEstimate requires, whatever the number of threads.

@@ -1063,9 +1063,11 @@ Status read_variational_state(const std::string& path, const std::string& finger
   const Status read = read_regular_file(path, path, "checkpoint file", &text);
   if (!read) return read;
   auto bad = [&](const std::string& why) { return Status::error(path + ": damaged checkpoint: " + why); };
-  // A state nests 5 deep (file, nodes, node, axes, axis); 8 leaves room.
+  // A state's deepest values are at depth 4 (file, nodes, node, axes, an axis); 8 leaves room.
   nlohmann::json j;
-  if (!parse_json_within(text, 8, &j) || !j.is_object()) return bad("not JSON, or nested deeper than a checkpoint");
+  bool too_deep = false;
+  if (!parse_json_within(text, 8, &j, &too_deep) || !j.is_object())
+    return bad(too_deep ? "nested deeper than a checkpoint can be" : "not JSON");
   try {
     if (j.value("format", "") != kCheckpointFormat || j.value("version", 0) != 1) return bad("not a vobb checkpoint");
     // Every top-level key must be one this builder writes: a damaged key name (a "sha256"

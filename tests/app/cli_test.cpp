@@ -586,6 +586,14 @@ TEST(Cli, GlRendererIsNamedByTheCommandLineOnlyWhenNotQuiet) {
   std::remove(tree.c_str());
 }
 
+// Runs `command` (a shell line) that a test hook kills with SIGKILL; true when it was killed.
+// The shell reports the killed child as 128 + 9, or, where it ran the command in its own
+// process (exec), the shell is the one killed.
+bool killed_by_its_hook(const std::string& command) {
+  const int status = std::system((command + " >/dev/null 2>&1").c_str());
+  return (WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL) || (WIFEXITED(status) && WEXITSTATUS(status) == 128 + SIGKILL);
+}
+
 // A variational build killed (SIGKILL) once its checkpoint holds two split levels, then started
 // again with the same folder, writes the same bytes as an uninterrupted build; a build with
 // other options refuses that folder with exit 2.
@@ -600,13 +608,9 @@ TEST(Cli, KilledBuildResumesToTheSameTree) {
   ASSERT_EQ(vobb_cli("build " + mesh + " -o " + whole + args).code, 0);
   // Killed (SIGKILL, by the build itself through a test hook) right after the state with two
   // levels split is saved: a known point, not a race with a poller.
-  const int status = std::system(("VOBB_TEST_KILL_AT_SPLIT_LEVELS=2 " + std::string(VOBB_CLI) + " build " + mesh +
-                                  " -o " + resumed + args + " --checkpoint " + dir + " >/dev/null 2>&1").c_str());
-  // The shell reports the killed child as 128 + 9, or, where it ran the build in its own
-  // process (exec), the shell is the one killed.
-  const bool killed = (WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL) ||
-                      (WIFEXITED(status) && WEXITSTATUS(status) == 128 + SIGKILL);
-  EXPECT_TRUE(killed) << "the build was not killed at its level-2 checkpoint (status " << status << ")";
+  EXPECT_TRUE(killed_by_its_hook("VOBB_TEST_KILL_AT_SPLIT_LEVELS=2 " + std::string(VOBB_CLI) + " build " + mesh +
+                                 " -o " + resumed + args + " --checkpoint " + dir))
+      << "the build was not killed at its level-2 checkpoint";
   EXPECT_NE(slurp(state).find("\"split_levels\":2"), std::string::npos);
   EXPECT_FALSE(test::exists(resumed)) << "the killed build wrote its tree";
   const CliRun again = vobb_cli("build " + mesh + " -o " + resumed + " --depth 3 --m 8 --lloyd 1 --backend cpu --checkpoint " + dir);
@@ -648,12 +652,9 @@ TEST(Cli, KilledCertifyResumesToTheSameCertificate) {
   ASSERT_EQ(vobb_cli("build " + mesh + " -o " + tree + " --method obbtree --depth 4 --quiet").code, 0);
   const CliRun whole = vobb_cli("certify " + mesh + " " + tree + " --json --rational --quiet");
   ASSERT_EQ(whole.code, 0) << whole.err;
-  const int status = std::system(("VOBB_TEST_KILL_AFTER_CERTIFIED_LAYERS=2 " + std::string(VOBB_CLI) + " certify " +
-                                  mesh + " " + tree + " --json --rational --quiet --checkpoint " + dir +
-                                  " >/dev/null 2>&1").c_str());
-  const bool killed = (WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL) ||
-                      (WIFEXITED(status) && WEXITSTATUS(status) == 128 + SIGKILL);
-  EXPECT_TRUE(killed) << "certify was not killed at its two-layer checkpoint (status " << status << ")";
+  EXPECT_TRUE(killed_by_its_hook("VOBB_TEST_KILL_AFTER_CERTIFIED_LAYERS=2 " + std::string(VOBB_CLI) + " certify " +
+                                 mesh + " " + tree + " --json --rational --quiet --checkpoint " + dir))
+      << "certify was not killed at its two-layer checkpoint";
   const nlohmann::json saved = nlohmann::json::parse(slurp(state), nullptr, false);
   ASSERT_TRUE(saved.is_object()) << "no checkpoint was saved";
   EXPECT_EQ(saved.at("layers").size(), 2u);
@@ -684,17 +685,17 @@ TEST(Cli, KilledCompareResumesItsCertification) {
   const std::string args = " --depth 3 --m 8 --lloyd 1 --backend cpu --json --quiet";
   const CliRun whole = vobb_cli("compare " + mesh + args);
   ASSERT_EQ(whole.code, 0) << whole.err;
-  const int status = std::system(("VOBB_TEST_KILL_AFTER_CERTIFIED_LAYERS=2 " + std::string(VOBB_CLI) + " compare " +
-                                  mesh + args + " --checkpoint " + dir + " >/dev/null 2>&1").c_str());
-  const bool killed = (WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL) ||
-                      (WIFEXITED(status) && WEXITSTATUS(status) == 128 + SIGKILL);
-  EXPECT_TRUE(killed) << "compare was not killed at its two-layer checkpoint (status " << status << ")";
+  EXPECT_TRUE(killed_by_its_hook("VOBB_TEST_KILL_AFTER_CERTIFIED_LAYERS=2 " + std::string(VOBB_CLI) + " compare " +
+                                 mesh + args + " --checkpoint " + dir))
+      << "compare was not killed at its two-layer checkpoint";
   EXPECT_TRUE(test::exists(dir + "/certify-obbtree/layers.json"));
   EXPECT_FALSE(test::exists(dir + "/certify-variational")) << "killed in the baseline's certification";
   const CliRun again = vobb_cli("compare " + mesh + " --depth 3 --m 8 --lloyd 1 --backend cpu --json --checkpoint " + dir);
   ASSERT_EQ(again.code, 0) << again.err;
   EXPECT_NE(again.err.find("resuming from " + dir + "/certify-obbtree (the boxes' OBV, 2 of 4 layers done)"),
             std::string::npos) << again.err;
+  // The saved layers were used, not certified again: two of the baseline's four layers.
+  EXPECT_NE(again.err.find("vobb: 2 of 4 layers: from the checkpoint\n"), std::string::npos) << again.err;
   EXPECT_EQ(without_seconds(nlohmann::json::parse(again.out)), without_seconds(nlohmann::json::parse(whole.out)));
   EXPECT_TRUE(test::exists(dir + "/certify-variational/layers.json"));
   std::system(("rm -rf " + dir).c_str());

@@ -26,7 +26,7 @@ TEST(GlContext, ReportsItsRendererPlatformAndVersion) {
   VOBB_MAKE_CONTEXT(ctx);
   EXPECT_FALSE(ctx->renderer().empty());
   EXPECT_TRUE(ctx->platform() == "device" || ctx->platform() == "surfaceless") << ctx->platform();
-  EXPECT_NE(ctx->version().find("4."), std::string::npos) << ctx->version();
+  EXPECT_EQ(ctx->version().rfind("4.", 0), 0u) << "an OpenGL 4.x context: " << ctx->version();
   EXPECT_EQ(current_renderer(), ctx->renderer()) << "create() leaves the context current on this thread";
 }
 

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -11,21 +12,32 @@
 namespace vobb::validate {
 namespace {
 
-// Each box's source: a node box of the baseline at the size's level (or the deepest), from
-// which the box is jittered (box_corpus.h): centre within 25 % of each half extent along each
-// axis, each axis within 15 degrees of its own, each half extent scaled by [0.8, 1.25]. The
-// checks allow 1e-9 relative for the rotation and orthonormalisation's round-off (a few ulps
-// of each term, far below 1e-9).
+// How far a box is from its source node box, per bound of box_corpus.h: the centre's offset
+// along each source axis over 25 % of that half extent, the largest angle between an axis and
+// its own (degrees), and each half extent over the source's.
+struct Jitter {
+  double offset = 0, angle = 0, ratio_lo = 1e300, ratio_hi = 0;
+};
+Jitter jitter(const Obb& box, const Obb& source) {
+  Jitter j;
+  for (int k = 0; k < 3; ++k) {
+    j.offset = std::max(j.offset, std::abs((box.center - source.center).dot(source.axes[k])) / (0.25 * source.half[k]));
+    j.angle = std::max(j.angle, std::acos(std::min(1.0, box.axes[k].dot(source.axes[k]))) * 180 / M_PI);
+    j.ratio_lo = std::min(j.ratio_lo, box.half[k] / source.half[k]);
+    j.ratio_hi = std::max(j.ratio_hi, box.half[k] / source.half[k]);
+  }
+  return j;
+}
+
+// Within the bounds: centre within 25 % of each half extent along each axis, each axis within
+// 15 degrees of its own, each half extent scaled by [0.8, 1.25]. The slack, 1e-9 relative, is
+// far above the round-off of these few operations on numbers of the mesh's size (some 1e-15
+// relative) and far below any real excess, so it decides nothing but round-off.
 bool jittered_from(const Obb& box, const Obb& source) {
   const double slack = 1e-9;
-  for (int k = 0; k < 3; ++k) {
-    const double along = (box.center - source.center).dot(source.axes[k]);
-    if (std::abs(along) > 0.25 * source.half[k] * (1 + slack) + slack * source.half.norm()) return false;
-    if (box.axes[k].dot(source.axes[k]) < std::cos(M_PI / 12) - slack) return false;
-    const double ratio = box.half[k] / source.half[k];
-    if (ratio < 0.8 * (1 - slack) || ratio > 1.25 * (1 + slack)) return false;
-  }
-  return true;
+  const Jitter j = jitter(box, source);
+  return j.offset <= 1 + slack && j.angle <= 15 * (1 + slack) && j.ratio_lo >= 0.8 * (1 - slack) &&
+         j.ratio_hi <= 1.25 * (1 + slack);
 }
 
 TEST(BoxCorpus, BoxesAreJitteredNodeBoxesOfTheirLevel) {
@@ -38,16 +50,33 @@ TEST(BoxCorpus, BoxesAreJitteredNodeBoxesOfTheirLevel) {
     const std::vector<int32_t> level = layer(tree, std::min(tree_level(size), tree.depth));
     const std::vector<Obb> boxes = box_corpus(mesh, size, 40, 3);
     ASSERT_EQ(boxes.size(), 40u);
+    Jitter most;
     for (size_t i = 0; i < boxes.size(); ++i) {
       const Obb& b = boxes[i];
       for (int k = 0; k < 3; ++k) {
+        // orthonormalize() leaves a few ulps (about 1e-16) in norms and dot products.
         EXPECT_NEAR(b.axes[k].norm(), 1.0, 1e-12) << i;
         for (int l = k + 1; l < 3; ++l) EXPECT_NEAR(b.axes[k].dot(b.axes[l]), 0.0, 1e-12) << i;
       }
       bool found = false;
-      for (int32_t id : level) found = found || jittered_from(b, tree.nodes[id].box);
+      for (int32_t id : level)
+        if (!found && jittered_from(b, tree.nodes[id].box)) {
+          found = true;
+          const Jitter j = jitter(b, tree.nodes[id].box);
+          most.offset = std::max(most.offset, j.offset);
+          most.angle = std::max(most.angle, j.angle);
+          most.ratio_lo = std::min(most.ratio_lo, j.ratio_lo);
+          most.ratio_hi = std::max(most.ratio_hi, j.ratio_hi);
+        }
       EXPECT_TRUE(found) << "box " << i << " is no jittered node box of level " << tree_level(size);
     }
+    // And the jitter is there: over 40 seeded boxes (120 draws of each kind, uniform over the
+    // bounds) the largest offset, angle and scalings reach past half their bounds; a jitter
+    // shrunk tenfold, or none, fails here.
+    EXPECT_GT(most.offset, 0.5);
+    EXPECT_GT(most.angle, 7.5);
+    EXPECT_LT(most.ratio_lo, 0.9);
+    EXPECT_GT(most.ratio_hi, 1.1);
   }
 }
 

@@ -14,6 +14,7 @@
 #include "exact/outer_volume.h"
 #include "fast/estimator_test_util.h"
 #include "fast/gl_estimator.h"
+#include "fast/gl_test_util.h"
 #include "test_common.h"
 #include "validate/box_corpus.h"
 #include "validate/estimators.h"
@@ -25,13 +26,6 @@ double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   const size_t n = v.size();
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
-std::unique_ptr<GlObvEstimator> make_gl(const Mesh& mesh) {
-  std::unique_ptr<GlObvEstimator> gl;
-  const Status s = GlObvEstimator::create(mesh, &gl);
-  EXPECT_TRUE(s) << s.message();
-  return gl;
 }
 
 // The CPU prototype's median relative errors at m = 32 (DESIGN §4): leaf, mid, root.
@@ -51,7 +45,7 @@ TEST(EstimatorAccuracy, RealMeshesMatchThePrototypeAndConvergeWithM) {
     ++meshes;
     LoadedMesh lm;
     ASSERT_TRUE(load_solid(test::real_mesh(name), &lm));
-    auto gl = make_gl(lm.mesh);
+    VOBB_MAKE_GL(gl, lm.mesh);
     ASSERT_TRUE(gl);
     const exact::ClipSolver exact(lm.mesh);
     uint64_t seed = 100;
@@ -86,7 +80,7 @@ TEST(EstimatorAccuracy, RealMeshesMatchThePrototypeAndConvergeWithM) {
 // On analytic meshes too the error falls as m doubles: medians over seeded boxes of all sizes.
 TEST(EstimatorAccuracy, AnalyticMeshesConvergeWithM) {
   for (const auto& a : {analytic::polygonal_torus(), analytic::cube_with_cavity(), analytic::octahedron()}) {
-    auto gl = make_gl(a.mesh);
+    VOBB_MAKE_GL(gl, a.mesh);
     ASSERT_TRUE(gl);
     const exact::ClipSolver exact(a.mesh);
     std::vector<Obb> boxes;
