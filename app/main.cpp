@@ -113,6 +113,14 @@ vobb::Status make_estimator(const vobb::Mesh& mesh, const BuildFlags& f, std::un
   return vobb::Status::ok();
 }
 
+// Makes a --checkpoint folder (and its parents) if it is not there.
+vobb::Status make_checkpoint_folder(const std::string& folder) {
+  std::error_code ec;
+  std::filesystem::create_directories(folder, ec);
+  if (ec) return vobb::Status::error(folder + ": cannot make the checkpoint folder: " + ec.message());
+  return vobb::Status::ok();
+}
+
 // What a variational build depends on, for its checkpoints: a state saved under another
 // fingerprint is refused, so a resumed build is the build that was interrupted.
 std::string build_fingerprint(const vobb::Mesh& mesh, const BuildFlags& f, const vobb::GlObvEstimator* gl) {
@@ -189,9 +197,8 @@ vobb::Status build_tree(const vobb::Mesh& mesh, const BuildFlags& f, const vobb:
   std::string state_path;
   vobb::Status save_error = vobb::Status::ok();
   if (!f.checkpoint.empty()) {
-    std::error_code ec;
-    std::filesystem::create_directories(f.checkpoint, ec);
-    if (ec) return vobb::Status::error(f.checkpoint + ": cannot make the checkpoint folder: " + ec.message());
+    vobb::Status made = make_checkpoint_folder(f.checkpoint);
+    if (!made) return made;
     state_path = (std::filesystem::path(f.checkpoint) / "state.json").string();
     const std::string fingerprint = build_fingerprint(mesh, f, gl);
     vobb::Status s = vobb::read_variational_state(state_path, fingerprint, mesh.faces.size(), f.arity, f.depth, &resume,
@@ -316,15 +323,14 @@ struct CertifySaver {
 
   vobb::Status attach(const std::string& folder, const vobb::Mesh& mesh, const vobb::Tree& tree,
                       const std::string& path, vobb::exact::CertifyOptions* opt) {
-    std::error_code ec;
-    std::filesystem::create_directories(folder, ec);
-    if (ec) return vobb::Status::error(folder + ": cannot make the checkpoint folder: " + ec.message());
+    vobb::Status s = make_checkpoint_folder(folder);
+    if (!s) return s;
     const std::string tree_json = vobb::tree_to_json(tree);
     files = std::make_unique<vobb::exact::CertifyCheckpoint>(
         folder, std::string(vobb::exact::kCertifyVersion) + "; mesh " + vobb::mesh_sha256(mesh) + "; tree " +
                     vobb::sha256_hex(tree_json.data(), tree_json.size()) + "; path " + path);
     bool resuming = false;
-    vobb::Status s = files->load(tree, &resume, &resuming);
+    s = files->load(tree, &resume, &resuming);
     if (!s) return s;
     opt->resume = resuming ? &resume : nullptr;
     // Said even with --quiet: it is what the certificate rests on, not progress.

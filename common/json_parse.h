@@ -6,7 +6,19 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/sha256.h"
+
 namespace vobb {
+
+// The checksum our checkpoint files carry in "sha256": the SHA-256 of the document without that
+// field, as nlohmann dumps it (keys sorted, doubles in shortest round-trip form), so that
+// parsing a saved file and dumping it again gives the bytes that were hashed.
+template <class Json>
+std::string json_checksum(Json j) {
+  j.erase("sha256");
+  const std::string body = j.dump();
+  return sha256_hex(body.data(), body.size());
+}
 
 // Parses `text` into *out. False, with *out reset, when it is not JSON or when arrays and
 // objects nest deeper than `max_depth` (the top level is depth 0; *too_deep, when given, says

@@ -25,6 +25,11 @@ Status check_regular_file(const std::string& path, const std::string& display, c
   return Status::ok();
 }
 
+bool path_absent(const std::string& path) {
+  struct stat st;
+  return ::stat(path.c_str(), &st) != 0 && (errno == ENOENT || errno == ENOTDIR);
+}
+
 Status read_regular_file(const std::string& path, const std::string& display, const std::string& what,
                          std::string* content) {
   uint64_t size = 0;

@@ -21,6 +21,11 @@ std::string extension_of(const std::string& path);
 Status check_regular_file(const std::string& path, const std::string& display, const std::string& what,
                           uint64_t* size);
 
+// Whether nothing is at `path` (stat fails with ENOENT or ENOTDIR): a checkpoint not yet saved.
+// Anything else there, or a path that cannot be checked, is not absent, so that reading it
+// reports why.
+bool path_absent(const std::string& path);
+
 // Reads the whole of `path` into `content`, after check_regular_file; a short read is
 // "<display>: read error".
 Status read_regular_file(const std::string& path, const std::string& display, const std::string& what,

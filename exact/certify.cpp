@@ -7,7 +7,6 @@
 #include <algorithm>
 #include <atomic>
 #include <cctype>
-#include <cerrno>
 #include <exception>
 #include <chrono>
 #include <cstdio>
@@ -15,13 +14,11 @@
 #include <mutex>
 #include <map>
 #include <set>
-#include <sys/stat.h>
 
 #include <nlohmann/json.hpp>
 
 #include "common/atomic_file.h"
 #include "common/json_parse.h"
-#include "common/sha256.h"
 #include "common/stopwatch.h"
 #include "common/text_util.h"
 #include "exact/outer_volume.h"
@@ -226,12 +223,6 @@ namespace {
 constexpr const char* kObvFormat = "vobb-certify-obv";
 constexpr const char* kLayersFormat = "vobb-certify-layers";
 
-std::string checksum(nlohmann::json j) {
-  j.erase("sha256");
-  const std::string body = j.dump();
-  return sha256_hex(body.data(), body.size());
-}
-
 // "p/q" (or "p") in base 10, q > 0, as mpq_class writes it; false for anything else, and for a
 // zero denominator, which mpq would divide by.
 bool parse_rational(const nlohmann::json& v, Rational* out) {
@@ -254,11 +245,6 @@ bool parse_rational(const nlohmann::json& v, Rational* out) {
   return true;
 }
 
-bool exists(const std::string& path) {
-  struct stat st;
-  return ::stat(path.c_str(), &st) == 0 || !(errno == ENOENT || errno == ENOTDIR);
-}
-
 // Reads one of the two files: JSON object, format, known fields, checksum, fingerprint.
 // *text gets the file's bytes.
 Status read_checkpoint_file(const std::string& path, const char* format, const std::set<std::string>& known,
@@ -273,7 +259,7 @@ Status read_checkpoint_file(const std::string& path, const char* format, const s
   if (j->value("format", "") != format || j->value("version", 0) != 1) return bad("not a vobb certify checkpoint");
   for (const auto& item : j->items())
     if (!known.count(item.key())) return bad("unknown field '" + item.key().substr(0, 40) + "'");
-  if (!j->contains("sha256") || !(*j)["sha256"].is_string() || (*j)["sha256"].get<std::string>() != checksum(*j))
+  if (!j->contains("sha256") || !(*j)["sha256"].is_string() || (*j)["sha256"].get<std::string>() != json_checksum(*j))
     return bad("checksum does not match the contents");
   if (!j->contains("fingerprint") || !(*j)["fingerprint"].is_string() || (*j)["fingerprint"].get<std::string>() != fingerprint)
     return Status::error(path + ": checkpoint of another certification (mesh, tree, path or certify version differ); "
@@ -304,7 +290,7 @@ Status CertifyCheckpoint::save(const CertifyState& state) {
     nlohmann::json obv = nlohmann::json::array();
     for (const Rational& q : state.obv) obv.push_back(q.get_str());
     j["obv"] = std::move(obv);
-    j["sha256"] = checksum(j);
+    j["sha256"] = json_checksum(j);
     const std::string text = j.dump() + "\n";
     const Status w = write_file_atomic(obv_path(), text);
     if (!w) return w;
@@ -340,14 +326,14 @@ Status CertifyCheckpoint::save(const CertifyState& state) {
     written_->layers.emplace(l.level, std::move(jl));
   }
   j["layers"] = std::move(layers);
-  j["sha256"] = checksum(j);
+  j["sha256"] = json_checksum(j);
   return write_file_atomic(layers_path(), j.dump() + "\n");
 }
 
 Status CertifyCheckpoint::load(const Tree& tree, CertifyState* state, bool* found) {
   *found = false;
   const std::string obv_file = obv_path(), layers_file = layers_path();
-  const bool has_obv = exists(obv_file), has_layers = exists(layers_file);
+  const bool has_obv = !path_absent(obv_file), has_layers = !path_absent(layers_file);
   if (!has_obv && !has_layers) return Status::ok();
   *found = true;
   if (!has_obv) return Status::error(layers_file + ": damaged certify checkpoint: layers without the boxes' OBV (" + obv_file + ")");

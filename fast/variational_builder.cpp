@@ -1,7 +1,6 @@
 #include "fast/variational_builder.h"
 
 #include <Eigen/Geometry>
-#include <sys/stat.h>
 #include <nlohmann/json.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
@@ -9,7 +8,6 @@
 #include <tbb/task_arena.h>
 #include <algorithm>
 #include <atomic>
-#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -27,7 +25,6 @@
 
 #include "common/atomic_file.h"
 #include "common/json_parse.h"
-#include "common/sha256.h"
 #include "common/status.h"
 #include "common/text_util.h"
 #include "fast/obbtree_builder.h"
@@ -1019,14 +1016,6 @@ Tree build_variational(const Mesh& mesh, const VariationalOptions& options, cons
 namespace {
 constexpr const char* kCheckpointFormat = "vobb-variational-state";
 
-// SHA-256 of the state's JSON without its "sha256" field, as nlohmann dumps it: keys sorted,
-// doubles in shortest round-trip form, so that parsing a saved state and dumping it again gives
-// the bytes that were hashed.
-std::string state_checksum(nlohmann::json j) {
-  j.erase("sha256");
-  const std::string body = j.dump();
-  return sha256_hex(body.data(), body.size());
-}
 }
 
 Status write_variational_state(const VariationalState& st, const std::string& fingerprint, const std::string& path) {
@@ -1049,15 +1038,14 @@ Status write_variational_state(const VariationalState& st, const std::string& fi
   // nlohmann writes doubles in their shortest round-trip form: a resumed build reads the
   // very axes it saved. The checksum covers everything else, so a damaged digit is refused
   // rather than resumed into another tree.
-  j["sha256"] = state_checksum(j);
+  j["sha256"] = json_checksum(j);
   return write_file_atomic(path, j.dump() + "\n");
 }
 
 Status read_variational_state(const std::string& path, const std::string& fingerprint, size_t mesh_faces,
                               int arity, int depth, VariationalState* state, bool* found) {
   *found = false;
-  struct stat st;
-  if (::stat(path.c_str(), &st) != 0 && (errno == ENOENT || errno == ENOTDIR)) return Status::ok();
+  if (path_absent(path)) return Status::ok();
   *found = true;
   std::string text;
   const Status read = read_regular_file(path, path, "checkpoint file", &text);
@@ -1077,7 +1065,7 @@ Status read_variational_state(const std::string& path, const std::string& finger
     for (const auto& item : j.items())
       if (!known.count(item.key())) return bad("unknown field '" + item.key().substr(0, 40) + "'");
     // States saved before checksums were written have none; any other must match.
-    if (j.contains("sha256") && (!j["sha256"].is_string() || j["sha256"].get<std::string>() != state_checksum(j)))
+    if (j.contains("sha256") && (!j["sha256"].is_string() || j["sha256"].get<std::string>() != json_checksum(j)))
       return bad("checksum does not match the contents");
     if (j.at("fingerprint").get<std::string>() != fingerprint)
       return Status::error(path + ": checkpoint of another build (mesh, options or estimator differ); "

@@ -88,5 +88,19 @@ TEST(TextUtil, OnlyRegularFilesAreRead) {
   std::remove(file.c_str());
 }
 
+// Absent: nothing there, or a path through a file (ENOTDIR). A file, a folder, a FIFO is there,
+// so that reading it says what is wrong with it.
+TEST(TextUtil, PathAbsentOnlyWhereNothingIs) {
+  const std::string file = test::temp_path("tu_absent.txt");
+  std::ofstream(file) << "x";
+  EXPECT_FALSE(path_absent(file));
+  EXPECT_FALSE(path_absent(::testing::TempDir()));
+  EXPECT_FALSE(path_absent("/dev/zero"));
+  EXPECT_TRUE(path_absent(test::temp_path("tu_nothing_here")));
+  EXPECT_TRUE(path_absent(file + "/below_a_file"));
+  std::remove(file.c_str());
+  EXPECT_TRUE(path_absent(file));
+}
+
 }  // namespace
 }  // namespace vobb
