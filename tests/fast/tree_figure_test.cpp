@@ -195,47 +195,6 @@ TEST(TreeFigure, PngRoundTripKeepsEveryPixel) {
   EXPECT_TRUE(back.rgba == img.rgba);
 }
 
-TEST(PngIo, TranslucentImageRoundTripsAsRgba) {
-  RgbaImage img;
-  img.width = 5;
-  img.height = 3;
-  for (int i = 0; i < 5 * 3 * 4; ++i) img.rgba.push_back(static_cast<uint8_t>(i * 53 + 7));
-  const std::string path = test::temp_path("translucent.png");
-  ASSERT_TRUE(write_png(path, img));
-  RgbaImage back;
-  const Status r = read_png(path, &back);
-  std::remove(path.c_str());
-  ASSERT_TRUE(r) << r.message();
-  EXPECT_TRUE(back.rgba == img.rgba);
-}
-
-TEST(PngIo, RejectsMalformedImagesAndFiles) {
-  RgbaImage bad;
-  bad.width = 3;
-  bad.height = 2;
-  bad.rgba.assign(5, 0);
-  const std::string path = test::temp_path("bad.png");
-  EXPECT_FALSE(write_png(path, bad));
-  EXPECT_FALSE(test::exists(path));  // nothing half-written
-  RgbaImage back;
-  EXPECT_FALSE(read_png(path, &back));  // absent
-  // A truncated PNG: the first half of a valid one.
-  RgbaImage ok;
-  ok.width = 17;
-  ok.height = 9;
-  for (int i = 0; i < 17 * 9 * 4; ++i) ok.rgba.push_back(static_cast<uint8_t>(i * 37));
-  std::string bytes;
-  ASSERT_TRUE(encode_png(ok, &bytes, "mem"));
-  FILE* out = std::fopen(path.c_str(), "wb");
-  ASSERT_NE(out, nullptr);
-  std::fwrite(bytes.data(), 1, bytes.size() / 2, out);
-  std::fclose(out);
-  const Status s = read_png(path, &back);
-  std::remove(path.c_str());
-  EXPECT_FALSE(s);
-  EXPECT_TRUE(back.rgba.empty());
-}
-
 // The command line draws a figure with the GL estimator's context after a build whose calls
 // came from several threads (compare --backend gl --figure): the estimator's drawing thread
 // holds the context only while it draws, so the figure can bind it between calls, and the
