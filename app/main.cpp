@@ -19,6 +19,7 @@
 #include <unistd.h>
 
 #include "app/cli_support.h"
+#include "common/atomic_file.h"
 #include "common/box_export.h"
 #include "common/io/mesh_report.h"
 #include "common/png_io.h"
@@ -113,11 +114,14 @@ vobb::Status make_estimator(const vobb::Mesh& mesh, const BuildFlags& f, std::un
   return vobb::Status::ok();
 }
 
-// Makes a --checkpoint folder (and its parents) if it is not there.
+// Makes a --checkpoint folder (and its parents) if it is not there, and clears it of the
+// temporary files of runs killed mid-write.
 vobb::Status make_checkpoint_folder(const std::string& folder) {
   std::error_code ec;
   std::filesystem::create_directories(folder, ec);
   if (ec) return vobb::Status::error(folder + ": cannot make the checkpoint folder: " + ec.message());
+  // A run killed while it wrote a checkpoint left its temporary file here.
+  vobb::remove_stray_temporaries(folder);
   return vobb::Status::ok();
 }
 

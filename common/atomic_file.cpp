@@ -1,6 +1,7 @@
 #include "common/atomic_file.h"
 
 #include <fcntl.h>
+#include <signal.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -26,6 +27,20 @@ bool write_all(int fd, const std::string& content) {
     done += static_cast<size_t>(n);
   }
   return true;
+}
+
+// The pid in a name ".vobb-<pid>-<n>.tmp" (both decimal, without sign), or 0 for other names.
+pid_t temporary_owner(const std::string& name) {
+  const std::string head = ".vobb-", tail = ".tmp";
+  if (name.size() <= head.size() + tail.size() || name.compare(0, head.size(), head) != 0 ||
+      name.compare(name.size() - tail.size(), tail.size(), tail) != 0)
+    return 0;
+  const std::string middle = name.substr(head.size(), name.size() - head.size() - tail.size());
+  const size_t dash = middle.find('-');
+  if (dash == 0 || dash == std::string::npos || dash + 1 == middle.size() || dash > 9) return 0;
+  for (size_t i = 0; i < middle.size(); ++i)
+    if (i != dash && (middle[i] < '0' || middle[i] > '9')) return 0;
+  return static_cast<pid_t>(std::stol(middle.substr(0, dash)));
 }
 
 }  // namespace
@@ -78,6 +93,21 @@ Status write_file_atomic(const std::string& path, const std::string& content) {
     return fail(why);
   }
   return Status::ok();
+}
+
+size_t remove_stray_temporaries(const std::string& folder) {
+  size_t removed = 0;
+  std::error_code ec;
+  for (std::filesystem::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
+    const pid_t owner = temporary_owner(it->path().filename().string());
+    if (owner <= 0 || owner == ::getpid()) continue;
+    std::error_code type_ec;
+    if (!it->is_regular_file(type_ec) || it->is_symlink(type_ec)) continue;
+    // kill with signal 0 sends nothing: ESRCH says no such process; EPERM says it lives.
+    if (::kill(owner, 0) == 0 || errno != ESRCH) continue;
+    if (::unlink(it->path().c_str()) == 0) ++removed;
+  }
+  return removed;
 }
 
 }  // namespace vobb

@@ -14,4 +14,12 @@ namespace vobb {
 
 Status write_file_atomic(const std::string& path, const std::string& content);
 
+// Removes from `folder` (not below it) the stray temporary files of runs that were killed
+// mid-write: regular files named ".vobb-<pid>-<n>.tmp" whose process <pid> no longer exists.
+// A live process's files, this one's included, are kept, so a run writing beside this one is
+// not disturbed (a pid reused since is taken as live: the file is kept, never a wrong removal).
+// Returns how many were removed; a folder that cannot be read removes nothing. For folders vobb
+// owns, such as checkpoints; it is not run on users' output folders.
+size_t remove_stray_temporaries(const std::string& folder);
+
 }  // namespace vobb

@@ -613,10 +613,15 @@ TEST(Cli, KilledBuildResumesToTheSameTree) {
       << "the build was not killed at its level-2 checkpoint";
   EXPECT_NE(slurp(state).find("\"split_levels\":2"), std::string::npos);
   EXPECT_FALSE(test::exists(resumed)) << "the killed build wrote its tree";
+  // What a build killed while writing its state leaves: the resumed build clears it.
+  const std::string stray = dir + "/.vobb-" + std::to_string(test::ended_pid()) + "-0.tmp";
+  { std::ofstream(stray) << "{\"half"; }
+  ASSERT_TRUE(test::exists(stray));
   const CliRun again = vobb_cli("build " + mesh + " -o " + resumed + " --depth 3 --m 8 --lloyd 1 --backend cpu --checkpoint " + dir);
   ASSERT_EQ(again.code, 0) << again.err;
   EXPECT_NE(again.err.find("resuming from"), std::string::npos) << again.err;
   EXPECT_EQ(slurp(resumed), slurp(whole));
+  EXPECT_FALSE(test::exists(stray)) << "a killed run's temporary file was left in the checkpoint";
   const CliRun other = vobb_cli("build " + mesh + " -o " + resumed + args + " --seed 2 --checkpoint " + dir);
   EXPECT_EQ(other.code, 2);
   EXPECT_NE(other.err.find("checkpoint of another build"), std::string::npos) << other.err;
@@ -658,6 +663,8 @@ TEST(Cli, KilledCertifyResumesToTheSameCertificate) {
   const nlohmann::json saved = nlohmann::json::parse(slurp(state), nullptr, false);
   ASSERT_TRUE(saved.is_object()) << "no checkpoint was saved";
   EXPECT_EQ(saved.at("layers").size(), 2u);
+  const std::string stray = dir + "/.vobb-" + std::to_string(test::ended_pid()) + "-4.tmp";
+  { std::ofstream(stray) << "{\"half"; }
   const CliRun again = vobb_cli("certify " + mesh + " " + tree + " --json --rational --checkpoint " + dir);
   ASSERT_EQ(again.code, 0) << again.err;
   EXPECT_NE(again.err.find("resuming from"), std::string::npos) << again.err;
@@ -666,6 +673,7 @@ TEST(Cli, KilledCertifyResumesToTheSameCertificate) {
   size_t layer_lines = 0;
   for (size_t at = 0; (at = again.err.find("certify: layer ", at)) != std::string::npos; ++at) ++layer_lines;
   EXPECT_EQ(layer_lines, 3u) << again.err;
+  EXPECT_FALSE(test::exists(stray)) << "a killed run's temporary file was left in the checkpoint";
   EXPECT_EQ(without_seconds(nlohmann::json::parse(again.out)), without_seconds(nlohmann::json::parse(whole.out)));
   const CliRun other = vobb_cli("certify " + mesh + " " + tree + " --path clip --quiet --checkpoint " + dir);
   EXPECT_EQ(other.code, 2);

@@ -84,5 +84,29 @@ TEST(WriteFileAtomic, WritesIntoAPipeThroughItsProcLink) {
   EXPECT_EQ(std::string(buf, n > 0 ? n : 0), "down the pipe");
 }
 
+// A run killed mid-write leaves ".vobb-<pid>-<n>.tmp" beside its target. Only those of ended
+// processes go; this process's own, names that merely look alike, and a folder of that name
+// stay.
+TEST(RemoveStrayTemporaries, RemovesOnlyTheFilesOfEndedRuns) {
+  const std::filesystem::path dir = test::temp_path("stray_dir");
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directory(dir);
+  const std::string ended = std::to_string(test::ended_pid()), mine = std::to_string(::getpid());
+  const std::vector<std::string> gone = {".vobb-" + ended + "-0.tmp", ".vobb-" + ended + "-17.tmp"};
+  const std::vector<std::string> kept = {".vobb-" + mine + "-3.tmp", ".vobb-" + ended + ".tmp", ".vobb--0.tmp",
+                                         ".vobb-" + ended + "-.tmp", ".vobb-" + ended + "-1x.tmp", "vobb-" + ended + "-0.tmp",
+                                         ".vobb-" + ended + "-0.tmpx", "state.json"};
+  for (const std::string& name : gone) ASSERT_TRUE(write_file_atomic((dir / name).string(), "half"));
+  for (const std::string& name : kept) ASSERT_TRUE(write_file_atomic((dir / name).string(), "keep"));
+  std::filesystem::create_directory(dir / (".vobb-" + ended + "-9.tmp"));
+  EXPECT_EQ(remove_stray_temporaries(dir.string()), gone.size());
+  for (const std::string& name : gone) EXPECT_FALSE(std::filesystem::exists(dir / name)) << name;
+  for (const std::string& name : kept) EXPECT_EQ(slurp((dir / name).string()), "keep") << name;
+  EXPECT_TRUE(std::filesystem::is_directory(dir / (".vobb-" + ended + "-9.tmp")));
+  EXPECT_EQ(remove_stray_temporaries(dir.string()), 0u);  // nothing left to remove
+  EXPECT_EQ(remove_stray_temporaries((dir / "absent").string()), 0u);
+  std::filesystem::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace vobb
