@@ -119,6 +119,7 @@ class Runner {
           }
           r.worst_rigorous_ratio = std::max(r.worst_rigorous_ratio, rr);
           r.worst_bound_ratio = std::max(r.worst_bound_ratio, br);
+          r.tightest_rigorous = std::min(r.tightest_rigorous, rb / volume(boxes[i]));
           ok = ok && err <= rb && (!within_b || err <= bb);
         }
       }

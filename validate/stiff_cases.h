@@ -13,6 +13,7 @@
 // self-intersecting mesh, coordinates beyond 2^240).
 #pragma once
 
+#include <cmath>
 #include <functional>
 #include <string>
 #include <vector>
@@ -29,6 +30,7 @@ struct StiffCaseResult {
   bool as_expected = false;
   double worst_rigorous_ratio = 0;  // max |E - V| / R(m) over the case's estimates
   double worst_bound_ratio = 0;     // max |E - V| / (B(m) vol(O))
+  double tightest_rigorous = INFINITY;  // min R(m) / vol(O) over the case's estimates
 };
 
 struct StiffConfig {
