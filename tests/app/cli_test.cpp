@@ -10,6 +10,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <limits>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -105,20 +107,27 @@ TEST(CliBadInput, NonFiniteAndNegativeNumbersAndOddNames) {
   const std::string mesh = write_cube("flags_cube.off", 1);
   const std::string tree = test::temp_path("flags_tree.json");
   ASSERT_EQ(vobb_cli("build " + mesh + " -o " + tree + " --method obbtree --depth 2").code, 0);
-  const std::string out = test::temp_path("flags_out.json");
-  for (const std::string& args :
-       {"collide " + mesh + " " + tree + " --seconds nan --colliders 5 -o " + out,
-        "collide " + mesh + " " + tree + " --seed -1 --static --colliders 5 -o " + out,
-        "build " + mesh + " -o " + out + " --time-budget nan", "build " + mesh + " -o " + out + " --seed -1",
-        "build " + mesh + " -o " + out + " --seed 18446744073709551616",
-        "compare " + mesh + " --seed 1e23 --depth 1", "export " + tree + " --level 3 -o " + out + ".obj",
-        "compare " + mesh + " --depth 1 --backend cpu --figure /nonexistent/folder/f.png"}) {
+  const std::string out = test::temp_path("flags_out.json"), obj = test::temp_path("flags_out.obj");
+  // Each case with the file it would write ("": compare writes to standard output, and the
+  // figure's folder does not exist).
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"collide " + mesh + " " + tree + " --seconds nan --colliders 5 -o " + out, out},
+      {"collide " + mesh + " " + tree + " --seed -1 --static --colliders 5 -o " + out, out},
+      {"build " + mesh + " -o " + out + " --time-budget nan", out},
+      {"build " + mesh + " -o " + out + " --seed -1", out},
+      {"build " + mesh + " -o " + out + " --seed 18446744073709551616", out},
+      {"compare " + mesh + " --seed 1e23 --depth 1", ""},
+      {"export " + tree + " --level 3 -o " + obj, obj},
+      {"compare " + mesh + " --depth 1 --backend cpu --figure /nonexistent/folder/f.png", ""}};
+  for (const auto& [args, written] : cases) {
+    std::remove(out.c_str());
+    std::remove(obj.c_str());
     const CliRun r = vobb_cli(args);
     EXPECT_EQ(r.code, 2) << args;
     EXPECT_EQ(line_count(r.err), 1u) << args << ": " << r.err;
-    EXPECT_FALSE(test::exists(out)) << args;
+    if (!written.empty()) EXPECT_FALSE(test::exists(written)) << args;
   }
-  const CliRun level = vobb_cli("export " + tree + " --level 3 -o " + out + ".obj");
+  const CliRun level = vobb_cli("export " + tree + " --level 3 -o " + obj);
   EXPECT_NE(level.err.find("--level 3"), std::string::npos) << level.err;
   // A newline in a file name is printed escaped, so the error stays one line.
   const CliRun odd = vobb_cli("info '" + test::temp_path("no\nsuch.off") + "'");
@@ -452,7 +461,45 @@ TEST(Cli, BuildExportAndInfoOnAnAnalyticMesh) {
   const std::string boxes = test::temp_path("layer.obj");
   r = vobb_cli("export " + tree + " --level 2 -o " + boxes);
   ASSERT_EQ(r.code, 0) << r.err;
-  EXPECT_TRUE(test::exists(boxes));
+  {
+    // The layer's boxes, each as one object of 8 corners and 6 quads (box_export.h); each
+    // corner is the box's centre plus or minus its three half axes.
+    const std::vector<int32_t> ids = layer(t, 2);
+    ASSERT_FALSE(ids.empty());
+    std::istringstream obj(slurp(boxes));
+    std::vector<Vec3> corners;
+    size_t objects = 0, quads = 0;
+    for (std::string line; std::getline(obj, line);) {
+      std::istringstream words(line);
+      std::string tag;
+      words >> tag;
+      if (tag == "o") ++objects;
+      if (tag == "f") quads += std::distance(std::istream_iterator<std::string>(words), std::istream_iterator<std::string>()) == 4;
+      if (tag == "v") {
+        Vec3 v;
+        words >> v[0] >> v[1] >> v[2];
+        corners.push_back(v);
+      }
+    }
+    EXPECT_EQ(objects, ids.size());
+    EXPECT_EQ(quads, 6 * ids.size());
+    ASSERT_EQ(corners.size(), 8 * ids.size());
+    for (size_t b = 0; b < ids.size(); ++b) {
+      const Obb& box = t.nodes[ids[b]].box;
+      for (size_t k = 0; k < 8; ++k) {
+        // Local coordinates of the corner, each +-1. The file prints doubles exactly (shortest
+        // round trip), so the error is that of computing the corner (3 sums of terms up to
+        // |c| + sum h) and of projecting it back (3 products, 2 sums): under 16 roundings of
+        // that size, taken as 64 eps for margin, relative to the half extent.
+        const Vec3 d = corners[8 * b + k] - box.center;
+        const double size = box.center.norm() + box.half.sum();
+        for (int a = 0; a < 3; ++a)
+          EXPECT_NEAR(std::abs(d.dot(box.axes[a])) / box.half[a], 1.0,
+                      64 * std::numeric_limits<double>::epsilon() * size / box.half[a])
+              << b << " " << k;
+      }
+    }
+  }
   r = vobb_cli("export " + tree + " --level 9 -o " + boxes);
   EXPECT_EQ(r.code, 2);
   // certify: a good tree passes (exit 0) with JSON per DESIGN §7; a shrunken box fails

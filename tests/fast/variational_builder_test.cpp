@@ -65,16 +65,6 @@ TEST(VariationalBuilder, WritesAValidConservativeTree) {
   EXPECT_TRUE(check_conservative(mesh, t).ok());
 }
 
-TEST(VariationalBuilder, SameInputSameBytes) {
-  const Mesh mesh = analytic::cube_with_cavity().mesh;
-  const CpuObvEstimator cpu(mesh);
-  VariationalOptions o;
-  o.depth = 3;
-  o.arity = 3;
-  EXPECT_EQ(tree_to_json(build_variational(mesh, o, cpu_at(cpu, 8))),
-            tree_to_json(build_variational(mesh, o, cpu_at(cpu, 8))));
-}
-
 // The CPU twin estimates batches in parallel; the builder must not depend on the thread count
 // (the same tree, byte for byte, under one thread and under four).
 TEST(VariationalBuilder, SameTreeForAnyThreadCount) {
