@@ -186,8 +186,11 @@ TEST(BoxFile, RoundTrip) {
   std::vector<Obb> back;
   ASSERT_TRUE(read_boxes(path, &back));
   ASSERT_EQ(back.size(), 2u);
-  EXPECT_EQ(back[1].center, boxes[1].center);
-  EXPECT_EQ(back[1].half, boxes[1].half);
+  for (size_t i = 0; i < 2; ++i) {  // every number of both boxes, bit for bit
+    EXPECT_EQ(back[i].center, boxes[i].center) << i;
+    EXPECT_EQ(back[i].half, boxes[i].half) << i;
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(back[i].axes[k], boxes[i].axes[k]) << i << " " << k;
+  }
   std::remove(path.c_str());
 }
 

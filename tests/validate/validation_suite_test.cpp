@@ -5,9 +5,12 @@
 #include <sys/wait.h>
 
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include "test_common.h"
 #include "validate/validation_suite.h"
@@ -45,6 +48,17 @@ TEST(ValidationSuite, QuickSuitePassesAndWritesItsFiles) {
   ASSERT_TRUE(s) << s.message();
   for (const auto& c : report.checks) EXPECT_TRUE(c.passed) << c.name << ": " << c.detail;
   EXPECT_TRUE(report.ok());
+  // Each of the suite's checks ran (an empty list would pass the loop above), the GL ones too
+  // unless GL is switched off (VOBB_GL=off, as the GL tests skip); CI has GL (llvmpipe).
+  std::vector<std::string> names = {"estimates finite", "within the rigorous bound R(m)",
+                                    "convergence rate of the median (cpu)", "median relative error at m = 32 (cpu)",
+                                    "held-out violation rate of B(m)", "Nef == clipping (exact)",
+                                    "sum OBV >= OMV on every layer (exact)", "stiff and extreme cases as expected"};
+  const char* gl = std::getenv("VOBB_GL");
+  if (gl == nullptr || std::string(gl) != "off")
+    names.insert(names.end(), {"GL within its float bound of the CPU twin", "convergence rate of the median (gl)",
+                               "median relative error at m = 32 (gl)"});
+  for (const std::string& name : names) EXPECT_NE(find_check(report, name), nullptr) << name;
   for (const char* f : {"summary.md", "samples.csv", "evaluations.csv", "error_by_m.csv", "bound.csv", "richardson.csv",
                         "pareto.csv", "upper_bound.csv", "stiff_cases.csv", "checks.csv"})
     EXPECT_TRUE(fs::exists(fs::path(out) / f)) << f;

@@ -346,10 +346,13 @@ TEST(MeshIo, RealMeshesWithAwkwardHeadersLoad) {
   VOBB_REQUIRE_REAL_MESH("dino");
   VOBB_REQUIRE_REAL_MESH("bunny00");
   LoadedMesh lm;
+  // The triangles each file's own header and face lines give, counted without vobb's reader.
   ASSERT_TRUE(load_mesh(test::real_mesh("dino"), &lm));  // COFF with colours
-  EXPECT_EQ(lm.mesh.faces.size(), 7828u);
+  EXPECT_EQ(static_cast<long>(lm.mesh.faces.size()), test::off_triangle_count(test::real_mesh("dino")));
+  EXPECT_GT(lm.mesh.faces.size(), 0u);
   ASSERT_TRUE(load_mesh(test::real_mesh("bunny00"), &lm));  // blank line after the header
-  EXPECT_EQ(lm.mesh.faces.size(), 75408u);
+  EXPECT_EQ(static_cast<long>(lm.mesh.faces.size()), test::off_triangle_count(test::real_mesh("bunny00")));
+  EXPECT_GT(lm.mesh.faces.size(), 0u);
 }
 
 #if VOBB_HAVE_ASSIMP
