@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "common/atomic_file.h"
 #include "common/io/mesh_io.h"
 #include "common/status.h"
 #include "common/text_util.h"
@@ -71,6 +72,37 @@ inline Status check_output_is_not_input(const std::string& option, const std::st
   return Status::ok();
 }
 
+// An output that names one of the run's own checkpoint files (`names` in `folder`), existing
+// yet or not, would be written over it at the end of the run and refuse every resume.
+inline Status check_output_is_not_checkpoint(const std::string& option, const std::string& output,
+                                             const std::string& folder, const std::vector<std::string>& names) {
+  namespace fs = std::filesystem;
+  if (output.empty() || folder.empty()) return Status::ok();
+  std::string followed;
+  if (!output_target(output, &followed)) return Status::ok();  // check_output_is_writable says why
+  std::error_code ec;
+  const fs::path out = fs::weakly_canonical(followed, ec);
+  if (ec) return Status::ok();
+  for (const std::string& name : names) {
+    const fs::path own = fs::weakly_canonical(fs::path(folder) / name, ec);
+    if (!ec && own == out)
+      return Status::error(option + " " + output + ": is this run's checkpoint file " + (fs::path(folder) / name).string() +
+                           "; choose another output");
+  }
+  return Status::ok();
+}
+
+// Whether the folder `dir` takes a new file: a probe file is made there and removed. `what`
+// begins the error line (the option and its value).
+inline Status check_folder_takes_files(const std::string& what, const std::string& dir) {
+  const std::filesystem::path probe = std::filesystem::path(dir) / (".vobb-" + std::to_string(::getpid()) + "-probe.tmp");
+  const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+  if (fd < 0) return Status::error(what + ": cannot write in " + dir + ": " + std::strerror(errno));
+  ::close(fd);
+  ::unlink(probe.c_str());
+  return Status::ok();
+}
+
 // An output that cannot be written is refused before the run, not after hours of it. Paths
 // are resolved as write_file_atomic resolves them (common/atomic_file.h): a folder is no
 // output; a device or pipe, also through a link (/dev/stdout), is written in place and passes
@@ -84,12 +116,9 @@ inline Status check_output_is_writable(const std::string& option, const std::str
   const fs::file_status st = fs::status(output, ec);
   if (fs::is_directory(st)) return Status::error(option + " " + output + ": is a folder; name a file");
   if (fs::exists(st) && !fs::is_regular_file(st)) return Status::ok();
-  fs::path target(output);
-  if (fs::is_symlink(fs::symlink_status(target, ec))) {
-    const fs::path resolved = fs::weakly_canonical(target, ec);
-    if (ec) return Status::error(option + " " + output + ": cannot follow the link: " + ec.message());
-    target = resolved;
-  }
+  std::string followed;
+  if (Status s = output_target(output, &followed); !s) return Status::error(option + " " + s.message());
+  const fs::path target(followed);
   fs::path dir = target.parent_path();
   if (dir.empty()) dir = ".";
   if (!fs::is_directory(dir, ec)) return Status::error(option + " " + output + ": no such folder " + dir.string());
@@ -97,12 +126,7 @@ inline Status check_output_is_writable(const std::string& option, const std::str
   if (name_max > 0 && target.filename().string().size() > static_cast<size_t>(name_max))
     return Status::error(option + " " + output + ": file name longer than the " + std::to_string(name_max) +
                          " bytes its folder takes");
-  const fs::path probe = dir / (".vobb-" + std::to_string(::getpid()) + "-probe.tmp");
-  const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
-  if (fd < 0) return Status::error(option + " " + output + ": cannot write in " + dir.string() + ": " + std::strerror(errno));
-  ::close(fd);
-  ::unlink(probe.c_str());
-  return Status::ok();
+  return check_folder_takes_files(option + " " + output, dir.string());
 }
 
 // The run could not finish for a reason that is not its input (its output could be written
@@ -114,13 +138,24 @@ inline int could_not_finish(const Status& s) {
 
 // Every command that reads a mesh says on stderr when it was read in single precision
 // (through assimp: float32 coordinates, DESIGN §3), since its results are then those of the
-// rounded mesh, not of the numbers in the file.
+// rounded mesh, not of the numbers in the file. The line is said when the run ends with its
+// results (exit 0 or 1, say_pending_notes), not at once: a run that then refuses its input
+// (a tree of another mesh, a bad option) says that in its one line and nothing else.
+inline std::string& pending_precision_note() {
+  static std::string note;
+  return note;
+}
 inline void note_precision(const std::string& path, const LoadedMesh& mesh) {
   if (!mesh.single_precision) return;
-  std::fprintf(stderr,
-               "vobb: %s: read in single precision through assimp (%s): the results are for its coordinates rounded "
-               "to float32; OFF, OBJ, PLY and ASCII STL files are read as written\n",
-               one_line(basename_of(path)).c_str(), one_line(mesh.format).c_str());
+  pending_precision_note() = "vobb: " + one_line(basename_of(path)) + ": read in single precision through assimp (" +
+                             one_line(mesh.format) + "): the results are for its coordinates rounded to float32; OFF, "
+                             "OBJ, PLY and ASCII STL files are read as written\n";
+}
+inline void say_pending_notes() {
+  std::string& note = pending_precision_note();
+  if (note.empty()) return;
+  std::fputs(note.c_str(), stderr);
+  note.clear();
 }
 
 // CLI::Range lets NaN through (every comparison with it is false), and an unsigned option
@@ -136,6 +171,11 @@ inline const CLI::Validator kFinite(
       return "";
     },
     "FINITE");
+
+// A file or folder name given to an option: not empty ('-o ""' named nothing, and a build ran
+// to its end before the write failed).
+inline const CLI::Validator kPath([](std::string& s) -> std::string { return s.empty() ? "an empty name" : ""; },
+                                  "PATH");
 
 // A seed: decimal digits only, at most 2^64 - 1.
 inline const CLI::Validator kSeed(

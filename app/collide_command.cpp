@@ -146,7 +146,8 @@ CLI::App* add_collide_command(CLI::App& app, CollideFlags* f) {
   c->add_flag("--static", f->static_mode, "No dynamics: poses sampled on and near the surface");
   c->add_flag("--no-fcl", f->no_fcl, "Skip the FCL replay");
   c->add_flag("--json", f->json, "Print JSON (DESIGN §7)");
-  c->add_option("-o,--output", f->output, "Write the report to this file (atomically) instead of stdout");
+  c->add_option("-o,--output", f->output, "Write the report to this file (atomically) instead of stdout")
+      ->check(vobb::app::kPath);
   return c;
 }
 

@@ -120,6 +120,9 @@ vobb::Status make_checkpoint_folder(const std::string& folder) {
   std::error_code ec;
   std::filesystem::create_directories(folder, ec);
   if (ec) return vobb::Status::error(folder + ": cannot make the checkpoint folder: " + ec.message());
+  // Refused now, not warned about at every save of a run that could never resume (a folder
+  // such as /sys/kernel exists and takes no file).
+  if (vobb::Status s = vobb::app::check_folder_takes_files("--checkpoint " + folder, folder); !s) return s;
   // A run killed while it wrote a checkpoint left its temporary file here.
   vobb::remove_stray_temporaries(folder);
   return vobb::Status::ok();
@@ -711,6 +714,9 @@ constexpr const char* kCompareThreadsHelp =
     "and values are the same for any number. No effect on obbtree's build";
 
 int main(int argc, char** argv) {
+  // A reader that closes the pipe early (vobb info M | head -1) makes a write fail with EPIPE,
+  // which ends the run with one line and exit 3, instead of killing it silently with SIGPIPE.
+  std::signal(SIGPIPE, SIG_IGN);
   CLI::App app{"vobb: tight oriented-bounding-box trees for solid meshes, with exact outer volumes"};
   app.require_subcommand(1);
   app.set_version_flag("--version", VOBB_VERSION);
@@ -727,7 +733,7 @@ int main(int argc, char** argv) {
   BuildFlags bf;
   CLI::App* build = app.add_subcommand("build", "Build an OBB tree and write it as JSON");
   build->add_option("MESH", mesh, "Solid mesh file")->required();
-  build->add_option("-o,--output", out, "Tree file to write")->required();
+  build->add_option("-o,--output", out, "Tree file to write")->required()->check(vobb::app::kPath);
   build->add_option("--method", bf.method, "variational (the paper's) or obbtree (the OBB-Tree baseline)")
       ->capture_default_str()->check(CLI::IsMember({"variational", "obbtree"}));
   build->add_option("--depth", bf.depth, "Deepest level; the root is level 0")
@@ -754,7 +760,8 @@ int main(int argc, char** argv) {
                     "bounding-box diagonal. The stored boxes stay tight")
       ->capture_default_str()->check(vobb::app::kFinite);
   build->add_option("--checkpoint", bf.checkpoint, "Folder for the build state after each level and sweep; "
-                    "a build started again with it resumes and gives the same tree");
+                    "a build started again with it resumes and gives the same tree")
+      ->check(vobb::app::kPath);
   build->add_option("--time-budget", bf.time_budget, "Seconds; then the search stops and the rest gets the baseline split")
       ->check(vobb::app::kFinite)->check(CLI::Range(1e-3, 1e9));
   build->add_flag("--quiet", bf.quiet, "No progress line");
@@ -773,7 +780,8 @@ int main(int argc, char** argv) {
   std::string certify_checkpoint;
   cert->add_option("--checkpoint", certify_checkpoint,
                    "Folder for what is certified so far (obv.json: the boxes' OBV; layers.json: each finished "
-                   "layer); a run started again with the same folder resumes it and prints the same certificate");
+                   "layer); a run started again with the same folder resumes it and prints the same certificate")
+      ->check(vobb::app::kPath);
   int certify_threads = 0;
   cert->add_option("--threads", certify_threads, kCertifyThreadsHelp)->check(CLI::Range(1, 4096));
 
@@ -808,7 +816,8 @@ int main(int argc, char** argv) {
   cmp->add_option("--sweeps", cf.sweeps, "Most bottom-up merging sweeps")->capture_default_str()->check(CLI::Range(0, 100));
   cmp->add_option("--checkpoint", cf.checkpoint, "Folder for the variational build's state after each level and sweep, "
                   "as for build (the same flags make the same build: either command resumes the other's), and "
-                  "for each tree's certification as for certify (certify-obbtree/, certify-variational/)");
+                  "for each tree's certification as for certify (certify-obbtree/, certify-variational/)")
+      ->check(vobb::app::kPath);
   cmp->add_option("--time-budget", cf.time_budget, "Seconds for the variational search, as for build")
       ->check(vobb::app::kFinite)->check(CLI::Range(1e-3, 1e9));
   cmp->add_flag("--json", compare_json, "Print JSON (DESIGN §7)");
@@ -816,7 +825,8 @@ int main(int argc, char** argv) {
   cmp->add_flag("--quiet", cf.quiet, "No progress on stderr");
   cmp->add_option("--threads", cf.threads, kCompareThreadsHelp)->check(CLI::Range(1, 4096));
   std::string compare_figure;
-  cmp->add_option("--figure", compare_figure, "Also draw both trees' boxes at levels 1..8 over the mesh to this PNG");
+  cmp->add_option("--figure", compare_figure, "Also draw both trees' boxes at levels 1..8 over the mesh to this PNG")
+      ->check(vobb::app::kPath);
   std::string compare_figure_up = "y";
   cmp->add_option("--figure-up", compare_figure_up, "The mesh's up axis in the figure: x, y, z, -x, -y or -z")
       ->capture_default_str()->check(CLI::IsMember({"x", "y", "z", "-x", "-y", "-z"}));
@@ -829,7 +839,7 @@ int main(int argc, char** argv) {
   CLI::App* exp = app.add_subcommand("export", "Write the boxes of one layer as OBJ or PLY");
   exp->add_option("TREE", tree_path, "Tree file")->required();
   exp->add_option("--level", level, "Layer to export")->required();
-  exp->add_option("-o,--output", out, "boxes.obj or boxes.ply")->required();
+  exp->add_option("-o,--output", out, "boxes.obj or boxes.ply")->required()->check(vobb::app::kPath);
 
   // The command named on the line: an unknown one is named back with the list, and a usage
   // error of a known one points to that command's help.
@@ -873,8 +883,14 @@ int main(int argc, char** argv) {
     vobb::Status s = vobb::Status::ok();
     if (build->parsed()) s = vobb::app::check_output_is_not_input("-o", out, {mesh});
     if (exp->parsed()) s = vobb::app::check_output_is_not_input("-o", out, {tree_path});
+    if (s && build->parsed()) s = vobb::app::check_output_is_not_checkpoint("-o", out, bf.checkpoint, {"state.json"});
     if (s && (build->parsed() || exp->parsed())) s = vobb::app::check_output_is_writable("-o", out);
     if (cmp->parsed()) s = vobb::app::check_output_is_not_input("--figure", compare_figure, {mesh});
+    if (s && cmp->parsed())
+      s = vobb::app::check_output_is_not_checkpoint(
+          "--figure", compare_figure, cf.checkpoint,
+          {"state.json", "certify-obbtree/obv.json", "certify-obbtree/layers.json", "certify-variational/obv.json",
+           "certify-variational/layers.json"});
     if (s && cmp->parsed()) s = vobb::app::check_output_is_writable("--figure", compare_figure);
     if (s && exp->parsed()) s = vobb::check_box_export_path(out);
     if (collide_cmd->parsed()) {
@@ -909,6 +925,9 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "%s: internal error: %s\n", who.c_str(), one_line(e.what()).c_str());
     return kExitCouldNotFinish;
   }
+  // A run that ends with its results names the single-precision read (say_pending_notes); a
+  // refusal or a run that could not finish keeps to its one line.
+  if (rc == kExitOk || rc == kExitCheckFailed) vobb::app::say_pending_notes();
   // A report printed to a full disk or a closed stream must not end as a success.
   if (std::fflush(stdout) != 0 || std::ferror(stdout)) {
     std::fprintf(stderr, "%s: cannot write standard output\n", who.c_str());

@@ -14,7 +14,7 @@ CLI::App* add_validate_command(CLI::App& app, ValidateFlags* f) {
   v->add_option("--suite", f->suite, "quick (CI, minutes) or full (under an hour)")
       ->capture_default_str()
       ->check(CLI::IsMember({"quick", "full"}));
-  v->add_option("--out", f->out, "Output folder (default: validation-<suite>)");
+  v->add_option("--out", f->out, "Output folder (default: validation-<suite>)")->check(app::kPath);
   v->add_option("--meshes", f->meshes,
                 std::string("Folder of the real meshes (default: data/real in the working folder if there is one, else ") +
                     VOBB_SOURCE_MESH_DIR + ", where this build's data/fetch_meshes.sh puts them)");
@@ -33,6 +33,18 @@ int run_validate_command(const ValidateFlags& f) {
   o.command = "vobb validate --suite " + f.suite + (f.out.empty() ? "" : " --out " + f.out) +
               (f.meshes.empty() ? "" : " --meshes " + f.meshes) + (f.cpu_only ? " --cpu-only" : "");
   if (!f.quiet) o.progress = [](const std::string& line) { std::fprintf(stderr, "validate: %s\n", line.c_str()); };
+  // The output folder, or the nearest folder above it that exists (where it will be made),
+  // must take files before the suite runs for minutes: a folder such as /sys/kernel exists and
+  // takes none. Nothing is made here.
+  {
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    fs::path at = o.out_dir;
+    while (!at.empty() && !fs::exists(fs::symlink_status(at, ec)) && at != at.parent_path()) at = at.parent_path();
+    if (at.empty()) at = ".";
+    if (!fs::is_directory(at, ec)) return refuse(Status::error("--out " + o.out_dir + ": " + at.string() + " is not a folder"));
+    if (Status w = check_folder_takes_files("--out " + o.out_dir, at.string()); !w) return refuse(w);
+  }
   validate::SuiteReport report;
   const Status s = validate::run_validation_suite(o, &report);
   if (!s) return refuse(s);

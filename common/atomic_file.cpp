@@ -63,13 +63,8 @@ Status write_file_atomic(const std::string& path, const std::string& content) {
   }
   // A symbolic link to a regular file, or to nothing yet, is followed: its target is
   // replaced, the link stays.
-  std::error_code ec;
-  std::string target = path;
-  if (std::filesystem::is_symlink(std::filesystem::symlink_status(path, ec))) {
-    const std::filesystem::path resolved = std::filesystem::weakly_canonical(path, ec);
-    if (ec) return fail(ec.message());
-    target = resolved.string();
-  }
+  std::string target;
+  if (Status s = output_target(path, &target); !s) return s;
   // The temporary file's name is short whatever the target's (a name of 255 bytes is valid).
   static std::atomic<unsigned> counter{0};
   const std::filesystem::path dir = std::filesystem::path(target).parent_path();
@@ -93,6 +88,23 @@ Status write_file_atomic(const std::string& path, const std::string& content) {
     return fail(why);
   }
   return Status::ok();
+}
+
+Status output_target(const std::string& path, std::string* target) {
+  namespace fs = std::filesystem;
+  fs::path at(path);
+  // Linux follows at most 40 links in one path (MAXSYMLINKS); a longer chain is refused too.
+  for (int hops = 0; hops <= 40; ++hops) {
+    std::error_code ec;
+    if (!fs::is_symlink(fs::symlink_status(at, ec))) {
+      *target = at.string();
+      return Status::ok();
+    }
+    const fs::path next = fs::read_symlink(at, ec);
+    if (ec) return Status::error(path + ": cannot follow the link: " + ec.message());
+    at = next.is_absolute() ? next : at.parent_path() / next;
+  }
+  return Status::error(path + ": cannot follow the link: a loop or more than 40 links");
 }
 
 size_t remove_stray_temporaries(const std::string& folder) {

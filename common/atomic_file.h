@@ -14,6 +14,12 @@ namespace vobb {
 
 Status write_file_atomic(const std::string& path, const std::string& content);
 
+// The file a write to `path` replaces: `path` itself, or, where `path` is a symbolic link, the
+// end of its chain of links (each relative link read against its own folder), whether that
+// file exists yet or not, so that the link is kept and its target written. A loop, or a
+// chain of more than 40 links, is an error naming `path`.
+Status output_target(const std::string& path, std::string* target);
+
 // Removes from `folder` (not below it) the stray temporary files of runs that were killed
 // mid-write: regular files named ".vobb-<pid>-<n>.tmp" whose process <pid> no longer exists.
 // A live process's files, this one's included, are kept, so a run writing beside this one is

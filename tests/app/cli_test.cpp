@@ -1,5 +1,6 @@
 // End-to-end tests of the `vobb` command line: exit codes, one-line errors, no partial
 // output, and the bad-input corpus in tests/data/bad.
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -183,7 +184,18 @@ TEST(CliBadInput, UnwritableOutputIsRefusedBeforeTheRun) {
                         Case{"build " + open_mesh + " -o " + dir + "/" + std::string(300, 'a') + ".json",
                              "file name longer than"},
                         Case{"compare " + open_mesh + " --depth 1 --backend cpu --figure " + dir, "is a folder"},
-                        Case{"export " + tree + " --level 1 -o " + dir + "/b.stl", "unknown box export format"}}) {
+                        Case{"export " + tree + " --level 1 -o " + dir + "/b.stl", "unknown box export format"},
+                        // An empty name names nothing (it was taken for "no file" and the run
+                        // failed only at its end).
+                        Case{"build " + open_mesh + " -o '' --backend cpu", "an empty name"},
+                        Case{"collide " + open_mesh + " " + tree + " --static -o ''", "an empty name"},
+                        Case{"compare " + open_mesh + " --figure ''", "an empty name"},
+                        // Folders that exist and take no file: refused before the run, not warned
+                        // about at every save.
+                        Case{"build " + mesh + " -o " + dir + "/t.json --backend cpu --checkpoint /proc/self",
+                             "cannot write in /proc/self"},
+                        Case{"certify " + mesh + " " + tree + " --checkpoint /proc/self", "cannot write in /proc/self"},
+                        Case{"validate --cpu-only --out /proc/self/v", "cannot write in /proc/self"}}) {
     const CliRun r = vobb_cli(c.args);
     EXPECT_EQ(r.code, 2) << c.args << ": " << r.err;
     EXPECT_EQ(line_count(r.err), 1u) << c.args << ": " << r.err;
@@ -213,6 +225,80 @@ TEST(CliBadInput, UnwritableOutputIsRefusedBeforeTheRun) {
   EXPECT_NE(full.err.find("No space left on device"), std::string::npos) << full.err;
   std::remove(mesh.c_str());
   std::remove(tree.c_str());
+}
+
+// An output named by a symbolic link: the link is kept and the file it names is written, also
+// where that file does not exist yet (the link used to be replaced by the file); a link into a
+// missing folder, or a loop of links, is refused before the run; and an output that is the
+// run's own checkpoint file (which it would write over at its end) is refused.
+TEST(CliBadInput, OutputsThroughLinksAndTheRunsOwnCheckpoint) {
+  namespace fs = std::filesystem;
+  const std::string mesh = write_cube("link_cube.off", 1);
+  const fs::path dir = test::temp_path("link_dir");
+  fs::remove_all(dir);
+  fs::create_directories(dir / "real");
+  fs::create_symlink("real/tree.json", dir / "a.json");  // relative, to a file not there yet
+  fs::create_symlink("/nonexistent/dir/tree.json", dir / "b.json");
+  fs::create_symlink("c.json", dir / "c.json");
+  CliRun r = vobb_cli("build " + mesh + " -o " + (dir / "a.json").string() + " --method obbtree --depth 1 --quiet");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(fs::is_symlink(fs::symlink_status(dir / "a.json")));
+  Tree t;
+  EXPECT_TRUE(read_tree((dir / "real" / "tree.json").string(), &t));
+  for (const auto& [link, says] : {std::pair<std::string, std::string>{"b.json", "no such folder /nonexistent/dir"},
+                                   {"c.json", "cannot follow the link"}}) {
+    r = vobb_cli("build " + mesh + " -o " + (dir / link).string() + " --method obbtree --depth 1");
+    EXPECT_EQ(r.code, 2) << link;
+    EXPECT_EQ(line_count(r.err), 1u) << r.err;
+    EXPECT_NE(r.err.find(says), std::string::npos) << r.err;
+    EXPECT_TRUE(fs::is_symlink(fs::symlink_status(dir / link))) << link;
+  }
+  const std::string ck = (dir / "ck").string();
+  for (const std::string& args :
+       {"build " + mesh + " -o " + ck + "/state.json --checkpoint " + ck + " --depth 1 --m 4 --backend cpu",
+        "build " + mesh + " -o " + ck + "/../ck/state.json --checkpoint " + ck + "/. --depth 1 --m 4 --backend cpu",
+        "compare " + mesh + " --depth 1 --m 4 --backend cpu --checkpoint " + ck + " --figure " + ck +
+            "/certify-variational/layers.json"}) {
+    r = vobb_cli(args);
+    EXPECT_EQ(r.code, 2) << args;
+    EXPECT_EQ(line_count(r.err), 1u) << r.err;
+    EXPECT_NE(r.err.find("is this run's checkpoint file"), std::string::npos) << r.err;
+  }
+  EXPECT_FALSE(fs::exists(ck + "/state.json"));
+  fs::remove_all(dir);
+  std::remove(mesh.c_str());
+}
+
+// A reader that has gone (vobb info M | head -1 after head's line): the write fails, and the
+// run ends with one line and exit 3, not silently by SIGPIPE. The pipe's reading end is closed
+// before vobb starts, so every write meets it closed.
+TEST(CliBadInput, StandardOutputWithNoReaderEndsWithExitThree) {
+  const std::string mesh = write_cube("pipe_cube.off", 1);
+  const std::string err_path = test::temp_path("pipe_err.txt");
+  int fds[2];
+  ASSERT_EQ(::pipe(fds), 0);
+  ::close(fds[0]);
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    ::dup2(fds[1], 1);
+    const int err = ::open(err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    ::dup2(err, 2);
+    ::signal(SIGPIPE, SIG_DFL);  // as a shell starts it
+    ::execl(VOBB_CLI, VOBB_CLI, "info", mesh.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  ::close(fds[1]);
+  int status = 0;
+  ASSERT_EQ(::waitpid(child, &status, 0), child);
+  const std::string err = slurp(err_path);
+  EXPECT_FALSE(WIFSIGNALED(status)) << "killed by signal " << WTERMSIG(status);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 3) << err;
+  EXPECT_EQ(line_count(err), 1u) << err;
+  EXPECT_NE(err.find("cannot write standard output"), std::string::npos) << err;
+  std::remove(err_path.c_str());
+  std::remove(mesh.c_str());
 }
 
 // The baseline has no search: a checkpoint or a time budget asked of it is refused, not
@@ -269,6 +355,15 @@ TEST(Cli, SinglePrecisionReadsAreNamed) {
     r = vobb_cli("collide " + mesh + " " + tree + " --static --colliders 5 --no-fcl");
     ASSERT_EQ(r.code, 0) << r.err;
     EXPECT_EQ(r.err.find("single precision") != std::string::npos, single) << r.err;
+    // Input refused after the mesh was read (a margin beyond the cube, a box file that is
+    // not one): the refusal is the one line, with no note before it.
+    for (const std::string& args : {"build " + mesh + " -o " + tree + " --collider-margin 100 --backend cpu",
+                                    "obv " + mesh + " --boxes " + mesh + " --backend cpu"}) {
+      r = vobb_cli(args);
+      EXPECT_EQ(r.code, 2) << args;
+      EXPECT_EQ(line_count(r.err), 1u) << args << ": " << r.err;
+      EXPECT_EQ(r.err.find("single precision"), std::string::npos) << args << ": " << r.err;
+    }
     std::remove(tree.c_str());
     std::remove(boxes.c_str());
   }

@@ -49,6 +49,30 @@ TEST(WriteFileAtomic, FollowsASymbolicLink) {
   std::filesystem::remove_all(dir);
 }
 
+// A link to a file that is not there yet, through a second link: the chain is followed to its
+// end, which is written, and both links stay links. A loop of links is refused, and left.
+TEST(WriteFileAtomic, FollowsAChainOfLinksToAFileNotThereYet) {
+  const std::filesystem::path dir = test::temp_path("atomic_chain");
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir / "sub");
+  std::filesystem::create_symlink("sub/inner.txt", dir / "outer.txt");
+  std::filesystem::create_symlink("target.txt", dir / "sub" / "inner.txt");  // relative to sub/
+  ASSERT_TRUE(write_file_atomic((dir / "outer.txt").string(), "chained"));
+  EXPECT_TRUE(std::filesystem::is_symlink(std::filesystem::symlink_status(dir / "outer.txt")));
+  EXPECT_TRUE(std::filesystem::is_symlink(std::filesystem::symlink_status(dir / "sub" / "inner.txt")));
+  EXPECT_EQ(slurp((dir / "sub" / "target.txt").string()), "chained");
+  std::string target;
+  ASSERT_TRUE(output_target((dir / "outer.txt").string(), &target));
+  EXPECT_EQ(target, (dir / "sub" / "target.txt").string());
+  std::filesystem::create_symlink("loop_b", dir / "loop_a");
+  std::filesystem::create_symlink("loop_a", dir / "loop_b");
+  const Status s = write_file_atomic((dir / "loop_a").string(), "x");
+  EXPECT_FALSE(s);
+  EXPECT_NE(s.message().find("loop"), std::string::npos) << s.message();
+  EXPECT_TRUE(std::filesystem::is_symlink(std::filesystem::symlink_status(dir / "loop_a")));
+  std::filesystem::remove_all(dir);
+}
+
 // A named pipe cannot be replaced by a file: it is written to in place (its reader gets the
 // content) and stays a pipe. The reader opens first, without blocking, so that a failure
 // cannot hang the test.
