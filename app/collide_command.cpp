@@ -133,7 +133,7 @@ CLI::App* add_collide_command(CLI::App& app, CollideFlags* f) {
       "collide", "Collision experiment (paper §5): collider–box tests per tree, checked against brute force");
   c->add_option("MESH", f->mesh, "The solid mesh the trees were built for")->required();
   c->add_option("TREES", f->trees, "Tree files; reductions are relative to the first")->required();
-  c->add_option("--colliders", f->colliders, "Falling colliders (at most 10^6, all held in memory) or static poses")
+  c->add_option("--colliders", f->colliders, "Falling colliders (at most 10^6, all held in memory) or, with --static, poses (at most 10^7)")
       ->capture_default_str()->check(CLI::Range(1, 10000000));
   c->add_option("--seconds", f->seconds, "Simulated seconds (dynamic mode)")
       ->capture_default_str()->check(vobb::app::kFinite)->check(CLI::Range(0.0, 1e6));

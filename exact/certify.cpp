@@ -417,7 +417,11 @@ Status CertifyCheckpoint::load(const Tree& tree, CertifyState* state, bool* foun
     }
     obv_sha256_ = obv_sha;
   } catch (const nlohmann::json::exception& e) {
-    return bad(e.what());  // nlohmann's messages are one line
+    // A field missing or of another type: nlohmann's one-line reason ("key 'x' not found",
+    // "type must be boolean, but is string") without its "[json.exception.type_error.302] ".
+    const std::string what = e.what();
+    const size_t tag = what.rfind("[json.exception.", 0) == 0 ? what.find("] ") : std::string::npos;
+    return bad(tag == std::string::npos ? what : what.substr(tag + 2));
   }
   *state = std::move(s);
   return Status::ok();

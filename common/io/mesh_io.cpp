@@ -755,7 +755,12 @@ Status load_mesh(const std::string& path, LoadedMesh* out) {
     // Lines that end in CR alone (classic Mac OS) would read as one long line.
     if (ext != "stl" && content.find('\n') == std::string::npos && content.find('\r') != std::string::npos)
       return Status::error(display + ": lines end in CR alone (classic Mac OS); convert them to LF or CR LF");
-    Reader r(display, content);
+    // A UTF-8 byte-order mark, which some Windows editors put first, is no part of the text
+    // (OBJ's first "v" line was dropped with it, and PLY's magic missed). Not for STL: a
+    // binary STL's 80-byte header may begin with any bytes.
+    std::string_view text = content;
+    if (ext != "stl" && text.substr(0, 3) == "\xEF\xBB\xBF") text.remove_prefix(3);
+    Reader r(display, text);
     out->format = ext;
     if (ext == "off") s = read_off(r, out);
     else if (ext == "obj") s = read_obj(r, out);

@@ -312,6 +312,7 @@ TEST_F(CertifyTorus, DamagedOrForeignCheckpointsAreRefused) {
     EXPECT_NE(r.message().find(why), std::string::npos) << r.message();
     EXPECT_NE(r.message().find(file), std::string::npos) << r.message();
     EXPECT_EQ(r.message().find('\n'), std::string::npos) << r.message();
+    EXPECT_EQ(r.message().find("json.exception"), std::string::npos) << r.message();  // our words, not the parser's tag
   };
   // A digit changed and not signed: the checksum refuses it.
   {
