@@ -19,6 +19,7 @@
 #include "data/analytic_meshes.h"
 #include "fast/obbtree_builder.h"
 #include "test_common.h"
+#include "validate/collision/collision_test_util.h"
 
 namespace vobb::collision {
 namespace {
@@ -341,14 +342,8 @@ TEST(CollideCli, StaticRunJsonAndBadInput) {
   // Text: where FCL did not run, its columns say "-", not a count of 0 or a change of -100 %.
   // A root with a single child (valid for us, not for FCL's binary BVH) is skipped by FCL with
   // a note; the baseline after it gets FCL counts but no change against the first tree.
-  Tree single = baseline(torus, 0);
-  TreeNode child = single.nodes[0];
-  child.id = 1;
-  child.parent = 0;
-  child.level = 1;
-  single.nodes[0].children = {1};
-  single.nodes.push_back(child);
-  single.depth = 1;
+  Tree single = test_util::root_with_one_child(torus);
+  single.mesh_sha256 = mesh_sha256(torus);
   const std::string single_path = test::temp_path("single_child.json");
   ASSERT_TRUE(write_tree(single, single_path));
   r = vobb_cli("collide " + mesh_path + " " + single_path + " " + tree_path + " --static --colliders 20");

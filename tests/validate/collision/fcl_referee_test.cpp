@@ -11,25 +11,19 @@
 
 #include "data/analytic_meshes.h"
 #include "fast/obbtree_builder.h"
+#include "validate/collision/collision_test_util.h"
 
 namespace vobb::collision {
 namespace {
+
+using test_util::root_with_one_child;
+using test_util::single_leaf;
 
 Tree baseline(const Mesh& mesh, int depth, int arity = 2) {
   ObbTreeOptions opt;
   opt.depth = depth;
   opt.arity = arity;
   return build_obbtree(mesh, opt);
-}
-
-// The whole mesh in one leaf, in the baseline's root box (which holds every face).
-Tree single_leaf(const Mesh& mesh) {
-  Tree t = baseline(mesh, 1);
-  TreeNode root = t.nodes[0];
-  root.children.clear();
-  t.nodes = {root};
-  t.depth = 0;
-  return t;
 }
 
 Collider sphere(const Vec3& c, double r) {
@@ -140,14 +134,7 @@ TEST(FclReferee, FindsTheFacesBruteForceFindsOnClearPoses) {
 // A node with a single child cannot become a binary node: refused, in one line naming the file.
 TEST(FclReferee, RefusesANodeWithASingleChild) {
   const Mesh mesh = analytic::polygonal_torus().mesh;
-  Tree t = single_leaf(mesh);
-  TreeNode child = t.nodes[0];
-  child.id = 1;
-  child.parent = 0;
-  child.level = 1;
-  t.nodes[0].children = {1};
-  t.nodes.push_back(child);
-  t.depth = 1;
+  const Tree t = root_with_one_child(mesh);
   std::unique_ptr<FclModel> m;
   const Status s = FclModel::from_tree(mesh, t, "single.json", &m);
   EXPECT_FALSE(s);
