@@ -72,8 +72,11 @@ inline Status check_output_is_not_input(const std::string& option, const std::st
   return Status::ok();
 }
 
-// An output that names one of the run's own checkpoint files (`names` in `folder`), existing
-// yet or not, would be written over it at the end of the run and refuse every resume.
+// An output that names one of the run's own checkpoint files (`names`, relative to `folder`),
+// existing yet or not, would be written over it at the end of the run and refuse every resume;
+// one that names the checkpoint folder, a folder of those files, or a folder above them would
+// be made a folder by the run and fail at its end. Both are compared as absolute paths with
+// links and dot parts resolved as far as they exist.
 inline Status check_output_is_not_checkpoint(const std::string& option, const std::string& output,
                                              const std::string& folder, const std::vector<std::string>& names) {
   namespace fs = std::filesystem;
@@ -81,13 +84,20 @@ inline Status check_output_is_not_checkpoint(const std::string& option, const st
   std::string followed;
   if (!output_target(output, &followed)) return Status::ok();  // check_output_is_writable says why
   std::error_code ec;
-  const fs::path out = fs::weakly_canonical(followed, ec);
+  const fs::path out = fs::weakly_canonical(fs::absolute(followed, ec), ec);
   if (ec) return Status::ok();
   for (const std::string& name : names) {
-    const fs::path own = fs::weakly_canonical(fs::path(folder) / name, ec);
-    if (!ec && own == out)
+    const fs::path own = fs::weakly_canonical(fs::absolute(fs::path(folder) / name, ec), ec);
+    if (ec) continue;
+    if (own == out)
       return Status::error(option + " " + output + ": is this run's checkpoint file " + (fs::path(folder) / name).string() +
                            "; choose another output");
+    for (fs::path above = own.parent_path(); !above.empty(); above = above.parent_path()) {
+      if (above == out)
+        return Status::error(option + " " + output + ": is a folder of this run's checkpoint " + folder +
+                             "; choose another output");
+      if (above == above.parent_path()) break;
+    }
   }
   return Status::ok();
 }

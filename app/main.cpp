@@ -925,13 +925,13 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "%s: internal error: %s\n", who.c_str(), one_line(e.what()).c_str());
     return kExitCouldNotFinish;
   }
-  // A run that ends with its results names the single-precision read (say_pending_notes); a
-  // refusal or a run that could not finish keeps to its one line.
-  if (rc == kExitOk || rc == kExitCheckFailed) vobb::app::say_pending_notes();
   // A report printed to a full disk or a closed stream must not end as a success.
   if (std::fflush(stdout) != 0 || std::ferror(stdout)) {
     std::fprintf(stderr, "%s: cannot write standard output\n", who.c_str());
     return kExitCouldNotFinish;
   }
+  // A run that ends with its results names the single-precision read (say_pending_notes); a
+  // refusal or a run that could not finish keeps to its one line.
+  if (rc == kExitOk || rc == kExitCheckFailed) vobb::app::say_pending_notes();
   return rc;
 }

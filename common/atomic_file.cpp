@@ -1,11 +1,12 @@
 #include "common/atomic_file.h"
 
 #include <fcntl.h>
-#include <signal.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include <atomic>
+#include <chrono>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -29,18 +30,18 @@ bool write_all(int fd, const std::string& content) {
   return true;
 }
 
-// The pid in a name ".vobb-<pid>-<n>.tmp" (both decimal, without sign), or 0 for other names.
-pid_t temporary_owner(const std::string& name) {
+// A name write_file_atomic gives its temporary files: ".vobb-<pid>-<n>.tmp", both decimal.
+bool is_temporary_name(const std::string& name) {
   const std::string head = ".vobb-", tail = ".tmp";
   if (name.size() <= head.size() + tail.size() || name.compare(0, head.size(), head) != 0 ||
       name.compare(name.size() - tail.size(), tail.size(), tail) != 0)
-    return 0;
+    return false;
   const std::string middle = name.substr(head.size(), name.size() - head.size() - tail.size());
   const size_t dash = middle.find('-');
-  if (dash == 0 || dash == std::string::npos || dash + 1 == middle.size() || dash > 9) return 0;
+  if (dash == 0 || dash == std::string::npos || dash + 1 == middle.size()) return false;
   for (size_t i = 0; i < middle.size(); ++i)
-    if (i != dash && (middle[i] < '0' || middle[i] > '9')) return 0;
-  return static_cast<pid_t>(std::stol(middle.substr(0, dash)));
+    if (i != dash && (middle[i] < '0' || middle[i] > '9')) return false;
+  return true;
 }
 
 }  // namespace
@@ -66,11 +67,19 @@ Status write_file_atomic(const std::string& path, const std::string& content) {
   std::string target;
   if (Status s = output_target(path, &target); !s) return s;
   // The temporary file's name is short whatever the target's (a name of 255 bytes is valid).
+  // Its lock, held until it is closed, tells remove_stray_temporaries that it is being written.
+  // A name taken already (a killed run's file under a pid used again) is passed over.
   static std::atomic<unsigned> counter{0};
   const std::filesystem::path dir = std::filesystem::path(target).parent_path();
-  const std::string tmp = (dir / (".vobb-" + std::to_string(::getpid()) + "-" + std::to_string(counter++) + ".tmp")).string();
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+  std::string tmp;
+  int fd = -1;
+  for (int tries = 0; fd < 0 && tries < 64; ++tries) {
+    tmp = (dir / (".vobb-" + std::to_string(::getpid()) + "-" + std::to_string(counter++) + ".tmp")).string();
+    fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+    if (fd < 0 && errno != EEXIST) break;
+  }
   if (fd < 0) return fail(std::strerror(errno));
+  ::flock(fd, LOCK_EX);
   if (!write_all(fd, content)) {
     const std::string why = std::strerror(errno);
     ::close(fd);
@@ -108,16 +117,21 @@ Status output_target(const std::string& path, std::string* target) {
 }
 
 size_t remove_stray_temporaries(const std::string& folder) {
+  namespace fs = std::filesystem;
   size_t removed = 0;
   std::error_code ec;
-  for (std::filesystem::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
-    const pid_t owner = temporary_owner(it->path().filename().string());
-    if (owner <= 0 || owner == ::getpid()) continue;
+  const auto now = fs::file_time_type::clock::now();
+  for (fs::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
+    if (!is_temporary_name(it->path().filename().string())) continue;
     std::error_code type_ec;
-    if (!it->is_regular_file(type_ec) || it->is_symlink(type_ec)) continue;
-    // kill with signal 0 sends nothing: ESRCH says no such process; EPERM says it lives.
-    if (::kill(owner, 0) == 0 || errno != ESRCH) continue;
-    if (::unlink(it->path().c_str()) == 0) ++removed;
+    if (it->is_symlink(type_ec) || !it->is_regular_file(type_ec)) continue;
+    const auto written = fs::last_write_time(it->path(), type_ec);
+    if (type_ec || now - written < std::chrono::seconds(kStrayAgeSeconds)) continue;
+    const int fd = ::open(it->path().c_str(), O_RDONLY | O_NOFOLLOW | O_CLOEXEC);
+    if (fd < 0) continue;
+    // Unlocked: no writer holds it open (a writer locks it from its creation to its close).
+    if (::flock(fd, LOCK_EX | LOCK_NB) == 0 && ::unlink(it->path().c_str()) == 0) ++removed;
+    ::close(fd);
   }
   return removed;
 }

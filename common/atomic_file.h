@@ -21,11 +21,15 @@ Status write_file_atomic(const std::string& path, const std::string& content);
 Status output_target(const std::string& path, std::string* target);
 
 // Removes from `folder` (not below it) the stray temporary files of runs that were killed
-// mid-write: regular files named ".vobb-<pid>-<n>.tmp" whose process <pid> no longer exists.
-// A live process's files, this one's included, are kept, so a run writing beside this one is
-// not disturbed (a pid reused since is taken as live: the file is kept, never a wrong removal).
-// Returns how many were removed; a folder that cannot be read removes nothing. For folders vobb
-// owns, such as checkpoints; it is not run on users' output folders.
+// mid-write: regular files named ".vobb-<pid>-<n>.tmp" that no writer holds (write_file_atomic
+// locks its temporary file with flock from its creation to its close) and that were last
+// written over kStrayAgeSeconds ago (which covers the moment between a writer's creating the
+// file and locking it, and between its closing and renaming it). Neither test uses the pid, so
+// a run in another pid namespace sharing the folder is not disturbed, and a killed run's file
+// goes even where this run was given the same pid. Returns how many were removed; a folder
+// that cannot be read removes nothing. For folders vobb owns, such as checkpoints; it is not
+// run on users' output folders.
+constexpr int kStrayAgeSeconds = 60;
 size_t remove_stray_temporaries(const std::string& folder);
 
 }  // namespace vobb

@@ -65,16 +65,6 @@ inline std::string slurp(const std::string& path) {
   return ss.str();
 }
 
-// The pid of a process that has ended (a child that exits at once, reaped): no process holds
-// it until the system hands it out again, which takes the whole pid range's turn.
-inline pid_t ended_pid() {
-  const pid_t child = ::fork();
-  if (child == 0) ::_exit(0);
-  int status = 0;
-  ::waitpid(child, &status, 0);
-  return child;
-}
-
 // The number of triangles an OFF file's faces make (a k-gon gives k - 2), read here from the
 // file with nothing of vobb's reader: the header's counts, then the first number of each face
 // line. Lines that are blank or start with '#' are skipped. -1 when the file does not read so.
@@ -112,9 +102,10 @@ struct CliRun {
   int code;
   std::string out, err;
 };
-inline CliRun vobb_cli(const std::string& args) {
+// `prefix` goes before the command in the shell line (such as "cd DIR && ").
+inline CliRun vobb_cli_in(const std::string& prefix, const std::string& args) {
   const std::string err_path = temp_path("stderr.txt");
-  const std::string cmd = std::string(VOBB_CLI) + " " + args + " 2>" + err_path;
+  const std::string cmd = prefix + std::string(VOBB_CLI) + " " + args + " 2>" + err_path;
   CliRun r;
   FILE* p = ::popen(cmd.c_str(), "r");
   char buf[4096];
@@ -129,6 +120,7 @@ inline CliRun vobb_cli(const std::string& args) {
   std::remove(err_path.c_str());
   return r;
 }
+inline CliRun vobb_cli(const std::string& args) { return vobb_cli_in("", args); }
 
 // Crossing sheets: k triangles, each with vertices of its own, in the planes through the z
 // axis at angles pi i / k. Each holds the segment from (0, 0, -1) to (0, 0, 1), so every pair

@@ -5,6 +5,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <csignal>
 #include <cstdlib>
 
@@ -26,6 +27,7 @@ namespace {
 
 using test::CliRun;
 using test::vobb_cli;
+using test::vobb_cli_in;
 
 size_t line_count(const std::string& s) { return std::count(s.begin(), s.end(), '\n'); }
 
@@ -253,18 +255,26 @@ TEST(CliBadInput, OutputsThroughLinksAndTheRunsOwnCheckpoint) {
     EXPECT_NE(r.err.find(says), std::string::npos) << r.err;
     EXPECT_TRUE(fs::is_symlink(fs::symlink_status(dir / link))) << link;
   }
-  const std::string ck = (dir / "ck").string();
-  for (const std::string& args :
-       {"build " + mesh + " -o " + ck + "/state.json --checkpoint " + ck + " --depth 1 --m 4 --backend cpu",
-        "build " + mesh + " -o " + ck + "/../ck/state.json --checkpoint " + ck + "/. --depth 1 --m 4 --backend cpu",
-        "compare " + mesh + " --depth 1 --m 4 --backend cpu --checkpoint " + ck + " --figure " + ck +
-            "/certify-variational/layers.json"}) {
-    r = vobb_cli(args);
-    EXPECT_EQ(r.code, 2) << args;
-    EXPECT_EQ(line_count(r.err), 1u) << r.err;
-    EXPECT_NE(r.err.find("is this run's checkpoint file"), std::string::npos) << r.err;
+  // The checkpoint folder is not there yet; relative and absolute spellings are mixed (run in
+  // `dir`, through a shell's cd).
+  const std::string ck = (dir / "ck").string(), in_dir = "cd " + dir.string() + " && ";
+  const std::string small = " --depth 1 --m 4 --backend cpu";
+  for (const auto& [args, says] : std::vector<std::pair<std::string, std::string>>{
+           {"build " + mesh + " -o " + ck + "/state.json --checkpoint " + ck + small, "checkpoint file"},
+           {"build " + mesh + " -o " + ck + "/../ck/state.json --checkpoint " + ck + "/." + small, "checkpoint file"},
+           {"build " + mesh + " -o ck/state.json --checkpoint ./ck" + small, "checkpoint file"},
+           {"build " + mesh + " -o ck/state.json --checkpoint " + ck + small, "checkpoint file"},
+           {"build " + mesh + " -o ck --checkpoint ck" + small, "is a folder of this run's checkpoint"},
+           {"build " + mesh + " -o x --checkpoint x/ck" + small, "is a folder of this run's checkpoint"},
+           {"compare " + mesh + small + " --checkpoint ck --figure ck/certify-variational/layers.json", "checkpoint file"},
+           {"compare " + mesh + small + " --checkpoint ck --figure ck/certify-obbtree", "is a folder of this run's checkpoint"}}) {
+    const CliRun run = vobb_cli_in(in_dir, args);
+    EXPECT_EQ(run.code, 2) << args;
+    EXPECT_EQ(line_count(run.err), 1u) << run.err;
+    EXPECT_NE(run.err.find(says), std::string::npos) << args << ": " << run.err;
   }
-  EXPECT_FALSE(fs::exists(ck + "/state.json"));
+  EXPECT_FALSE(fs::exists(ck));
+  EXPECT_FALSE(fs::exists(dir / "x"));
   fs::remove_all(dir);
   std::remove(mesh.c_str());
 }
@@ -355,6 +365,10 @@ TEST(Cli, SinglePrecisionReadsAreNamed) {
     r = vobb_cli("collide " + mesh + " " + tree + " --static --colliders 5 --no-fcl");
     ASSERT_EQ(r.code, 0) << r.err;
     EXPECT_EQ(r.err.find("single precision") != std::string::npos, single) << r.err;
+    // A report that cannot be written (a full disk): exit 3 and its one line, with no note.
+    r = vobb_cli("obv " + mesh + " --boxes " + boxes + " --backend cpu --m 4 >/dev/full");
+    EXPECT_EQ(r.code, 3) << r.err;
+    EXPECT_EQ(line_count(r.err), 1u) << r.err;
     // Input refused after the mesh was read (a margin beyond the cube, a box file that is
     // not one): the refusal is the one line, with no note before it.
     for (const std::string& args : {"build " + mesh + " -o " + tree + " --collider-margin 100 --backend cpu",
@@ -761,8 +775,10 @@ TEST(Cli, KilledBuildResumesToTheSameTree) {
   EXPECT_NE(slurp(state).find("\"split_levels\":2"), std::string::npos);
   EXPECT_FALSE(test::exists(resumed)) << "the killed build wrote its tree";
   // What a build killed while writing its state leaves: the resumed build clears it.
-  const std::string stray = dir + "/.vobb-" + std::to_string(test::ended_pid()) + "-0.tmp";
+  // (Unlocked, and written longer ago than remove_stray_temporaries waits.)
+  const std::string stray = dir + "/.vobb-12345-0.tmp";
   { std::ofstream(stray) << "{\"half"; }
+  std::filesystem::last_write_time(stray, std::filesystem::file_time_type::clock::now() - std::chrono::minutes(5));
   ASSERT_TRUE(test::exists(stray));
   const CliRun again = vobb_cli("build " + mesh + " -o " + resumed + " --depth 3 --m 8 --lloyd 1 --backend cpu --checkpoint " + dir);
   ASSERT_EQ(again.code, 0) << again.err;
@@ -810,8 +826,9 @@ TEST(Cli, KilledCertifyResumesToTheSameCertificate) {
   const nlohmann::json saved = nlohmann::json::parse(slurp(state), nullptr, false);
   ASSERT_TRUE(saved.is_object()) << "no checkpoint was saved";
   EXPECT_EQ(saved.at("layers").size(), 2u);
-  const std::string stray = dir + "/.vobb-" + std::to_string(test::ended_pid()) + "-4.tmp";
+  const std::string stray = dir + "/.vobb-12345-4.tmp";
   { std::ofstream(stray) << "{\"half"; }
+  std::filesystem::last_write_time(stray, std::filesystem::file_time_type::clock::now() - std::chrono::minutes(5));
   const CliRun again = vobb_cli("certify " + mesh + " " + tree + " --json --rational --checkpoint " + dir);
   ASSERT_EQ(again.code, 0) << again.err;
   EXPECT_NE(again.err.find("resuming from"), std::string::npos) << again.err;

@@ -2,12 +2,15 @@
 
 #include <fcntl.h>
 #include <gtest/gtest.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <vector>
 
 #include "test_common.h"
 
@@ -109,30 +112,47 @@ TEST(WriteFileAtomic, WritesIntoAPipeThroughItsProcLink) {
   EXPECT_EQ(std::string(buf, n > 0 ? n : 0), "down the pipe");
 }
 
-// A run killed mid-write leaves ".vobb-<pid>-<n>.tmp" beside its target. Only those of ended
-// processes go; this process's own, names that merely look alike, and a folder of that name
-// stay.
-TEST(RemoveStrayTemporaries, RemovesOnlyTheFilesOfEndedRuns) {
-  const std::filesystem::path dir = test::temp_path("stray_dir");
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directory(dir);
-  const std::string ended = std::to_string(test::ended_pid()), mine = std::to_string(::getpid());
-  const std::vector<std::string> gone = {".vobb-" + ended + "-0.tmp", ".vobb-" + ended + "-17.tmp"};
-  const std::vector<std::string> kept = {".vobb-" + mine + "-3.tmp", ".vobb-" + ended + ".tmp", ".vobb--0.tmp",
-                                         ".vobb-" + ended + "-.tmp", ".vobb-" + ended + "-1x.tmp", "vobb-" + ended + "-0.tmp",
-                                         ".vobb-" + ended + "-0.tmpx", "state.json"};
+// A run killed mid-write leaves ".vobb-<pid>-<n>.tmp" beside its target. Those go that no
+// writer holds (locks) and that were last written over kStrayAgeSeconds ago, whatever the pid
+// (this process's own too: a pid used again); a file being written (locked, as
+// write_file_atomic holds its own), one written just now, names that merely look alike and a
+// folder of that name stay.
+TEST(RemoveStrayTemporaries, RemovesOnlyUnheldOldFilesOfThatName) {
+  namespace fs = std::filesystem;
+  const fs::path dir = test::temp_path("stray_dir");
+  fs::remove_all(dir);
+  fs::create_directory(dir);
+  const std::string mine = std::to_string(::getpid());
+  const std::vector<std::string> gone = {".vobb-12345-0.tmp", ".vobb-" + mine + "-17.tmp"};
+  const std::string held = ".vobb-777-1.tmp", fresh = ".vobb-778-2.tmp";
+  const std::vector<std::string> alike = {".vobb-12345.tmp", ".vobb--0.tmp", ".vobb-12345-.tmp", ".vobb-12345-1x.tmp",
+                                          "vobb-12345-0.tmp", ".vobb-12345-0.tmpx", "state.json"};
+  const auto old = fs::file_time_type::clock::now() - std::chrono::seconds(2 * kStrayAgeSeconds);
   // Made plainly (write_file_atomic's own temporaries are named like this process's file).
   for (const std::string& name : gone) std::ofstream(dir / name) << "half";
-  for (const std::string& name : kept) std::ofstream(dir / name) << "keep";
-  for (const std::string& name : gone) ASSERT_TRUE(std::filesystem::exists(dir / name)) << name;
-  std::filesystem::create_directory(dir / (".vobb-" + ended + "-9.tmp"));
+  for (const std::string& name : alike) std::ofstream(dir / name) << "keep";
+  std::ofstream(dir / held) << "keep";
+  std::ofstream(dir / fresh) << "keep";
+  for (const std::string& name : gone) fs::last_write_time(dir / name, old);
+  for (const std::string& name : alike) fs::last_write_time(dir / name, old);
+  fs::last_write_time(dir / held, old);
+  fs::create_directory(dir / ".vobb-12345-9.tmp");
+  const int writer = ::open((dir / held).c_str(), O_WRONLY | O_CLOEXEC);
+  ASSERT_GE(writer, 0);
+  ASSERT_EQ(::flock(writer, LOCK_EX), 0);
   EXPECT_EQ(remove_stray_temporaries(dir.string()), gone.size());
-  for (const std::string& name : gone) EXPECT_FALSE(std::filesystem::exists(dir / name)) << name;
-  for (const std::string& name : kept) EXPECT_EQ(slurp((dir / name).string()), "keep") << name;
-  EXPECT_TRUE(std::filesystem::is_directory(dir / (".vobb-" + ended + "-9.tmp")));
+  for (const std::string& name : gone) EXPECT_FALSE(fs::exists(dir / name)) << name;
+  for (const std::string& name : alike) EXPECT_EQ(slurp((dir / name).string()), "keep") << name;
+  EXPECT_EQ(slurp((dir / held).string()), "keep");
+  EXPECT_EQ(slurp((dir / fresh).string()), "keep");
+  EXPECT_TRUE(fs::is_directory(dir / ".vobb-12345-9.tmp"));
+  // Once its writer is gone, the held file goes too.
+  ::close(writer);
+  EXPECT_EQ(remove_stray_temporaries(dir.string()), 1u);
+  EXPECT_FALSE(fs::exists(dir / held));
   EXPECT_EQ(remove_stray_temporaries(dir.string()), 0u);  // nothing left to remove
   EXPECT_EQ(remove_stray_temporaries((dir / "absent").string()), 0u);
-  std::filesystem::remove_all(dir);
+  fs::remove_all(dir);
 }
 
 }  // namespace

@@ -1,7 +1,7 @@
 // PNG I/O (common/png_io.h): pixels survive a round trip, opaque images are stored as RGB and
-// translucent ones as RGBA, 8-bit grey and palette files from another writer are expanded to
-// RGBA, and bad images, files and paths are refused in one line naming the file, leaving
-// nothing half-written.
+// translucent ones as RGBA, 8-bit grey files (with and without alpha) from another writer are
+// expanded to RGBA, and bad images, files and paths are refused in one line naming the file,
+// leaving nothing half-written.
 #include "common/png_io.h"
 
 #include <gtest/gtest.h>

@@ -28,25 +28,49 @@ ObvEstimate cpu_at(const CpuObvEstimator& cpu, int m) {
   return [&cpu, m](const std::vector<Obb>& boxes) { return cpu.estimate(boxes, m); };
 }
 
-// Estimated sum of OBV of a layer, through tight boxes of its groups and axes (as the search
-// measures them: fit_obb's padding of the written boxes, a few ulps, could move a silhouette
-// texel and blur an exact comparison).
-double layer_sum(const CpuObvEstimator& cpu, const Mesh& mesh, const Tree& t, int level, int m) {
+// A tree with the orientation its builder measured each node's faces in: the variational
+// search's axes (its last checkpoint state), or the baseline's covariance axes (the search's
+// starting state). The written boxes are not that measure: fit_obb orthonormalizes the axes
+// again (not bit for bit the same) and pads the box by a few ulps, either of which may move a
+// silhouette texel. Through tight boxes of these axes the sums below are the builder's own,
+// and comparisons between them need no slack.
+struct Measured {
+  Tree tree;
+  std::vector<std::array<Vec3, 3>> axes;  // per node
+};
+
+Measured build_measured(const Mesh& mesh, VariationalOptions o, const ObvEstimate& estimate,
+                        VariationalReport* report = nullptr) {
+  VariationalState last;
+  o.checkpoint = [&](const VariationalState& st) { last = st; };
+  Measured out{build_variational(mesh, o, estimate, nullptr, report), {}};
+  out.axes = last.axes;
+  EXPECT_EQ(out.axes.size(), out.tree.nodes.size());
+  return out;
+}
+
+Measured baseline_measured(const Mesh& mesh, int depth) {
+  ObbTreeOptions b;
+  b.depth = depth;
+  Measured out{build_obbtree(mesh, b), {}};
+  for (const TreeNode& n : out.tree.nodes) out.axes.push_back(covariance_axes(mesh, n.faces));
+  return out;
+}
+
+double sum_of(const CpuObvEstimator& cpu, const Mesh& mesh, const Measured& t, const std::vector<int32_t>& ids, int m) {
   std::vector<Obb> boxes;
-  for (int32_t id : layer(t, level)) boxes.push_back(tight_box(mesh, t.nodes[id].faces, t.nodes[id].box.axes));
+  for (int32_t id : ids) boxes.push_back(tight_box(mesh, t.tree.nodes[id].faces, t.axes[id]));
   double s = 0;
   for (double v : cpu.estimate(boxes, m)) s += v;
   return s;
 }
 
-// Estimated sum of OBV of the root's children, through tight boxes of the same groups and axes
-// (fit_obb pads each written box by a few ulps, which would blur exact comparisons).
-double root_children_sum(const CpuObvEstimator& cpu, const Mesh& mesh, const Tree& t, int m) {
-  std::vector<Obb> boxes;
-  for (int32_t c : t.nodes[0].children) boxes.push_back(tight_box(mesh, t.nodes[c].faces, t.nodes[c].box.axes));
-  double s = 0;
-  for (double v : cpu.estimate(boxes, m)) s += v;
-  return s;
+double layer_sum(const CpuObvEstimator& cpu, const Mesh& mesh, const Measured& t, int level, int m) {
+  return sum_of(cpu, mesh, t, layer(t.tree, level), m);
+}
+
+double root_children_sum(const CpuObvEstimator& cpu, const Mesh& mesh, const Measured& t, int m) {
+  return sum_of(cpu, mesh, t, t.tree.nodes[0].children, m);
 }
 
 // Whether two build states have the same nodes: children and faces.
@@ -274,8 +298,7 @@ TEST(VariationalBuilder, MoreLloydIterationsNeverRaiseTheEstimatedSum) {
     VariationalOptions o;
     o.depth = 1;
     o.lloyd_iterations = iterations;
-    const Tree t = build_variational(mesh, o, cpu_at(cpu, m));
-    const double sum = root_children_sum(cpu, mesh, t, m);
+    const double sum = root_children_sum(cpu, mesh, build_measured(mesh, o, cpu_at(cpu, m)), m);
     EXPECT_LE(sum, previous) << iterations;
     previous = sum;
   }
@@ -291,12 +314,9 @@ TEST(VariationalBuilder, EstimatedLayerSumsAtMostTheBaselines) {
   const int m = 32;
   VariationalOptions o;
   o.depth = 3;
-  const Tree v = build_variational(mesh, o, cpu_at(cpu, m));
-  ObbTreeOptions b;
-  b.depth = 3;
-  const Tree base = build_obbtree(mesh, b);
-  // The same deterministic estimator measures both trees' tight boxes, so no noise enters and
-  // no slack is needed.
+  const Measured v = build_measured(mesh, o, cpu_at(cpu, m)), base = baseline_measured(mesh, 3);
+  // The same deterministic estimator measures both trees as their builders did (Measured), so
+  // no noise enters and no slack is needed.
   for (int level = 0; level <= 3; ++level)
     EXPECT_LE(layer_sum(cpu, mesh, v, level, m), layer_sum(cpu, mesh, base, level, m)) << level;
 }
@@ -314,11 +334,11 @@ TEST(VariationalBuilder, AdjustmentNeverRaisesTheRootChildrensEstimatedSum) {
     o.merge = false;  // merging would re-group the root's grandchildren: compare the top-down split
     o.adjust = adjust;
     VariationalReport report;
-    const Tree t = build_variational(mesh, o, cpu_at(cpu, m), nullptr, &report);
+    const Measured t = build_measured(mesh, o, cpu_at(cpu, m), &report);
     if (adjust) {
       EXPECT_GT(report.adjustments, 0u) << "no adjusted split was kept: the check below would be empty";
     }
-    EXPECT_TRUE(check_conservative(mesh, t).ok());
+    EXPECT_TRUE(check_conservative(mesh, t.tree).ok());
     sums[adjust] = root_children_sum(cpu, mesh, t, m);
   }
   EXPECT_LE(sums[1], sums[0]);
@@ -484,7 +504,7 @@ TEST(VariationalBuilder, CheckpointOfAnotherBuildOrDamagedIsRefused) {
 
 // Each merging move is kept only when it lowers the changed parents' estimated sum, and it
 // changes only their layer: so with the same estimator, every layer's estimated sum of OBV
-// after the sweeps is at most the one before (tight boxes, see layer_sum).
+// after the sweeps is at most the one before (as the builder measured them: Measured).
 TEST(VariationalBuilder, MergingNeverRaisesALayersEstimatedSum) {
   const Mesh mesh = analytic::polygonal_torus().mesh;
   const CpuObvEstimator cpu(mesh);
@@ -492,13 +512,13 @@ TEST(VariationalBuilder, MergingNeverRaisesALayersEstimatedSum) {
   VariationalOptions o;
   o.depth = 4;
   o.merge = false;
-  const Tree before = build_variational(mesh, o, cpu_at(cpu, m));
+  const Measured before = build_measured(mesh, o, cpu_at(cpu, m));
   o.merge = true;
   VariationalReport report;
-  const Tree after = build_variational(mesh, o, cpu_at(cpu, m), nullptr, &report);
+  const Measured after = build_measured(mesh, o, cpu_at(cpu, m), &report);
   EXPECT_GT(report.merges, 0u) << "no merge was kept: the check below would be empty";
-  EXPECT_TRUE(validate_tree(after, "merged"));
-  EXPECT_TRUE(check_conservative(mesh, after).ok());
+  EXPECT_TRUE(validate_tree(after.tree, "merged"));
+  EXPECT_TRUE(check_conservative(mesh, after.tree).ok());
   for (int level = 0; level <= 4; ++level)
     EXPECT_LE(layer_sum(cpu, mesh, after, level, m), layer_sum(cpu, mesh, before, level, m)) << level;
 }
