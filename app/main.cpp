@@ -587,6 +587,26 @@ int run_obv(const std::string& mesh_path, const std::string& boxes_path, const s
 // tree's layers with the same weights: e of trees of different depths weighs their layers
 // differently and is not to be compared.
 // With `figure_path`, also draws both trees' layers over the mesh (fast/tree_figure.h) to a PNG.
+// compare's checkpoint, checked before its long work (the baseline's certification comes
+// before the variational build): the variational build's state against this run's flags, and
+// each certification's files as files (their trees, which the rest depends on, come later).
+vobb::Status check_compare_checkpoint(const vobb::Mesh& mesh, const BuildFlags& flags, const vobb::GlObvEstimator* gl) {
+  BuildFlags f = flags;
+  f.method = "variational";
+  vobb::Status s = make_checkpoint_folder(f.checkpoint);
+  if (!s) return s;
+  vobb::VariationalState state;
+  bool found = false;
+  s = vobb::read_variational_state((std::filesystem::path(f.checkpoint) / "state.json").string(),
+                                   build_fingerprint(mesh, f, gl), mesh.faces.size(), f.arity, f.depth, &state, &found);
+  if (!s) return s;
+  for (const char* method : {"obbtree", "variational"}) {
+    s = vobb::exact::CertifyCheckpoint::check_files((std::filesystem::path(f.checkpoint) / ("certify-" + std::string(method))).string());
+    if (!s) return s;
+  }
+  return vobb::Status::ok();
+}
+
 int run_compare(const std::string& mesh_path, const BuildFlags& flags, bool json, bool rational,
                 const std::string& figure_path, const std::string& figure_up) {
   vobb::LoadedMesh loaded;
@@ -598,6 +618,10 @@ int run_compare(const std::string& mesh_path, const BuildFlags& flags, bool json
   vobb::ObvEstimate estimate;
   s = make_estimator(loaded.mesh, flags, &gl, &cpu, &estimate);
   if (!s) return refuse(s);
+  if (!flags.checkpoint.empty()) {
+    s = check_compare_checkpoint(loaded.mesh, flags, gl.get());
+    if (!s) return refuse(s);
+  }
   vobb::exact::CertifyOptions copt;
   if (!flags.quiet) copt.progress = [](const std::string& line) { std::fprintf(stderr, "vobb: %s\n", line.c_str()); };
   struct Result {

@@ -247,8 +247,10 @@ bool parse_rational(const nlohmann::json& v, Rational* out) {
 
 // Reads one of the two files: JSON object, format, known fields, checksum, fingerprint.
 // *text gets the file's bytes.
+// `fingerprint` null: the file is checked as a file (JSON, format, fields, checksum), not as
+// this certification's.
 Status read_checkpoint_file(const std::string& path, const char* format, const std::set<std::string>& known,
-                            const std::string& fingerprint, nlohmann::json* j, std::string* text) {
+                            const std::string* fingerprint, nlohmann::json* j, std::string* text) {
   const Status read = read_regular_file(path, path, "checkpoint file", text);
   if (!read) return read;
   auto bad = [&](const std::string& why) { return Status::error(path + ": damaged certify checkpoint: " + why); };
@@ -261,13 +263,29 @@ Status read_checkpoint_file(const std::string& path, const char* format, const s
     if (!known.count(item.key())) return bad("unknown field '" + item.key().substr(0, 40) + "'");
   if (!j->contains("sha256") || !(*j)["sha256"].is_string() || (*j)["sha256"].get<std::string>() != json_checksum(*j))
     return bad("checksum does not match the contents");
-  if (!j->contains("fingerprint") || !(*j)["fingerprint"].is_string() || (*j)["fingerprint"].get<std::string>() != fingerprint)
+  if (fingerprint == nullptr) return Status::ok();
+  if (!j->contains("fingerprint") || !(*j)["fingerprint"].is_string() || (*j)["fingerprint"].get<std::string>() != *fingerprint)
     return Status::error(path + ": checkpoint of another certification (mesh, tree, path or certify version differ); "
                          "use another --checkpoint folder or remove it");
   return Status::ok();
 }
 
 }  // namespace
+
+const std::set<std::string> kObvFields = {"format", "version", "fingerprint", "obv", "sha256"};
+const std::set<std::string> kLayersFields = {"format", "version", "fingerprint", "obv_sha256", "layers", "sha256"};
+
+Status CertifyCheckpoint::check_files(const std::string& folder) {
+  nlohmann::json j;
+  std::string text;
+  const std::string obv_file = folder + "/obv.json", layers_file = folder + "/layers.json";
+  if (!path_absent(obv_file)) {
+    Status s = read_checkpoint_file(obv_file, kObvFormat, kObvFields, nullptr, &j, &text);
+    if (!s) return s;
+  }
+  if (!path_absent(layers_file)) return read_checkpoint_file(layers_file, kLayersFormat, kLayersFields, nullptr, &j, &text);
+  return Status::ok();
+}
 
 struct CertifyCheckpoint::Written {
   std::map<int, nlohmann::json> layers;
@@ -344,8 +362,7 @@ Status CertifyCheckpoint::load(const Tree& tree, CertifyState* state, bool* foun
     nlohmann::json j;
     std::string text;
     current = obv_file;
-    Status r = read_checkpoint_file(obv_file, kObvFormat, {"format", "version", "fingerprint", "obv", "sha256"},
-                                    fingerprint_, &j, &text);
+    Status r = read_checkpoint_file(obv_file, kObvFormat, kObvFields, &fingerprint_, &j, &text);
     if (!r) return r;
     const std::string obv_sha = j["sha256"].get<std::string>();  // checked: the checksum of its contents
     const nlohmann::json& obv = j.at("obv");
@@ -358,9 +375,7 @@ Status CertifyCheckpoint::load(const Tree& tree, CertifyState* state, bool* foun
     }
     if (has_layers) {
       current = layers_file;
-      r = read_checkpoint_file(layers_file, kLayersFormat,
-                               {"format", "version", "fingerprint", "obv_sha256", "layers", "sha256"}, fingerprint_, &j,
-                               &text);
+      r = read_checkpoint_file(layers_file, kLayersFormat, kLayersFields, &fingerprint_, &j, &text);
       if (!r) return r;
       if (j.at("obv_sha256").get<std::string>() != obv_sha) return bad("its layers belong to another obv.json");
       const nlohmann::json& layers = j.at("layers");

@@ -105,6 +105,10 @@ class CertifyCheckpoint {
   // than its nodes', a layer outside 0..depth or given twice, a box count or a sum of OBV
   // other than the layer's, or a path's result that contradicts itself.
   Status load(const Tree& tree, CertifyState* state, bool* found);
+  // The files in `folder` checked as files only (JSON, format, fields, checksum), before the
+  // tree they belong to is known: so that a run can refuse a damaged folder before its long
+  // work rather than after it. load() checks the rest.
+  static Status check_files(const std::string& folder);
   // Writes obv.json the first time `state` has OBV (not again once loaded or written), then
   // layers.json.
   Status save(const CertifyState& state);

@@ -457,6 +457,20 @@ TEST(Cli, CompareAndBuildShareACheckpoint) {
   CliRun r = vobb_cli("compare " + mesh + flags + " --quiet --checkpoint " + dir);
   ASSERT_EQ(r.code, 0) << r.err;
   ASSERT_TRUE(test::exists(dir + "/state.json"));
+  // Refused before any work (not after the baseline's build and certification, which print
+  // progress lines without --quiet): the folder with other flags, or with a damaged file.
+  r = vobb_cli("compare " + mesh + " --depth 3 --m 4 --backend cpu --checkpoint " + dir);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(line_count(r.err), 1u) << r.err;
+  EXPECT_NE(r.err.find("checkpoint of another build"), std::string::npos) << r.err;
+  const std::string obv = dir + "/certify-variational/obv.json", obv_bytes = slurp(obv);
+  ASSERT_FALSE(obv_bytes.empty());
+  { std::ofstream(obv) << obv_bytes.substr(0, obv_bytes.size() / 2); }
+  r = vobb_cli("compare " + mesh + flags + " --checkpoint " + dir);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(line_count(r.err), 1u) << r.err;
+  EXPECT_NE(r.err.find("obv.json: damaged certify checkpoint"), std::string::npos) << r.err;
+  { std::ofstream(obv) << obv_bytes; }
   const std::string resumed = test::temp_path("ck_resumed.json"), fresh = test::temp_path("ck_fresh.json");
   r = vobb_cli("build " + mesh + " -o " + resumed + flags + " --checkpoint " + dir);
   ASSERT_EQ(r.code, 0) << r.err;
@@ -465,8 +479,8 @@ TEST(Cli, CompareAndBuildShareACheckpoint) {
   r = vobb_cli("build " + mesh + " -o " + fresh + flags + " --quiet");
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_EQ(slurp(resumed), slurp(fresh));
-  for (const std::string& p : {mesh, resumed, fresh, dir + "/state.json"}) std::remove(p.c_str());
-  ::rmdir(dir.c_str());
+  for (const std::string& p : {mesh, resumed, fresh}) std::remove(p.c_str());
+  std::filesystem::remove_all(dir);
 }
 
 // File names need not be UTF-8; a JSON report escapes what is not (U+FFFD) instead of failing

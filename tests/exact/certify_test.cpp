@@ -299,6 +299,8 @@ TEST_F(CertifyTorus, DamagedOrForeignCheckpointsAreRefused) {
   Status s = CertifyCheckpoint(dir, "another fp").load(t, &back, &found);
   EXPECT_FALSE(s);
   EXPECT_NE(s.message().find("another certification"), std::string::npos) << s.message();
+  // check_files judges the files alone: sound files pass whatever certification they belong to.
+  EXPECT_TRUE(CertifyCheckpoint::check_files(dir));
   const std::string obv_file = ck.obv_path(), layers_file = ck.layers_path();
   const nlohmann::json obv = nlohmann::json::parse(test::slurp(obv_file));
   const nlohmann::json layers = nlohmann::json::parse(test::slurp(layers_file));
@@ -320,6 +322,9 @@ TEST_F(CertifyTorus, DamagedOrForeignCheckpointsAreRefused) {
     j["layers"][0]["omv"] = "7/3";
     write_text(layers_file, j.dump());
     refused("checksum", layers_file);
+    const Status files = CertifyCheckpoint::check_files(dir);  // damage it finds without the tree
+    EXPECT_FALSE(files);
+    EXPECT_NE(files.message().find("checksum"), std::string::npos) << files.message();
     restore();
   }
   struct Edit {
