@@ -261,6 +261,15 @@ Status load_with_assimp(const std::string& path, const std::string& display, Loa
   // SIGXCPU, or SIGKILL after it, with the CPU time spent: the limit; SIGKILL before it is
   // spent is an outside kill (the kernel's, out of memory) unless it was ours (timed_out).
   const bool killed = WIFSIGNALED(status) && (WTERMSIG(status) == SIGXCPU || WTERMSIG(status) == SIGKILL);
+  // Our wall-clock kill of an importer that used under half its CPU limit in twice that time
+  // and more: it was mostly waiting (a file it opened itself, such as one a scene names, that
+  // blocks: a pipe), not looping.
+  if (timed_out && cpu_used < cpu_seconds / 2) {
+    char waited[32];
+    std::snprintf(waited, sizeof waited, "%.0f", 2 * cpu_seconds + 10);
+    return Status::error(display + ": cannot read: assimp waited " + waited +
+                         " s without finishing (does the file name another that blocks, such as a pipe?)");
+  }
   if (timed_out || (killed && (WTERMSIG(status) == SIGXCPU || cpu_used >= cpu_seconds - 0.5)))
     return Status::error(display + ": cannot read: assimp did not finish within " + limit +
                          " s of CPU time (a damaged file can make it loop)");

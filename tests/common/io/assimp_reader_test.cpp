@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <sys/stat.h>
+#include <filesystem>
 #include <fstream>
 
 #include "common/io/mesh_io.h"
@@ -15,6 +17,27 @@ namespace {
 #if VOBB_HAVE_ASSIMP
 void write_text(const std::string& path, const std::string& text) {
   std::ofstream(path, std::ios::binary) << text;
+}
+
+// A LightWave scene names its object file, which assimp opens itself; a pipe there blocks it.
+// The importer is killed at its wall-clock deadline (2 cpu_seconds + 10 s; cpu_seconds 1
+// here) and the refusal says it waited, not that it ran out of CPU time (it used almost none).
+TEST(AssimpReader, AnImporterThatWaitsIsNamedAsWaiting) {
+  const std::string dir = test::temp_path("lws_dir");
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directory(dir);
+  const std::string fifo = dir + "/object.lwo", scene = dir + "/scene.lws";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  write_text(scene, "LWSC\n3\n\nFirstFrame 1\nLastFrame 60\nLoadObjectLayer 1 " + fifo + "\n");
+  LoadedMesh lm;
+  const auto t0 = std::chrono::steady_clock::now();
+  const Status s = load_with_assimp(scene, "scene.lws", &lm, 1.0);
+  const double waited = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  EXPECT_FALSE(s);
+  EXPECT_NE(s.message().find("scene.lws: cannot read: assimp waited 12 s without finishing"), std::string::npos)
+      << s.message();
+  EXPECT_GE(waited, 12.0);
+  std::filesystem::remove_all(dir);
 }
 
 // Each of these few bytes crashes assimp 5.2's importer (found by mutating small files): an
