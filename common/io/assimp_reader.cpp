@@ -9,6 +9,7 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
+#include <assimp/DefaultIOSystem.h>
 #include <assimp/Importer.hpp>
 
 #include <fcntl.h>
@@ -69,8 +70,26 @@ class AddressSpaceCap {
   double allowance_ = 0;
 };
 
+// Assimp opens the files a scene names itself (a LightWave scene's objects, an OBJ's
+// materials); like vobb's own reader it is given regular files only: a pipe or a device
+// there would block it or feed it without end.
+class RegularFilesOnly : public Assimp::DefaultIOSystem {
+ public:
+  bool Exists(const char* file) const override { return regular(file) && DefaultIOSystem::Exists(file); }
+  Assimp::IOStream* Open(const char* file, const char* mode) override {
+    return regular(file) ? DefaultIOSystem::Open(file, mode) : nullptr;
+  }
+
+ private:
+  static bool regular(const char* file) {
+    struct stat st;
+    return file != nullptr && ::stat(file, &st) == 0 && S_ISREG(st.st_mode);
+  }
+};
+
 Status import_here(const std::string& path, const std::string& display, LoadedMesh* out) {
   Assimp::Importer importer;
+  importer.SetIOHandler(new RegularFilesOnly);  // the importer owns it
   const aiScene* scene = nullptr;
   std::string why;
   {
@@ -262,8 +281,8 @@ Status load_with_assimp(const std::string& path, const std::string& display, Loa
   // spent is an outside kill (the kernel's, out of memory) unless it was ours (timed_out).
   const bool killed = WIFSIGNALED(status) && (WTERMSIG(status) == SIGXCPU || WTERMSIG(status) == SIGKILL);
   // Our wall-clock kill of an importer that used under half its CPU limit in twice that time
-  // and more: it was mostly waiting (a file it opened itself, such as one a scene names, that
-  // blocks: a pipe), not looping.
+  // and more: it was mostly waiting, not looping. (A pipe a scene named did this until
+  // RegularFilesOnly; no file is known to do it since, so this is the safety net's message.)
   if (timed_out && cpu_used < cpu_seconds / 2) {
     char waited[32];
     std::snprintf(waited, sizeof waited, "%.0f", 2 * cpu_seconds + 10);

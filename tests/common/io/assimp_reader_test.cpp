@@ -19,10 +19,10 @@ void write_text(const std::string& path, const std::string& text) {
   std::ofstream(path, std::ios::binary) << text;
 }
 
-// A LightWave scene names its object file, which assimp opens itself; a pipe there blocks it.
-// The importer is killed at its wall-clock deadline (2 cpu_seconds + 10 s; cpu_seconds 1
-// here) and the refusal says it waited, not that it ran out of CPU time (it used almost none).
-TEST(AssimpReader, AnImporterThatWaitsIsNamedAsWaiting) {
+// A LightWave scene names its object file, which assimp opens itself. A pipe there blocked it
+// until the wall-clock deadline (50 s by default), which then blamed CPU time: assimp is given
+// regular files only, so the scene is refused at once, in one line.
+TEST(AssimpReader, ASceneNamingAPipeIsRefusedAtOnce) {
   const std::string dir = test::temp_path("lws_dir");
   std::filesystem::remove_all(dir);
   std::filesystem::create_directory(dir);
@@ -31,12 +31,13 @@ TEST(AssimpReader, AnImporterThatWaitsIsNamedAsWaiting) {
   write_text(scene, "LWSC\n3\n\nFirstFrame 1\nLastFrame 60\nLoadObjectLayer 1 " + fifo + "\n");
   LoadedMesh lm;
   const auto t0 = std::chrono::steady_clock::now();
-  const Status s = load_with_assimp(scene, "scene.lws", &lm, 1.0);
-  const double waited = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const Status s = load_mesh(scene, &lm);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   EXPECT_FALSE(s);
-  EXPECT_NE(s.message().find("scene.lws: cannot read: assimp waited 12 s without finishing"), std::string::npos)
-      << s.message();
-  EXPECT_GE(waited, 12.0);
+  EXPECT_EQ(s.message().rfind("scene.lws: cannot read", 0), 0u) << s.message();
+  EXPECT_EQ(s.message().find('\n'), std::string::npos) << s.message();
+  // Far below the wall-clock deadline, 2 x 20 s + 10 s: nothing waited.
+  EXPECT_LT(seconds, 10.0) << s.message();
   std::filesystem::remove_all(dir);
 }
 
