@@ -113,7 +113,13 @@ Status import_here(const std::string& path, const std::string& display, LoadedMe
   if (scene == nullptr || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE)) {
     for (char& c : why)
       if (c == '\n' || c == '\r') c = ' ';
-    return Status::error(display + ": cannot read: " + (why.empty() ? "unknown format" : why));
+    // No reason from assimp: no importer took the file, or one made an incomplete scene (as
+    // LightWave's does when an object file the scene names cannot be read).
+    if (why.empty())
+      why = scene == nullptr ? "unknown format"
+                             : "assimp made an incomplete scene (does the file name another that is missing or not a "
+                               "regular file?)";
+    return Status::error(display + ": cannot read: " + why);
   }
   Mesh& m = out->mesh;
   for (unsigned i = 0; i < scene->mNumMeshes; ++i) {
