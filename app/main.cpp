@@ -580,13 +580,6 @@ int run_obv(const std::string& mesh_path, const std::string& boxes_path, const s
   return kExitOk;
 }
 
-// Both builders on one mesh, both trees certified exactly; per layer the exact OMV of each and
-// the change, and each tree's weighted error e (DESIGN §1, §7). Where one tree stops sooner
-// than the other (every leaf of it holds one face, or cannot be split), its layers below its
-// last are its leaf layer again, as in its own layers, and both e are taken over the deeper
-// tree's layers with the same weights: e of trees of different depths weighs their layers
-// differently and is not to be compared.
-// With `figure_path`, also draws both trees' layers over the mesh (fast/tree_figure.h) to a PNG.
 // compare's checkpoint, checked before its long work (the baseline's certification comes
 // before the variational build): the variational build's state against this run's flags, and
 // each certification's files as files (their trees, which the rest depends on, come later).
@@ -601,12 +594,22 @@ vobb::Status check_compare_checkpoint(const vobb::Mesh& mesh, const BuildFlags& 
                                    build_fingerprint(mesh, f, gl), mesh.faces.size(), f.arity, f.depth, &state, &found);
   if (!s) return s;
   for (const char* method : {"obbtree", "variational"}) {
-    s = vobb::exact::CertifyCheckpoint::check_files((std::filesystem::path(f.checkpoint) / ("certify-" + std::string(method))).string());
+    const std::string folder = (std::filesystem::path(f.checkpoint) / ("certify-" + std::string(method))).string();
+    s = make_checkpoint_folder(folder);  // made now, and must take files, as the build's
+    if (!s) return s;
+    s = vobb::exact::CertifyCheckpoint::check_files(folder);
     if (!s) return s;
   }
   return vobb::Status::ok();
 }
 
+// Both builders on one mesh, both trees certified exactly; per layer the exact OMV of each and
+// the change, and each tree's weighted error e (DESIGN §1, §7). Where one tree stops sooner
+// than the other (every leaf of it holds one face, or cannot be split), its layers below its
+// last are its leaf layer again, as in its own layers, and both e are taken over the deeper
+// tree's layers with the same weights: e of trees of different depths weighs their layers
+// differently and is not to be compared.
+// With `figure_path`, also draws both trees' layers over the mesh (fast/tree_figure.h) to a PNG.
 int run_compare(const std::string& mesh_path, const BuildFlags& flags, bool json, bool rational,
                 const std::string& figure_path, const std::string& figure_up) {
   vobb::LoadedMesh loaded;

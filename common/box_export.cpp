@@ -1,5 +1,7 @@
 #include "common/box_export.h"
 
+#include <array>
+
 #include "common/atomic_file.h"
 #include "common/text_util.h"
 
@@ -9,6 +11,18 @@ Status check_box_export_path(const std::string& path) {
   if (ext == "obj" || ext == "ply") return Status::ok();
   return Status::error(path + ": unknown box export format (use .obj or .ply)");
 }
+
+namespace {
+
+// A box's quad k with its corners in outward order: kBoxQuads as given for right-handed axes,
+// reversed for left-handed ones (a frame read from a file may be either; box_defect).
+std::array<int, 4> outward_quad(const Obb& box, int k) {
+  const int* q = kBoxQuads[k];
+  if (box.axes[0].dot(box.axes[1].cross(box.axes[2])) >= 0) return {q[0], q[1], q[2], q[3]};
+  return {q[3], q[2], q[1], q[0]};
+}
+
+}  // namespace
 
 Status export_boxes(const std::vector<Obb>& boxes, const std::vector<std::string>& names,
                     const std::string& path) {
@@ -25,9 +39,9 @@ Status export_boxes(const std::vector<Obb>& boxes, const std::vector<std::string
         append_xyz(&s, p);
         s += '\n';
       }
-      for (const auto& q : kBoxQuads) {
+      for (int k = 0; k < 6; ++k) {
         s += "f";
-        for (int c : q) s += " " + std::to_string(8 * b + c + 1);
+        for (int c : outward_quad(boxes[b], k)) s += " " + std::to_string(8 * b + c + 1);
         s += '\n';
       }
     }
@@ -41,9 +55,9 @@ Status export_boxes(const std::vector<Obb>& boxes, const std::vector<std::string
         s += '\n';
       }
     for (size_t b = 0; b < boxes.size(); ++b)
-      for (const auto& q : kBoxQuads) {
+      for (int k = 0; k < 6; ++k) {
         s += "4";
-        for (int c : q) s += " " + std::to_string(8 * b + c);
+        for (int c : outward_quad(boxes[b], k)) s += " " + std::to_string(8 * b + c);
         s += '\n';
       }
   }

@@ -258,13 +258,17 @@ Status read_checkpoint_file(const std::string& path, const char* format, const s
   bool too_deep = false;
   if (!parse_json_within(*text, 8, j, &too_deep) || !j->is_object())
     return bad(too_deep ? "nested deeper than a checkpoint can be" : "not JSON");
-  if (j->value("format", "") != format || j->value("version", 0) != 1) return bad("not a vobb certify checkpoint");
+  // Types first: value() throws on a field of another type ("format": 5).
+  const bool format_ok = j->contains("format") && (*j)["format"].is_string() && (*j)["format"].get<std::string>() == format;
+  const bool version_ok = j->contains("version") && (*j)["version"].is_number_integer() && (*j)["version"].get<int64_t>() == 1;
+  if (!format_ok || !version_ok) return bad("not a vobb certify checkpoint");
   for (const auto& item : j->items())
     if (!known.count(item.key())) return bad("unknown field '" + item.key().substr(0, 40) + "'");
   if (!j->contains("sha256") || !(*j)["sha256"].is_string() || (*j)["sha256"].get<std::string>() != json_checksum(*j))
     return bad("checksum does not match the contents");
+  if (!j->contains("fingerprint") || !(*j)["fingerprint"].is_string()) return bad("no fingerprint");
   if (fingerprint == nullptr) return Status::ok();
-  if (!j->contains("fingerprint") || !(*j)["fingerprint"].is_string() || (*j)["fingerprint"].get<std::string>() != *fingerprint)
+  if ((*j)["fingerprint"].get<std::string>() != *fingerprint)
     return Status::error(path + ": checkpoint of another certification (mesh, tree, path or certify version differ); "
                          "use another --checkpoint folder or remove it");
   return Status::ok();
@@ -276,14 +280,22 @@ const std::set<std::string> kObvFields = {"format", "version", "fingerprint", "o
 const std::set<std::string> kLayersFields = {"format", "version", "fingerprint", "obv_sha256", "layers", "sha256"};
 
 Status CertifyCheckpoint::check_files(const std::string& folder) {
-  nlohmann::json j;
+  nlohmann::json obv, layers;
   std::string text;
   const std::string obv_file = folder + "/obv.json", layers_file = folder + "/layers.json";
-  if (!path_absent(obv_file)) {
-    Status s = read_checkpoint_file(obv_file, kObvFormat, kObvFields, nullptr, &j, &text);
+  const bool has_obv = !path_absent(obv_file), has_layers = !path_absent(layers_file);
+  if (has_layers && !has_obv)
+    return Status::error(layers_file + ": damaged certify checkpoint: layers without the boxes' OBV (" + obv_file + ")");
+  if (has_obv) {
+    Status s = read_checkpoint_file(obv_file, kObvFormat, kObvFields, nullptr, &obv, &text);
     if (!s) return s;
   }
-  if (!path_absent(layers_file)) return read_checkpoint_file(layers_file, kLayersFormat, kLayersFields, nullptr, &j, &text);
+  if (has_layers) {
+    Status s = read_checkpoint_file(layers_file, kLayersFormat, kLayersFields, nullptr, &layers, &text);
+    if (!s) return s;
+    if (!layers.contains("obv_sha256") || !layers["obv_sha256"].is_string() || layers["obv_sha256"] != obv["sha256"])
+      return Status::error(layers_file + ": damaged certify checkpoint: its layers belong to another obv.json");
+  }
   return Status::ok();
 }
 

@@ -87,6 +87,20 @@ class RegularFilesOnly : public Assimp::DefaultIOSystem {
   }
 };
 
+// Whether the process is asleep (state S or D in /proc/<pid>/stat: waiting, not running).
+bool sleeping(pid_t pid) {
+  char path[64];
+  std::snprintf(path, sizeof path, "/proc/%d/stat", static_cast<int>(pid));
+  std::FILE* f = std::fopen(path, "r");
+  if (f == nullptr) return false;
+  char text[512];
+  const size_t n = std::fread(text, 1, sizeof text - 1, f);
+  std::fclose(f);
+  text[n] = '\0';
+  const char* close = std::strrchr(text, ')');  // the command name may hold spaces and ')'
+  return close != nullptr && close[1] == ' ' && (close[2] == 'S' || close[2] == 'D');
+}
+
 Status import_here(const std::string& path, const std::string& display, LoadedMesh* out) {
   Assimp::Importer importer;
   importer.SetIOHandler(new RegularFilesOnly);  // the importer owns it
@@ -256,12 +270,13 @@ Status load_with_assimp(const std::string& path, const std::string& display, Loa
   const auto deadline = std::chrono::steady_clock::now() +
                         std::chrono::milliseconds(static_cast<int64_t>(1000 * (2 * cpu_seconds + 10)));
   std::string got;
-  bool timed_out = false;
+  bool timed_out = false, waiting = false;
   char buf[1 << 16];
   for (;;) {
     const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
     if (left.count() <= 0) {
       timed_out = true;
+      waiting = sleeping(pid);
       ::kill(pid, SIGKILL);
       break;
     }
@@ -286,10 +301,10 @@ Status load_with_assimp(const std::string& path, const std::string& display, Loa
   // SIGXCPU, or SIGKILL after it, with the CPU time spent: the limit; SIGKILL before it is
   // spent is an outside kill (the kernel's, out of memory) unless it was ours (timed_out).
   const bool killed = WIFSIGNALED(status) && (WTERMSIG(status) == SIGXCPU || WTERMSIG(status) == SIGKILL);
-  // Our wall-clock kill of an importer that used under half its CPU limit in twice that time
-  // and more: it was mostly waiting, not looping. (A pipe a scene named did this until
-  // RegularFilesOnly; no file is known to do it since, so this is the safety net's message.)
-  if (timed_out && cpu_used < cpu_seconds / 2) {
+  // Our wall-clock kill of an importer that was asleep then (waiting on a file, not looping,
+  // which a starved machine could also keep under its CPU limit). A pipe a scene named did this
+  // until RegularFilesOnly; no file is known to do it since, so this is the safety net's message.
+  if (timed_out && waiting) {
     char waited[32];
     std::snprintf(waited, sizeof waited, "%.0f", 2 * cpu_seconds + 10);
     return Status::error(display + ": cannot read: assimp waited " + waited +

@@ -42,6 +42,9 @@ TEST(BoxExport, BoxesReadBackAsOutwardSolids) {
     b.center = Vec3(u(rng), u(rng), u(rng)) * (i < 12 ? 3.0 : 100.0);
     b.axes = orthonormalize({Vec3(u(rng), u(rng), u(rng)), Vec3(u(rng), u(rng), u(rng)), Vec3::Zero()});
     b.half = Vec3(0.01 + std::abs(u(rng)), 0.01 + std::abs(u(rng)), 0.01 + std::abs(u(rng)));
+    // Every third box left-handed (its third axis negated), as a tree or box file may give it:
+    // its quads are written reversed, so that it too reads back as an outward solid.
+    if (i % 3 == 2) b.axes[2] = -b.axes[2];
     boxes.push_back(b);
   }
   constexpr double kU = 0.5 * std::numeric_limits<double>::epsilon();

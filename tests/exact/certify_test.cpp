@@ -11,6 +11,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <functional>
+#include <set>
 #include <stdexcept>
 #include <string>
 
@@ -333,6 +334,11 @@ TEST_F(CertifyTorus, DamagedOrForeignCheckpointsAreRefused) {
     std::function<void(nlohmann::json&)> edit;
   };
   const std::vector<Edit> edits = {
+      // Fields of another type where the format is named: refused in one line, not thrown.
+      {"not a vobb certify checkpoint", true, [](nlohmann::json& j) { j["format"] = 5; }},
+      {"not a vobb certify checkpoint", false, [](nlohmann::json& j) { j["version"] = "1"; }},
+      {"no fingerprint", true, [](nlohmann::json& j) { j.erase("fingerprint"); }},
+      {"no fingerprint", false, [](nlohmann::json& j) { j["fingerprint"] = 7; }},
       {"unknown field", false, [](nlohmann::json& j) { j["extra"] = 1; }},
       {"unknown field", true, [](nlohmann::json& j) { j["extra"] = 1; }},
       {"boxes for a tree", true, [](nlohmann::json& j) { j["obv"].erase(j["obv"].size() - 1); }},
@@ -366,16 +372,26 @@ TEST_F(CertifyTorus, DamagedOrForeignCheckpointsAreRefused) {
          for (int i = 0; i < 8; ++i) j["obv"] = nlohmann::json::array({j["obv"]});  // depth 9: limit 8
        }},
   };
+  // Damage check_files can find without the tree (it runs before compare's long work): the
+  // file-level edits above and a layers.json of another obv.json.
+  const std::set<std::string> file_level = {"not a vobb certify checkpoint", "no fingerprint", "unknown field",
+                                            "another obv.json", "nested deeper"};
   for (const Edit& e : edits) {
     nlohmann::json j = e.in_obv ? obv : layers;
     e.edit(j);
     sign(&j);
     write_text(e.in_obv ? obv_file : layers_file, j.dump());
     refused(e.why, e.why == std::string("another obv.json") || !e.in_obv ? layers_file : obv_file);
+    if (file_level.count(e.why)) {
+      const Status files = CertifyCheckpoint::check_files(dir);
+      EXPECT_FALSE(files) << e.why;
+      EXPECT_NE(files.message().find(e.why), std::string::npos) << files.message();
+    }
     restore();
   }
   ASSERT_EQ(::unlink(obv_file.c_str()), 0);
   refused("without the boxes' OBV", layers_file);
+  EXPECT_NE(CertifyCheckpoint::check_files(dir).message().find("without the boxes' OBV"), std::string::npos);
   restore();
   // The unedited files, signed the same way, are read: the edits, not the signing, were refused.
   {
