@@ -8,7 +8,9 @@
 #include <atomic>
 #include <cctype>
 #include <exception>
+#include <limits>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <memory>
 #include <mutex>
@@ -196,7 +198,19 @@ Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& op
       throw;        // task_group passes it on to the caller
     }
   };
-  const int workers = std::max(1, std::min(todo, tbb::this_task_arena::max_concurrency()));
+  const int concurrency = tbb::this_task_arena::max_concurrency();
+  const bool uses_nef = options.path != OmvPath::kClip;
+  const double available = available_memory_bytes();
+  const int workers = layer_workers(todo, concurrency, uses_nef, mesh.faces.size(), available);
+  if (workers < std::min(todo, concurrency)) {
+    char buf[200];
+    std::snprintf(buf, sizeof buf,
+                  "layers on %d threads, not %d: a Nef polyhedron of this mesh takes about %.2f GB, and %.2f GB "
+                  "is available",
+                  workers, std::min(todo, concurrency), kNefBytesPerFace * static_cast<double>(mesh.faces.size()) / 1e9,
+                  available / 1e9);
+    say(buf);
+  }
   tbb::task_group group;
   for (int w = 1; w < workers; ++w) group.run(certify_layers);
   // This thread takes layers too. Its failure is held until the workers have stopped: the
@@ -216,6 +230,26 @@ Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& op
   cert.weighted_error = sum_pairwise(weighted);
   cert.seconds = seconds_since(t0);
   return cert;
+}
+
+int layer_workers(int layers, int concurrency, bool uses_nef, size_t faces, double available_bytes) {
+  int workers = std::min(layers, concurrency);
+  if (uses_nef) {
+    const double fit = std::floor(available_bytes / (kNefBytesPerFace * static_cast<double>(std::max<size_t>(faces, 1))));
+    if (fit < workers) workers = static_cast<int>(fit);
+  }
+  return std::max(1, workers);
+}
+
+double available_memory_bytes() {
+  std::FILE* f = std::fopen("/proc/meminfo", "r");
+  if (f == nullptr) return std::numeric_limits<double>::infinity();
+  char line[256];
+  double kib = -1;
+  while (std::fgets(line, sizeof line, f) != nullptr)
+    if (std::sscanf(line, "MemAvailable: %lf kB", &kib) == 1) break;
+  std::fclose(f);
+  return kib >= 0 ? kib * 1024 : std::numeric_limits<double>::infinity();
 }
 
 namespace {

@@ -78,10 +78,25 @@ struct CertifyOptions {
 // triangle count). Creates no GL context.
 // Threads: the boxes' OBV are computed in parallel, then the layers, one per thread at a time,
 // the layers with most boxes first; each thread that needs a union builds its own Nef(X), so
-// memory grows with the threads (TBB's: limit them with tbb::global_control or a task_arena).
+// memory grows with the threads (TBB's: limit them with tbb::global_control or a task_arena),
+// and the layers' threads are also limited to the Nef polyhedra that fit in the memory
+// available (layer_workers; said through `progress` when it limits them).
 // The result is the same rationals for any number of threads; only `seconds` and the order of
 // the progress lines vary. `progress` is called from any of the threads, one call at a time.
 Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& options);
+
+// Bytes of a Nef polyhedron of a mesh, per face: measured 9.2-10.6 KB on dino and bunny
+// (docs/BENCHMARKS.md, "Memory against mesh size"), taken as 12 KB.
+inline constexpr double kNefBytesPerFace = 12e3;
+
+// How many threads certify layers at once: at most `concurrency` and the `layers` to do, and,
+// where a layer may take Nef's path (`uses_nef`), at most as many Nef polyhedra of a mesh of
+// `faces` faces as fit in `available_bytes` (kNefBytesPerFace each); never fewer than one.
+int layer_workers(int layers, int concurrency, bool uses_nef, size_t faces, double available_bytes);
+
+// The memory the system could give this process now (MemAvailable of /proc/meminfo), or
+// infinity where it cannot be read.
+double available_memory_bytes();
 
 // What a checkpoint's fingerprint names as certify's own: bump it when certify's arithmetic or
 // choices change, so that checkpoints of the older code are refused.

@@ -7,6 +7,8 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <cmath>
+#include <limits>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -458,6 +460,23 @@ TEST_F(CertifyTorus, ResumedLayersThatDoNotMatchThisRunAreCertifiedAgain) {
     EXPECT_EQ(k.layers[i].omv, full.layers[i].omv) << "layer " << i;  // the two paths agree exactly
     EXPECT_EQ(k.layers[i].omv_path, full.layers[i].omv_path == "nef" ? "clip" : "none") << "layer " << i;
   }
+}
+
+// The layers' threads are limited by the Nef polyhedra that fit in the memory available (a
+// million-face mesh takes some 10 GB each), never below one, and not where no layer takes Nef.
+TEST(Certify, LayerWorkersFitTheirNefPolyhedraInMemory) {
+  const double nef = kNefBytesPerFace * 1000;  // one Nef polyhedron of a 1,000-face mesh
+  EXPECT_EQ(layer_workers(5, 2, true, 1000, 1e15), 2);
+  EXPECT_EQ(layer_workers(1, 16, true, 1000, 1e15), 1);   // one layer to do
+  EXPECT_EQ(layer_workers(8, 8, true, 1000, 3 * nef), 3);
+  EXPECT_EQ(layer_workers(8, 8, true, 1000, 3 * nef - 1), 2);
+  EXPECT_EQ(layer_workers(8, 8, true, 1000, 0.5 * nef), 1);  // not even one fits: still one
+  EXPECT_EQ(layer_workers(8, 8, false, 1000, 0), 8);         // clipping only: no Nef to fit
+  EXPECT_EQ(layer_workers(8, 8, true, 1000, std::numeric_limits<double>::infinity()), 8);
+  // This machine's memory reads as a positive, finite number of bytes (Linux's /proc/meminfo).
+  const double here = available_memory_bytes();
+  EXPECT_GT(here, 0);
+  EXPECT_TRUE(std::isfinite(here));
 }
 
 TEST(Certify, RootLayerOfTheCubeIsExact) {
