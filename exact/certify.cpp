@@ -200,7 +200,7 @@ Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& op
   };
   const int concurrency = tbb::this_task_arena::max_concurrency();
   const bool uses_nef = options.path != OmvPath::kClip;
-  const double available = available_memory_bytes();
+  const double available = options.memory_bytes >= 0 ? options.memory_bytes : available_memory_bytes();
   const int workers = layer_workers(todo, concurrency, uses_nef, mesh.faces.size(), available);
   if (workers < std::min(todo, concurrency)) {
     char buf[200];

@@ -72,6 +72,9 @@ struct CertifyOptions {
   // took). The files' checksums guard against damage, not against a forged state: certify
   // trusts its own checkpoints.
   const CertifyState* resume = nullptr;
+  // The memory the layers' Nef polyhedra may take (layer_workers), in bytes; negative: what the
+  // system has available now (available_memory_bytes). Tests set it to see the limit work.
+  double memory_bytes = -1;
 };
 
 // Precondition: the mesh is solid and the tree validated against it (validate_tree, same

@@ -13,6 +13,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <functional>
+#include <mutex>
 #include <set>
 #include <stdexcept>
 #include <string>
@@ -168,6 +169,35 @@ TEST_F(CertifyTorus, SameRationalsForAnyThreadCount) {
   EXPECT_EQ(four.containment.violations, one.containment.violations);
   EXPECT_EQ(four.containment.checked_pairs, one.containment.checked_pairs);
   EXPECT_TRUE(one.ok());
+}
+
+// Memory for one Nef polyhedron of the torus only: four threads certify the layers on one, say
+// so, and give the same rationals.
+TEST_F(CertifyTorus, MemoryForOneNefPolyhedronCertifiesOnOneThread) {
+  CertifyOptions co = both_paths();
+  Certificate free, tight;
+  std::vector<std::string> lines;
+  std::mutex lines_mutex;  // progress is called one call at a time, but from any thread
+  co.progress = [&](const std::string& line) {
+    std::lock_guard<std::mutex> lock(lines_mutex);
+    lines.push_back(line);
+  };
+  auto count = [&](const std::string& start) {
+    size_t n = 0;
+    for (const std::string& line : lines) n += line.rfind(start, 0) == 0 ? 1 : 0;
+    return n;
+  };
+  co.memory_bytes = 1e15;  // room for every thread's
+  tbb::task_arena(4).execute([&] { free = certify(m, t, co); });
+  EXPECT_EQ(count("layers on "), 0u);  // not limited (how many threads then build one is TBB's)
+  lines.clear();
+  co.memory_bytes = 1.5 * kNefBytesPerFace * static_cast<double>(m.faces.size());
+  tbb::task_arena(4).execute([&] { tight = certify(m, t, co); });
+  EXPECT_EQ(count("layers on 1 threads, not 4:"), 1u);
+  EXPECT_EQ(count("Nef polyhedron of the mesh built"), 1u) << "one thread, one Nef polyhedron";
+  ASSERT_EQ(tight.layers.size(), free.layers.size());
+  for (size_t i = 0; i < free.layers.size(); ++i) EXPECT_EQ(tight.layers[i].omv, free.layers[i].omv) << "layer " << i;
+  EXPECT_EQ(tight.weighted_error, free.weighted_error);
 }
 
 // A failure on any thread (here the caller's progress callback, which runs on whichever thread
