@@ -580,6 +580,18 @@ int run_obv(const std::string& mesh_path, const std::string& boxes_path, const s
   return kExitOk;
 }
 
+// The folder in compare's checkpoint that keeps the certification of `method`'s tree, and the
+// files there and beside it that compare writes (an output may name none of them).
+std::string certify_folder(const std::string& checkpoint, const std::string& method) {
+  return (std::filesystem::path(checkpoint) / ("certify-" + method)).string();
+}
+std::vector<std::string> compare_checkpoint_files() {
+  std::vector<std::string> files = {"state.json"};
+  for (const char* method : {"obbtree", "variational"})
+    for (const char* name : {"obv.json", "layers.json"}) files.push_back(certify_folder("", method) + "/" + name);
+  return files;
+}
+
 // compare's checkpoint, checked before its long work (the baseline's certification comes
 // before the variational build): the variational build's state against this run's flags, and
 // each certification's files as files (their trees, which the rest depends on, come later).
@@ -594,7 +606,7 @@ vobb::Status check_compare_checkpoint(const vobb::Mesh& mesh, const BuildFlags& 
                                    build_fingerprint(mesh, f, gl), mesh.faces.size(), f.arity, f.depth, &state, &found);
   if (!s) return s;
   for (const char* method : {"obbtree", "variational"}) {
-    const std::string folder = (std::filesystem::path(f.checkpoint) / ("certify-" + std::string(method))).string();
+    const std::string folder = certify_folder(f.checkpoint, method);
     s = make_checkpoint_folder(folder);  // made now, and must take files, as the build's
     if (!s) return s;
     s = vobb::exact::CertifyCheckpoint::check_files(folder);
@@ -643,7 +655,7 @@ int run_compare(const std::string& mesh_path, const BuildFlags& flags, bool json
     CertifySaver saver;
     vobb::exact::CertifyOptions o = copt;
     if (!flags.checkpoint.empty()) {
-      s = saver.attach((std::filesystem::path(flags.checkpoint) / ("certify-" + f.method)).string(), loaded.mesh,
+      s = saver.attach(certify_folder(flags.checkpoint, f.method), loaded.mesh,
                        r[i].tree, "auto", &o);
       if (!s) return refuse(s);
     }
@@ -914,10 +926,7 @@ int main(int argc, char** argv) {
     if (s && (build->parsed() || exp->parsed())) s = vobb::app::check_output_is_writable("-o", out);
     if (cmp->parsed()) s = vobb::app::check_output_is_not_input("--figure", compare_figure, {mesh});
     if (s && cmp->parsed())
-      s = vobb::app::check_output_is_not_checkpoint(
-          "--figure", compare_figure, cf.checkpoint,
-          {"state.json", "certify-obbtree/obv.json", "certify-obbtree/layers.json", "certify-variational/obv.json",
-           "certify-variational/layers.json"});
+      s = vobb::app::check_output_is_not_checkpoint("--figure", compare_figure, cf.checkpoint, compare_checkpoint_files());
     if (s && cmp->parsed()) s = vobb::app::check_output_is_writable("--figure", compare_figure);
     if (s && exp->parsed()) s = vobb::check_box_export_path(out);
     if (collide_cmd->parsed()) {

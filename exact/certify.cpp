@@ -308,29 +308,46 @@ Status read_checkpoint_file(const std::string& path, const char* format, const s
   return Status::ok();
 }
 
-}  // namespace
-
 const std::set<std::string> kObvFields = {"format", "version", "fingerprint", "obv", "sha256"};
 const std::set<std::string> kLayersFields = {"format", "version", "fingerprint", "obv_sha256", "layers", "sha256"};
 
-Status CertifyCheckpoint::check_files(const std::string& folder) {
-  nlohmann::json obv, layers;
-  std::string text;
-  const std::string obv_file = folder + "/obv.json", layers_file = folder + "/layers.json";
+// Both files of a checkpoint, each checked as read_checkpoint_file checks it. An absent file
+// leaves its JSON null; layers.json without obv.json is damage.
+Status read_checkpoint_files(const std::string& obv_file, const std::string& layers_file, const std::string* fingerprint,
+                             nlohmann::json* obv, nlohmann::json* layers) {
+  *obv = nlohmann::json();
+  *layers = nlohmann::json();
   const bool has_obv = !path_absent(obv_file), has_layers = !path_absent(layers_file);
   if (has_layers && !has_obv)
     return Status::error(layers_file + ": damaged certify checkpoint: layers without the boxes' OBV (" + obv_file + ")");
+  std::string text;
   if (has_obv) {
-    Status s = read_checkpoint_file(obv_file, kObvFormat, kObvFields, nullptr, &obv, &text);
+    Status s = read_checkpoint_file(obv_file, kObvFormat, kObvFields, fingerprint, obv, &text);
     if (!s) return s;
   }
   if (has_layers) {
-    Status s = read_checkpoint_file(layers_file, kLayersFormat, kLayersFields, nullptr, &layers, &text);
+    Status s = read_checkpoint_file(layers_file, kLayersFormat, kLayersFields, fingerprint, layers, &text);
     if (!s) return s;
-    if (!layers.contains("obv_sha256") || !layers["obv_sha256"].is_string() || layers["obv_sha256"] != obv["sha256"])
-      return Status::error(layers_file + ": damaged certify checkpoint: its layers belong to another obv.json");
   }
   return Status::ok();
+}
+
+// Whether layers.json (read, not null) names obv.json (read) by its checksum: it was written
+// after that obv.json, not another.
+bool layers_name_obv(const nlohmann::json& obv, const nlohmann::json& layers) {
+  return layers.contains("obv_sha256") && layers["obv_sha256"].is_string() && layers["obv_sha256"] == obv["sha256"];
+}
+constexpr const char* kLayersOfAnotherObv = "its layers belong to another obv.json";
+
+}  // namespace
+
+Status CertifyCheckpoint::check_files(const std::string& folder) {
+  nlohmann::json obv, layers;
+  const std::string layers_file = folder + "/layers.json";
+  Status s = read_checkpoint_files(folder + "/obv.json", layers_file, nullptr, &obv, &layers);
+  if (s && !layers.is_null() && !layers_name_obv(obv, layers))
+    return Status::error(layers_file + ": damaged certify checkpoint: " + kLayersOfAnotherObv);
+  return s;
 }
 
 struct CertifyCheckpoint::Written {
@@ -397,21 +414,18 @@ Status CertifyCheckpoint::save(const CertifyState& state) {
 Status CertifyCheckpoint::load(const Tree& tree, CertifyState* state, bool* found) {
   *found = false;
   const std::string obv_file = obv_path(), layers_file = layers_path();
-  const bool has_obv = !path_absent(obv_file), has_layers = !path_absent(layers_file);
-  if (!has_obv && !has_layers) return Status::ok();
+  if (path_absent(obv_file) && path_absent(layers_file)) return Status::ok();
   *found = true;
-  if (!has_obv) return Status::error(layers_file + ": damaged certify checkpoint: layers without the boxes' OBV (" + obv_file + ")");
   CertifyState s;
   std::string current;  // the file being read, for the messages
   auto bad = [&](const std::string& why) { return Status::error(current + ": damaged certify checkpoint: " + why); };
   try {
-    nlohmann::json j;
-    std::string text;
-    current = obv_file;
-    Status r = read_checkpoint_file(obv_file, kObvFormat, kObvFields, &fingerprint_, &j, &text);
+    nlohmann::json jo, j;
+    Status r = read_checkpoint_files(obv_file, layers_file, &fingerprint_, &jo, &j);
     if (!r) return r;
-    const std::string obv_sha = j["sha256"].get<std::string>();  // checked: the checksum of its contents
-    const nlohmann::json& obv = j.at("obv");
+    current = obv_file;
+    const std::string obv_sha = jo["sha256"].get<std::string>();  // checked: the checksum of its contents
+    const nlohmann::json& obv = jo.at("obv");
     if (!obv.is_array() || obv.size() != tree.nodes.size())
       return bad("OBV of " + std::to_string(obv.size()) + " boxes for a tree of " + std::to_string(tree.nodes.size()));
     for (size_t i = 0; i < obv.size(); ++i) {
@@ -419,11 +433,9 @@ Status CertifyCheckpoint::load(const Tree& tree, CertifyState* state, bool* foun
       if (!parse_rational(obv[i], &q)) return bad("OBV of node " + std::to_string(i) + " is not a rational");
       s.obv.push_back(q);
     }
-    if (has_layers) {
+    if (!j.is_null()) {
       current = layers_file;
-      r = read_checkpoint_file(layers_file, kLayersFormat, kLayersFields, &fingerprint_, &j, &text);
-      if (!r) return r;
-      if (j.at("obv_sha256").get<std::string>() != obv_sha) return bad("its layers belong to another obv.json");
+      if (!layers_name_obv(jo, j)) return bad(kLayersOfAnotherObv);
       const nlohmann::json& layers = j.at("layers");
       if (!layers.is_array()) return bad("layers is not a list");
       std::vector<char> seen(tree.depth + 1, 0);
