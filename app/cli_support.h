@@ -102,6 +102,22 @@ inline Status check_output_is_not_checkpoint(const std::string& option, const st
   return Status::ok();
 }
 
+// Two outputs of one run that name the same file, existing yet or not (links followed, paths
+// made absolute), would have the second written over the first.
+inline Status check_outputs_differ(const std::string& option, const std::string& output,
+                                   const std::string& other_option, const std::string& other) {
+  namespace fs = std::filesystem;
+  if (output.empty() || other.empty()) return Status::ok();
+  std::string a, b;
+  if (!output_target(output, &a) || !output_target(other, &b)) return Status::ok();  // check_output_is_writable says why
+  std::error_code ec1, ec2;
+  const fs::path pa = fs::weakly_canonical(fs::absolute(a, ec1), ec1);
+  const fs::path pb = fs::weakly_canonical(fs::absolute(b, ec2), ec2);
+  if (!ec1 && !ec2 && pa == pb)
+    return Status::error(option + " " + output + ": is also the file of " + other_option + "; choose another output");
+  return Status::ok();
+}
+
 // Whether the folder `dir` takes a new file: a probe file is made there and removed. `what`
 // begins the error line (the option and its value).
 inline Status check_folder_takes_files(const std::string& what, const std::string& dir) {

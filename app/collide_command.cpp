@@ -13,6 +13,7 @@
 #include "common/text_util.h"
 #include "common/tree_io.h"
 #include "validate/collision/collision_experiment.h"
+#include "validate/collision/query_objective.h"
 
 namespace vobb::app {
 namespace {
@@ -148,6 +149,13 @@ CLI::App* add_collide_command(CLI::App& app, CollideFlags* f) {
   c->add_flag("--json", f->json, "Print JSON (DESIGN §7)");
   c->add_option("-o,--output", f->output, "Write the report to this file (atomically) instead of stdout")
       ->check(vobb::app::kPath);
+  c->add_option("--record-queries", f->record_queries,
+                "Also write the run's queries (the colliders, in the mesh's frame) to this query file, for "
+                "`vobb build --queries`; record with other seeds than the runs you report")
+      ->check(vobb::app::kPath);
+  CLI::Option* record = c->get_option("--record-queries");
+  c->add_option("--record-every", f->record_every, "Record every K-th query only (with --record-queries)")
+      ->capture_default_str()->check(CLI::Range(1, 1000000000))->needs(record);
   return c;
 }
 
@@ -173,6 +181,18 @@ int run_collide_command(const CollideFlags& f) {
   opt.seed = f.seed;
   opt.collider_scale = f.collider_scale;
   opt.fcl = !f.no_fcl;
+  collision::QueryStream recorded;
+  recorded.mesh_sha256 = sha;
+  uint64_t seen = 0;
+  bool too_many = false;
+  if (!f.record_queries.empty())
+    opt.on_query = [&](const collision::Collider& c) {
+      if (seen++ % static_cast<uint64_t>(f.record_every) != 0) return;
+      if (recorded.colliders.size() < collision::kMaxRecordedQueries)
+        recorded.colliders.push_back(c);
+      else
+        too_many = true;
+    };
   // Nothing has been written yet (outputs are written whole at the end), so ending here
   // leaves no partial file.
   opt.on_physics_failure = [&](const std::string& why) {
@@ -184,11 +204,19 @@ int run_collide_command(const CollideFlags& f) {
   collision::ExperimentReport report;
   s = collision::run_collision_experiment(mesh.mesh, named, opt, &report);
   if (!s) return refuse(s);
+  if (too_many)
+    return refuse(Status::error("--record-queries: the run made more than " +
+                                std::to_string(collision::kMaxRecordedQueries) +
+                                " queries to record; raise --record-every"));
   const std::string out = f.json ? format_json(f, report) : format_text(f, report);
   if (f.output.empty()) {
     std::fputs(out.c_str(), stdout);
   } else {
     s = write_file_atomic(f.output, out);
+    if (!s) return could_not_finish(s);  // its folder took a file when the run started
+  }
+  if (!f.record_queries.empty()) {
+    s = collision::write_query_stream(recorded, f.record_queries);
     if (!s) return could_not_finish(s);  // its folder took a file when the run started
   }
   if (!report.brute_force_agrees) {

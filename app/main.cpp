@@ -37,6 +37,7 @@
 #include "app/validate_command.h"
 #include "validate/estimators.h"
 #include "app/collide_command.h"
+#include "validate/collision/query_objective.h"
 #include "common/stopwatch.h"
 
 namespace {
@@ -70,6 +71,10 @@ struct BuildFlags {
   int sweeps = 3;
   int threads = 0;             // CPU twin's threads; 0: all the cores this process may use
   double collider_margin = 0;  // world units; 0: the paper's objective
+  // Query files (validate/collision/query_objective.h): when given, the objective is the
+  // recorded queries that hit each box, not its OBV, and no OBV estimator is made.
+  std::vector<std::string> queries;
+  std::string queries_digest;  // SHA-256 of the colliders read from them, for the fingerprint
   std::string checkpoint;    // folder; empty: none
   double time_budget = 0;    // seconds; 0: none
 };
@@ -138,7 +143,8 @@ std::string build_fingerprint(const vobb::Mesh& mesh, const BuildFlags& f, const
          (f.no_merge ? "off" : "on") + "; sweeps " + std::to_string(f.sweeps) + "; m " + std::to_string(f.m) +
          "; estimator " + (gl ? "gl " + gl->renderer() : std::string("cpu")) +
          // Named only when set, so that states saved before the option existed still resume.
-         (f.collider_margin > 0 ? "; collider margin " + vobb::format_double(f.collider_margin) : std::string());
+         (f.collider_margin > 0 ? "; collider margin " + vobb::format_double(f.collider_margin) : std::string()) +
+         (f.queries.empty() ? std::string() : "; recorded queries " + f.queries_digest);
 }
 
 vobb::Status build_tree(const vobb::Mesh& mesh, const BuildFlags& f, const vobb::ObvEstimate& estimate,
@@ -189,7 +195,7 @@ vobb::Status build_tree(const vobb::Mesh& mesh, const BuildFlags& f, const vobb:
           std::snprintf(eta, sizeof eta, "  ~%.0f s left to split", now * (1 - p.done) / (p.done - done0));
         std::fprintf(stderr, "%svobb: level %d/%d  nodes done %zu/%zu  iteration %d/%d  sum %s %.6g  %.1f s%s%s", start,
                      p.level, f.depth, p.node, p.nodes, p.iteration, f.lloyd,
-                     f.collider_margin > 0 ? "grown OBV" : "OBV", p.sum_obv, now, eta, end);
+                     !f.queries.empty() ? "hits" : f.collider_margin > 0 ? "grown OBV" : "OBV", p.sum_obv, now, eta, end);
       } else {
         if (p.sweep_done > 0.02)
           std::snprintf(eta, sizeof eta, "  ~%.0f s left in this sweep",
@@ -244,12 +250,44 @@ vobb::Status build_tree(const vobb::Mesh& mesh, const BuildFlags& f, const vobb:
   return vobb::Status::ok();
 }
 
-int run_build(const std::string& mesh_path, const std::string& out, const BuildFlags& f) {
+// Reads the --queries files for `mesh` into one stream; sets f->queries_digest.
+vobb::Status read_queries(const vobb::Mesh& mesh, BuildFlags* f, std::vector<vobb::collision::Collider>* colliders) {
+  const std::string sha = vobb::mesh_sha256(mesh);
+  colliders->clear();
+  for (const std::string& path : f->queries) {
+    vobb::collision::QueryStream stream;
+    vobb::Status s = vobb::collision::read_query_stream(path, &stream);
+    if (!s) return s;
+    if (stream.mesh_sha256 != sha)
+      return vobb::Status::error(vobb::basename_of(path) + ": recorded for another mesh (sha256 differs)");
+    if (colliders->size() + stream.colliders.size() > vobb::collision::kMaxRecordedQueries)
+      return vobb::Status::error("--queries: more than " + std::to_string(vobb::collision::kMaxRecordedQueries) +
+                                 " colliders in all");
+    colliders->insert(colliders->end(), stream.colliders.begin(), stream.colliders.end());
+  }
+  if (colliders->empty()) return vobb::Status::error("--queries: the files hold no colliders");
+  std::string bytes;
+  for (const vobb::collision::Collider& c : *colliders) {
+    double v[17] = {c.shape == vobb::collision::ColliderShape::kSphere ? 0.0 : 1.0, c.center[0], c.center[1], c.center[2],
+                    c.radius, c.half[0], c.half[1], c.half[2]};
+    for (int k = 0; k < 3; ++k)
+      for (int i = 0; i < 3; ++i) v[8 + 3 * k + i] = c.axes[k][i];
+    bytes.append(reinterpret_cast<const char*>(v), sizeof v);
+  }
+  f->queries_digest = vobb::sha256_hex(bytes.data(), bytes.size());
+  return vobb::Status::ok();
+}
+
+int run_build(const std::string& mesh_path, const std::string& out, BuildFlags f) {
   const auto t0 = std::chrono::steady_clock::now();
   if (!std::isfinite(f.collider_margin) || f.collider_margin < 0)
     return refuse(vobb::Status::error("--collider-margin must be a finite length >= 0"));
   if (f.collider_margin > 0 && f.method != "variational")
     return refuse(vobb::Status::error("--collider-margin applies to --method variational only"));
+  if (!f.queries.empty() && f.method != "variational")
+    return refuse(vobb::Status::error("--queries applies to --method variational only"));
+  if (!f.queries.empty() && f.collider_margin > 0)
+    return refuse(vobb::Status::error("--queries and --collider-margin are two objectives; choose one"));
   // The baseline takes well under a second and has no search to budget or resume.
   if (!f.checkpoint.empty() && f.method != "variational")
     return refuse(vobb::Status::error("--checkpoint applies to --method variational only"));
@@ -270,8 +308,17 @@ int run_build(const std::string& mesh_path, const std::string& out, const BuildF
   }
   std::unique_ptr<vobb::GlObvEstimator> gl;
   std::unique_ptr<vobb::CpuObvEstimator> cpu;
+  std::unique_ptr<vobb::collision::QueryHitObjective> hits;
   vobb::ObvEstimate estimate;
-  if (f.method == "variational") {
+  if (!f.queries.empty()) {
+    std::vector<vobb::collision::Collider> colliders;
+    s = read_queries(loaded.mesh, &f, &colliders);
+    if (!s) return refuse(s);
+    hits = std::make_unique<vobb::collision::QueryHitObjective>(loaded.mesh, colliders);
+    if (!f.quiet) std::fprintf(stderr, "vobb: objective: the hits of %zu recorded queries (no OBV estimator)\n", hits->size());
+    const vobb::collision::QueryHitObjective* h = hits.get();
+    estimate = [h](const std::vector<vobb::Obb>& boxes) { return (*h)(boxes); };
+  } else if (f.method == "variational") {
     s = make_estimator(loaded.mesh, f, &gl, &cpu, &estimate);
     if (!s) return refuse(s);
   }
@@ -798,6 +845,11 @@ int main(int argc, char** argv) {
                     "for colliders of about this radius; 0 is the paper's objective, and at most the mesh's "
                     "bounding-box diagonal. The stored boxes stay tight")
       ->capture_default_str()->check(vobb::app::kFinite);
+  build->add_option("--queries", bf.queries,
+                    "Variational: minimise, instead of OBV, the recorded collider queries that hit each box "
+                    "(query files from `vobb collide --record-queries`, for this mesh; several are merged). "
+                    "An objective for one application's colliders, beyond the paper; no OBV estimator is used")
+      ->check(vobb::app::kPath);
   build->add_option("--checkpoint", bf.checkpoint, "Folder for the build state after each level and sweep; "
                     "a build started again with it resumes and gives the same tree")
       ->check(vobb::app::kPath);
@@ -920,7 +972,14 @@ int main(int argc, char** argv) {
   if (threads > 0) thread_limit.emplace(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
   {
     vobb::Status s = vobb::Status::ok();
-    if (build->parsed()) s = vobb::app::check_output_is_not_input("-o", out, {mesh});
+    if (build->parsed()) {
+      std::vector<std::string> inputs = bf.queries;
+      inputs.push_back(mesh);
+      s = vobb::app::check_output_is_not_input("-o", out, inputs);
+      // The recorded queries replace the OBV estimator that these two choose.
+      if (s && !bf.queries.empty() && (build->count("--m") > 0 || build->count("--backend") > 0))
+        s = vobb::Status::error("--m and --backend choose the OBV estimator, which --queries replaces");
+    }
     if (exp->parsed()) s = vobb::app::check_output_is_not_input("-o", out, {tree_path});
     if (s && build->parsed()) s = vobb::app::check_output_is_not_checkpoint("-o", out, bf.checkpoint, {"state.json"});
     if (s && (build->parsed() || exp->parsed())) s = vobb::app::check_output_is_writable("-o", out);
@@ -934,6 +993,11 @@ int main(int argc, char** argv) {
       inputs.push_back(collide_flags.mesh);
       s = vobb::app::check_output_is_not_input("-o", collide_flags.output, inputs);
       if (s) s = vobb::app::check_output_is_writable("-o", collide_flags.output);
+      if (s && !collide_flags.record_queries.empty()) {
+        s = vobb::app::check_output_is_not_input("--record-queries", collide_flags.record_queries, inputs);
+        if (s) s = vobb::app::check_outputs_differ("--record-queries", collide_flags.record_queries, "-o", collide_flags.output);
+        if (s) s = vobb::app::check_output_is_writable("--record-queries", collide_flags.record_queries);
+      }
     }
     if (!s) return refuse(s);
   }

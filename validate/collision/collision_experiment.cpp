@@ -66,7 +66,7 @@ class QueryEngine {
  public:
   QueryEngine(const Mesh& mesh, const std::vector<NamedTree>& trees, const ExperimentOptions& opt,
               ExperimentReport* report)
-      : mesh_(mesh), scale_(mesh_scale(mesh)), report_(report), tamper_(opt.tamper_answer), brute_force_(mesh) {
+      : mesh_(mesh), scale_(mesh_scale(mesh)), report_(report), tamper_(opt.tamper_answer), on_query_(opt.on_query), brute_force_(mesh) {
     for (const NamedTree& t : trees) traversals_.emplace_back(mesh, *t.tree);
     if (opt.fcl) {
       fcl_own_ = FclModel::fcl_own(mesh);
@@ -85,6 +85,7 @@ class QueryEngine {
 
   // One query; returns brute force's touching faces.
   const std::vector<int32_t>& query(const Collider& c) {
+    if (on_query_) on_query_(c);
     const PreparedCollider pc = prepare_collider(c, scale_);
     ++report_->queries;
     const auto t0 = Clock::now();
@@ -127,6 +128,7 @@ class QueryEngine {
   const double scale_;
   ExperimentReport* report_;
   const std::function<void(size_t, uint64_t, std::vector<int32_t>*)> tamper_;
+  const std::function<void(const Collider&)> on_query_;
   const BruteForce brute_force_;
   std::vector<TreeTraversal> traversals_;
   std::unique_ptr<FclModel> fcl_own_;

@@ -55,6 +55,9 @@ struct ExperimentOptions {
   // and that tree's answer (its touching faces, sorted) before the answer is compared with
   // brute force; it may change the answer. Empty: answers are compared as found.
   std::function<void(size_t tree, uint64_t query, std::vector<int32_t>* faces)> tamper_answer;
+  // Called with every query's collider (model frame), in query order, before it is tested; may
+  // be empty. For recording the scene's query stream (query_objective.h).
+  std::function<void(const Collider&)> on_query;
 };
 
 struct FclCounts {

@@ -1,0 +1,46 @@
+// Trees as their builder measured them, for tests that compare builders' sums with no slack
+// (the variational builder's tests and the recorded-query objective's).
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <vector>
+
+#include "common/mesh.h"
+#include "common/tree.h"
+#include "fast/obbtree_builder.h"
+#include "fast/variational_builder.h"
+
+namespace vobb::test {
+
+// A tree with the orientation its builder measured each node's faces in: the variational
+// search's axes (its last checkpoint state), or the baseline's covariance axes (the search's
+// starting state). The written boxes are not that measure: fit_obb orthonormalizes the axes
+// again (not bit for bit the same) and pads the box by a few ulps, either of which may move a
+// silhouette texel. Through tight boxes of these axes the sums below are the builder's own,
+// and comparisons between them need no slack.
+struct Measured {
+  Tree tree;
+  std::vector<std::array<Vec3, 3>> axes;  // per node
+};
+
+inline Measured build_measured(const Mesh& mesh, VariationalOptions o, const ObvEstimate& estimate,
+                               VariationalReport* report = nullptr) {
+  VariationalState last;
+  o.checkpoint = [&](const VariationalState& st) { last = st; };
+  Measured out{build_variational(mesh, o, estimate, nullptr, report), {}};
+  out.axes = last.axes;
+  EXPECT_EQ(out.axes.size(), out.tree.nodes.size());
+  return out;
+}
+
+inline Measured baseline_measured(const Mesh& mesh, int depth) {
+  ObbTreeOptions b;
+  b.depth = depth;
+  Measured out{build_obbtree(mesh, b), {}};
+  for (const TreeNode& n : out.tree.nodes) out.axes.push_back(covariance_axes(mesh, n.faces));
+  return out;
+}
+
+}  // namespace vobb::test
