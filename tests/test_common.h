@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -92,10 +93,27 @@ inline long off_triangle_count(const std::string& path) {
   return triangles;
 }
 
-inline std::string temp_path(const std::string& name) {
+inline std::string temp_dir() {
   const char* dir = std::getenv("TMPDIR");
-  return std::string(dir ? dir : "/tmp") + "/vobb_test_" + std::to_string(::getpid()) + "_" + name;
+  return dir ? dir : "/tmp";
 }
+inline std::string temp_prefix() { return "vobb_test_" + std::to_string(::getpid()) + "_"; }
+inline std::string temp_path(const std::string& name) { return temp_dir() + "/" + temp_prefix() + name; }
+
+// What a test process leaves under its temp_path names (a test that stops at a failed ASSERT,
+// or one that does not remove its files) goes when the process exits: every entry of the temp
+// folder that begins with this process's prefix, files and folders alike.
+struct TempCleaner {
+  ~TempCleaner() {
+    std::error_code ec;
+    const std::string prefix = temp_prefix();
+    std::vector<std::filesystem::path> mine;
+    for (const auto& e : std::filesystem::directory_iterator(temp_dir(), ec))
+      if (e.path().filename().string().rfind(prefix, 0) == 0) mine.push_back(e.path());
+    for (const auto& p : mine) std::filesystem::remove_all(p, ec);
+  }
+};
+inline TempCleaner temp_cleaner;
 
 // Runs the `vobb` command line with `args` (a shell word list): exit code, stdout, stderr.
 struct CliRun {
