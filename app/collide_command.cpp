@@ -204,10 +204,6 @@ int run_collide_command(const CollideFlags& f) {
   collision::ExperimentReport report;
   s = collision::run_collision_experiment(mesh.mesh, named, opt, &report);
   if (!s) return refuse(s);
-  if (too_many)
-    return refuse(Status::error("--record-queries: the run made more than " +
-                                std::to_string(collision::kMaxRecordedQueries) +
-                                " queries to record; raise --record-every"));
   const std::string out = f.json ? format_json(f, report) : format_text(f, report);
   if (f.output.empty()) {
     std::fputs(out.c_str(), stdout);
@@ -215,6 +211,11 @@ int run_collide_command(const CollideFlags& f) {
     s = write_file_atomic(f.output, out);
     if (!s) return could_not_finish(s);  // its folder took a file when the run started
   }
+  // The report is written whole first: a recording over its limit loses only itself.
+  if (too_many)
+    return refuse(Status::error("--record-queries: the run made more than " +
+                                std::to_string(collision::kMaxRecordedQueries) +
+                                " queries to record, so none were written; raise --record-every"));
   if (!f.record_queries.empty()) {
     s = collision::write_query_stream(recorded, f.record_queries);
     if (!s) return could_not_finish(s);  // its folder took a file when the run started

@@ -14,6 +14,7 @@
 set -euo pipefail
 vobb=$1 out=$2 seeds=${3:-5} every=${4:-2}
 train=${TRAIN_SEEDS:-101 102}
+[ -n "${train// /}" ] || { echo "collide_queries_bench.sh: TRAIN_SEEDS names no seed" >&2; exit 2; }
 mkdir -p "$out"
 for s in $(seq 1 "$seeds"); do
   for t in $train; do

@@ -105,11 +105,12 @@ inline std::string temp_path(const std::string& name) { return temp_dir() + "/" 
 // folder that begins with this process's prefix, files and folders alike.
 struct TempCleaner {
   ~TempCleaner() {
+    // Never throws (a destructor at exit): every step takes an error code.
     std::error_code ec;
     const std::string prefix = temp_prefix();
     std::vector<std::filesystem::path> mine;
-    for (const auto& e : std::filesystem::directory_iterator(temp_dir(), ec))
-      if (e.path().filename().string().rfind(prefix, 0) == 0) mine.push_back(e.path());
+    for (std::filesystem::directory_iterator it(temp_dir(), ec), end; !ec && it != end; it.increment(ec))
+      if (it->path().filename().string().rfind(prefix, 0) == 0) mine.push_back(it->path());
     for (const auto& p : mine) std::filesystem::remove_all(p, ec);
   }
 };

@@ -56,7 +56,11 @@ Status write_query_stream(const QueryStream& stream, const std::string& path) {
     }
     for (size_t k = 0; k < v.size(); ++k) {
       if (k) out += ", ";
-      append_double(&out, v[k]);
+      // "-0" would read back as the integer 0, that is +0: keep the sign with a fraction.
+      if (v[k] == 0 && std::signbit(v[k]))
+        out += "-0.0";
+      else
+        append_double(&out, v[k]);
     }
     out += "]";
   }
@@ -66,6 +70,11 @@ Status write_query_stream(const QueryStream& stream, const std::string& path) {
 
 Status read_query_stream(const std::string& path, QueryStream* stream) {
   const std::string display = basename_of(path);
+  uint64_t size = 0;
+  if (Status s = check_regular_file(path, display, "query file", &size); !s) return s;
+  if (size > kMaxQueryFileBytes)
+    return Status::error(display + ": larger than " + std::to_string(kMaxQueryFileBytes >> 30) +
+                         " GiB; record fewer queries (--record-every)");
   std::string text;
   if (Status s = read_regular_file(path, display, "query file", &text); !s) return s;
   auto fail = [&](const std::string& why) { return Status::error(display + ": " + why); };
@@ -132,22 +141,29 @@ QueryHitObjective::QueryHitObjective(const Mesh& mesh, const std::vector<Collide
 uint64_t QueryHitObjective::hits(const Obb& box) const {
   const PreparedBox b = prepare_box(box);
   // The screen's pad. Write S = b.extent + reach_ (reach_ >= |s| + r + the mesh's scale M
-  // for every collider), e = b.orth_error and u the unit round-off.
+  // for every collider), e = b.orth_error and u the unit round-off. (One far collider makes
+  // S large for every box; the counts stay right, the screen only prunes less.)
   //  - Sphere (centre s, radius r): may_touch_box accepts only when its computed distance is
   //    at most r + slack + margin, and (its derivation) the true distance to B is at least the
   //    computed one less margin; slack <= 32u(|s| + M + r) <= 32u S and margin <=
   //    3(e + 4u)(|s - c_B| + |h|) + 32u(|s| + extent + r) <= 9(e + 4u) S + 32u S, using
   //    |h| <= 2 sum h_k |a_k| (axes within e of unit, e small). So an accepted sphere's ball
   //    comes within slack + 2 margin <= 18 e S + 200u S of B.
-  //  - Box: may_touch_box accepts only when no axis among the 15 separates the two by more
+  //  - Box: may_touch_box accepts only when no axis among its 15 separates the two by more
   //    than 32u |L| scale in computed terms, 44u |L| scale in exact terms (its 12u
-  //    round-off). For two rectangular boxes those 15 directions include the one that realises
-  //    their distance, so the distance is at most 44u scale <= 44u S; axes off orthonormal by
-  //    e move a face of B by at most 2e times its extent: 46u S + 2e S in all.
+  //    round-off). That bounds the distance only up to a factor: where the nearest features
+  //    are a face and a vertex, the face's normal is among the 15 and shows the whole
+  //    distance; at a vertex of the Minkowski difference the best of the 15 shows at least
+  //    1/sqrt(3) of it (diagonal offsets); where two edges are nearly parallel the rounded
+  //    cross product is off by about u / angle, and no closed bound is derived here. The
+  //    pad below leaves a factor of 20 over the first two cases (sqrt(3) 46u S + 2e S), and
+  //    the test places box colliders tangent and just beyond, at small angles too.
   //  - B lies in the hull of its corners; each computed corner coordinate, c + sum +-h_k a_k,
   //    is off by at most 6u S.
-  // Pad (32e + 1024u) S covers all three with room: the screen drops no collider that
-  // may_touch_box accepts (tested: QueryObjective.HitsAreMayTouchBoxOverEveryCollider).
+  // Pad (32e + 1024u) S covers the sphere and the corners with room, and the box as said.
+  // Tested (HitsAtScale.HitsAreMayTouchBoxOverEveryCollider): colliders at the very edge of
+  // may_touch_box's acceptance are all kept; that test fails with 16u S in place of 1024u S
+  // and passes with 64u S, so the pad is some 16 times what the probed edge needs.
   const double pad = (32 * b.orth_error + 1024 * kU) * (b.extent + reach_);
   Aabb q;
   for (int s = 0; s < 8; ++s) {

@@ -11,9 +11,12 @@
 // A recorded query "hits" a box when the collider's outward-rounded bounds meet the box's
 // outward-padded axis-aligned bounds (an index screen, part of the definition) and
 // may_touch_box (contact_predicates.h), the traversal's own pruning test, accepts it. The
-// screen's pad is derived in the .cpp so that it drops only colliders that may_touch_box
-// rejects: the count is the traversal's "opens this box" on the stream (tested against
-// may_touch_box alone, tangent colliders included).
+// screen's pad is chosen (see the .cpp) so that it drops only colliders that may_touch_box
+// rejects: derived for spheres; for boxes with a wide margin over the face-normal case, not
+// proven for every edge-edge case. So the count is the traversal's "opens this box" on the
+// stream, tested equal to may_touch_box alone on tangent and near-tangent colliders of both
+// kinds; a collider it could miss would lie within round-off of touching, one count off in a
+// heuristic objective.
 // Training on a stream and measuring on the same stream would measure the fit, not the tree:
 // record the training stream with other seeds (or other sessions) than the runs reported.
 //
@@ -36,9 +39,13 @@
 
 namespace vobb::collision {
 
-// Most colliders a query file may hold (about 1.5 GB of text at the most; each takes 120 bytes
-// in memory once read).
-constexpr size_t kMaxRecordedQueries = 10000000;
+// Most colliders a recording or a build may hold: 5 million, about 1.6 GB of text if all are
+// boxes (some 325 bytes each; spheres about 90), 136 bytes each in memory once read.
+constexpr size_t kMaxRecordedQueries = 5000000;
+// Largest query file read (2 GiB): the file is parsed whole, so reading one takes about
+// 2.5 times its size in memory (text, parsed document, colliders) at the peak. A larger file
+// is refused before it is read.
+constexpr uint64_t kMaxQueryFileBytes = uint64_t(1) << 31;
 
 struct QueryStream {
   std::string mesh_sha256;            // the mesh whose frame the colliders are in
@@ -48,7 +55,8 @@ struct QueryStream {
 Status write_query_stream(const QueryStream& stream, const std::string& path);
 // One-line errors naming the file: not a query file, a collider that is not finite, a radius
 // or half extent that is not positive and normal, box axes further from orthonormal than
-// box_defect allows (common/obb.h), coordinates beyond 2^240, more than kMaxRecordedQueries.
+// box_defect allows (common/obb.h), coordinates beyond 2^240, more than kMaxRecordedQueries
+// colliders, a file over kMaxQueryFileBytes.
 Status read_query_stream(const std::string& path, QueryStream* stream);
 
 class QueryHitObjective {

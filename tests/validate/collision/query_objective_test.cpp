@@ -10,6 +10,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <array>
 #include <cstring>
 #include <fstream>
 #include <random>
@@ -46,9 +47,9 @@ uint64_t every_collider(const std::vector<Collider>& colliders, double scale, co
 }
 
 // 2,000 random spheres and boxes around a torus, and for each of 40 random boxes and their
-// axis-aligned copies 26 spheres tangent to it (centre at distance r from a corner, an edge's
-// midpoint or a face's centre, along the outward direction) and 4 x 26 just beyond: the count
-// equals may_touch_box over every collider, at unit scale and scaled by 2^-140 and 2^200.
+// axis-aligned copies, spheres and boxes at the edge of may_touch_box's acceptance beyond each
+// corner, edge and face (below): the count equals may_touch_box over every collider, at unit
+// scale and scaled by 2^-140 and 2^200.
 class HitsAtScale : public ::testing::TestWithParam<double> {};
 
 TEST_P(HitsAtScale, HitsAreMayTouchBoxOverEveryCollider) {
@@ -69,6 +70,7 @@ TEST_P(HitsAtScale, HitsAreMayTouchBoxOverEveryCollider) {
     boxes.push_back(b);
   }
   std::vector<Collider> colliders;
+  size_t near_pairs = 0;
   for (int q = 0; q < 2000; ++q) {
     Collider c;
     c.center = s * 2.0 * Vec3(u(rng), u(rng), u(rng));
@@ -93,7 +95,14 @@ TEST_P(HitsAtScale, HitsAreMayTouchBoxOverEveryCollider) {
     b.axes = {Vec3::UnitX(), Vec3::UnitY(), Vec3::UnitZ()};
     boxes.push_back(b);
   }
-  for (const Obb& b : boxes)
+  // Along each of the 26 outward directions of each box, a sphere and a box collider (its
+  // axes the box's turned by 0, 1e-9 or 1e-4 rad) are pushed out from touching until
+  // may_touch_box rejects them (bisection on the gap t, from 0 to 2^-20 of the box's size):
+  // the last accepted and the first rejected gap both go in. The screen must keep the first,
+  // which its pad alone keeps on the axis-aligned copies.
+  std::uniform_int_distribution<int> pick(0, 2);
+  for (const Obb& b : boxes) {
+    const PreparedBox pb = prepare_box(b);
     for (int dx = -1; dx <= 1; ++dx)
       for (int dy = -1; dy <= 1; ++dy)
         for (int dz = -1; dz <= 1; ++dz) {
@@ -104,15 +113,45 @@ TEST_P(HitsAtScale, HitsAreMayTouchBoxOverEveryCollider) {
             on += d[k] * b.half[k] * b.axes[k];
             out += d[k] * b.axes[k];
           }
-          // Tangent, and 2^-50 to 2^-44 of the radius beyond (a few to some 60 ulps).
-          for (double beyond : {0.0, 0x1p-50, 0x1p-48, 0x1p-46, 0x1p-44}) {
+          out.normalize();
+          for (ColliderShape shape : {ColliderShape::kSphere, ColliderShape::kBox}) {
             Collider c;
-            c.shape = ColliderShape::kSphere;
-            c.radius = s * 0.1;
-            c.center = on + c.radius * (1 + beyond) * out.normalized();
-            colliders.push_back(c);
+            c.shape = shape;
+            double reach;  // the collider's support along -out
+            if (shape == ColliderShape::kSphere) {
+              c.radius = s * 0.1;
+              reach = c.radius;
+            } else {
+              const double angle = std::array<double, 3>{0, 1e-9, 1e-4}[pick(rng)];
+              const Eigen::Matrix3d turn =
+                  Eigen::AngleAxisd(angle, Vec3(u(rng), u(rng), u(rng)).normalized()).toRotationMatrix();
+              reach = 0;
+              for (int k = 0; k < 3; ++k) {
+                c.axes[k] = turn * b.axes[k];
+                c.half[k] = s * (0.05 + 0.05 * (u(rng) + 1));
+                reach += c.half[k] * std::abs(c.axes[k].dot(out));
+              }
+            }
+            auto at = [&](double t) {
+              Collider moved = c;
+              moved.center = on + (reach + t) * out;
+              return moved;
+            };
+            auto accepted = [&](double t) { return may_touch_box(prepare_collider(at(t), scale), pb); };
+            if (!accepted(0)) continue;  // rounding put the touching pose just outside
+            double lo = 0, hi = std::ldexp(b.half.maxCoeff(), -20);
+            if (accepted(hi)) continue;
+            for (int i = 0; i < 200; ++i) {
+              const double mid = lo + (hi - lo) / 2;
+              if (mid == lo || mid == hi) break;
+              (accepted(mid) ? lo : hi) = mid;
+            }
+            colliders.push_back(at(lo));
+            colliders.push_back(at(hi));
+            ++near_pairs;
           }
         }
+  }
   const QueryHitObjective objective(mesh, colliders);
   ASSERT_EQ(objective.size(), colliders.size());
   const std::vector<double> batch = objective(boxes);
@@ -123,7 +162,9 @@ TEST_P(HitsAtScale, HitsAreMayTouchBoxOverEveryCollider) {
     EXPECT_EQ(batch[i], static_cast<double>(want)) << "box " << i;
     total += want;
   }
-  // Not vacuous: boxes are hit, and not by everything.
+  // Not vacuous: most directions gave an edge of acceptance; boxes are hit, and not by
+  // everything.
+  EXPECT_GT(near_pairs, 80u * 26);
   EXPECT_GT(total, 80u);
   EXPECT_LT(total, 80u * colliders.size() / 2);
 }
@@ -153,6 +194,16 @@ TEST(QueryObjective, FilesRoundTripBitForBit) {
     }
     w.colliders.push_back(c);
   }
+  // Whole numbers and signed zeros, which JSON readers take as integers ("-0" would come back
+  // as +0).
+  Collider z;
+  z.center = Vec3(-0.0, 0.0, 3.0);
+  z.radius = 2.0;
+  w.colliders.push_back(z);
+  z.shape = ColliderShape::kBox;
+  z.half = Vec3(1, 2, 4);
+  z.axes = {Vec3(-0.0, 1, 0), Vec3(1, -0.0, 0), Vec3(0, 0, -1)};
+  w.colliders.push_back(z);
   const std::string path = test::temp_path("queries.json");
   ASSERT_TRUE(write_query_stream(w, path));
   QueryStream r;
@@ -335,13 +386,31 @@ TEST(QueryObjectiveCli, RecordBuildCollideAndRefusals) {
       {"collide " + mesh_path + " " + base_path + " --static --colliders 10 -o " + hits_path + " --record-queries " + hits_path,
        "is also the file of -o"},
   };
+  const std::string q1_bytes = test::slurp(q1);
   for (const Case& c : cases) {
     r = vobb_cli(c.args);
     EXPECT_EQ(r.code, 2) << c.args << "\n" << r.err;
     EXPECT_EQ(lines_of(r.err), 1u) << r.err;
     EXPECT_NE(r.err.find(c.says), std::string::npos) << r.err;
     EXPECT_FALSE(test::exists(hits_path)) << c.args;
+    EXPECT_EQ(test::slurp(q1), q1_bytes) << c.args;
   }
+  // A checkpoint saved with one recording is refused under another: the fingerprint names the
+  // recorded colliders.
+  const std::string ck = test::temp_path("q_ck");
+  r = vobb_cli("build " + mesh_path + " -o " + hits_path + " --depth 2 --quiet --checkpoint " + ck + " --queries " + q1);
+  ASSERT_EQ(r.code, 0) << r.err;
+  std::remove(hits_path.c_str());
+  r = vobb_cli("build " + mesh_path + " -o " + hits_path + " --depth 2 --quiet --checkpoint " + ck + " --queries " + q2);
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_EQ(lines_of(r.err), 1u) << r.err;
+  EXPECT_NE(r.err.find("checkpoint of another build"), std::string::npos) << r.err;
+  EXPECT_FALSE(test::exists(hits_path));
+  // The same recording resumes it.
+  r = vobb_cli("build " + mesh_path + " -o " + hits_path + " --depth 2 --checkpoint " + ck + " --queries " + q1);
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("resuming from"), std::string::npos) << r.err;
+  std::remove(hits_path.c_str());
   // An empty recording (every collider missed the first tree's root... or a hand-made file):
   // nothing to minimise.
   QueryStream empty;
