@@ -849,7 +849,8 @@ int main(int argc, char** argv) {
                     "Variational: minimise, instead of OBV, the recorded collider queries that hit each box "
                     "(query files from `vobb collide --record-queries`, for this mesh; several are merged). "
                     "An objective for one application's colliders, beyond the paper; no OBV estimator is used")
-      ->check(vobb::app::kPath);
+      ->check(vobb::app::kPath)
+      ->allow_extra_args(false);  // one file per --queries, so that a MESH after it stays the MESH
   build->add_option("--checkpoint", bf.checkpoint, "Folder for the build state after each level and sweep; "
                     "a build started again with it resumes and gives the same tree")
       ->check(vobb::app::kPath);

@@ -364,6 +364,9 @@ TEST(QueryObjectiveCli, RecordBuildCollideAndRefusals) {
   EXPECT_EQ(t.method, "variational");
   r = vobb_cli("collide " + mesh_path + " " + base_path + " " + hits_path + " --static --colliders 100 --seed 6");
   EXPECT_EQ(r.code, 0) << r.err;
+  // Each --queries takes one file: a MESH after it is still the MESH.
+  r = vobb_cli("build --queries " + q1 + " " + mesh_path + " -o " + hits_path + " --depth 1 --quiet");
+  EXPECT_EQ(r.code, 0) << r.err;
 
   // Refusals: exit 2, one line, before anything is written.
   ASSERT_EQ(vobb_cli("build " + octa_path + " -o " + base_path + " --method obbtree --depth 1").code, 0);
