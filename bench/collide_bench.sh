@@ -11,6 +11,8 @@
 # Trees and runs already in OUTDIR are kept, so an interrupted run can be started again.
 # DEPTHS and MESHES (environment) narrow the set, e.g. to run two meshes side by side.
 set -euo pipefail
+# shellcheck source=bench/collide_runs.sh
+. "$(dirname "$0")/collide_runs.sh"
 vobb=$1 out=$2 seeds=${3:-5} margin=${4:-}
 mkdir -p "$out"
 if [ -n "$margin" ]; then
@@ -37,15 +39,7 @@ print(repr($margin * 0.5 * math.dist(b['min'], b['max'])))")
       /usr/bin/time -f "$mesh $method depth $depth: %e s wall, %U s user" -a -o "$out/build_times.txt" \
         "$vobb" build "$off" -o "$tree" "${args[@]}" --depth "$depth" --backend cpu --quiet
     done
-    for seed in $(seq 1 "$seeds"); do
-      for mode in dynamic static; do
-        run=$out/run_${mesh}_${depth}_${mode}_s$seed${margin:+_margin$margin}.json
-        [ -s "$run" ] && continue
-        if [ "$mode" = dynamic ]; then scene="--colliders 1000 --seconds 10"; else scene="--static --colliders 5000"; fi
-        # shellcheck disable=SC2086
-        "$vobb" collide "$off" "${trees[@]}" $scene --seed "$seed" --json -o "$run"
-      done
-    done
+    collide_runs "$vobb" "$off" "$out" "$mesh" "$depth" "$seeds" "${margin:+_margin$margin}" "${trees[@]}"
   done
 done
 python3 "$(dirname "$0")/collide_summary.py" "$out"/run_*.json

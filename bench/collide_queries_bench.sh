@@ -12,6 +12,8 @@
 # are the recording's seeds; DEPTHS and MESHES narrow the set. Files already in OUTDIR are
 # kept, so an interrupted run can be started again.
 set -euo pipefail
+# shellcheck source=bench/collide_runs.sh
+. "$(dirname "$0")/collide_runs.sh"
 vobb=$1 out=$2 seeds=${3:-5} every=${4:-2}
 train=${TRAIN_SEEDS:-101 102}
 [ -n "${train// /}" ] || { echo "collide_queries_bench.sh: TRAIN_SEEDS names no seed" >&2; exit 2; }
@@ -38,15 +40,7 @@ for depth in ${DEPTHS:-8 12}; do
       "$vobb" build "$off" -o "$tree" "${queries[@]}" --depth "$depth" --quiet
     trees=("$base" "$tree")
     [ ! -s "$out/${mesh}_variational_$depth.json" ] || trees+=("$out/${mesh}_variational_$depth.json")
-    for seed in $(seq 1 "$seeds"); do
-      for mode in dynamic static; do
-        run=$out/run_${mesh}_${depth}_${mode}_s${seed}_queries.json
-        [ -s "$run" ] && continue
-        if [ "$mode" = dynamic ]; then scene="--colliders 1000 --seconds 10"; else scene="--static --colliders 5000"; fi
-        # shellcheck disable=SC2086
-        "$vobb" collide "$off" "${trees[@]}" $scene --seed "$seed" --json -o "$run"
-      done
-    done
+    collide_runs "$vobb" "$off" "$out" "$mesh" "$depth" "$seeds" _queries "${trees[@]}"
   done
 done
 python3 "$(dirname "$0")/collide_summary.py" "$out"/run_*_queries.json
