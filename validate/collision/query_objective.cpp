@@ -156,8 +156,8 @@ uint64_t QueryHitObjective::hits(const Obb& box) const {
   //    distance; at a vertex of the Minkowski difference the best of the 15 shows at least
   //    1/sqrt(3) of it (diagonal offsets); where two edges are nearly parallel the rounded
   //    cross product is off by about u / angle, and no closed bound is derived here. The
-  //    pad below leaves a factor of 20 over the first two cases (sqrt(3) 46u S + 2e S), and
-  //    the test places box colliders tangent and just beyond, at small angles too.
+  //    pad below is at least 9 times the first two cases' sqrt(3) (46u S + 2e S), and the
+  //    test places box colliders tangent and just beyond, at small angles too.
   //  - B lies in the hull of its corners; each computed corner coordinate, c + sum +-h_k a_k,
   //    is off by at most 6u S.
   // Pad (32e + 1024u) S covers the sphere and the corners with room, and the box as said.
@@ -166,11 +166,7 @@ uint64_t QueryHitObjective::hits(const Obb& box) const {
   // and passes with 64u S, so the pad is some 16 times what the probed edge needs.
   const double pad = (32 * b.orth_error + 1024 * kU) * (b.extent + reach_);
   Aabb q;
-  for (int s = 0; s < 8; ++s) {
-    Vec3 p = box.center;
-    for (int k = 0; k < 3; ++k) p += ((s >> k) & 1 ? 1.0 : -1.0) * box.half[k] * box.axes[k];
-    q.extend(p);
-  }
+  for (const Vec3& p : corners(box)) q.extend(p);
   q.lo.array() -= pad;
   q.hi.array() += pad;
   uint64_t n = 0;
