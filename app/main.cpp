@@ -16,6 +16,8 @@
 #include <string>
 
 #include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+#include <functional>
 #include <unistd.h>
 
 #include "app/cli_support.h"
@@ -30,6 +32,7 @@
 #include "exact/outer_volume.h"
 #include "fast/cpu_estimator.h"
 #include "fast/gl_estimator.h"
+#include "fast/poly_solver.h"
 #include "fast/obbtree_builder.h"
 #include "fast/tree_figure.h"
 #include "fast/variational_builder.h"
@@ -99,7 +102,14 @@ constexpr int kAutoGlFromM = 128;
 // the CPU twin, which is faster there (docs/BENCHMARKS.md) and gives the same texels in double.
 // No GL context is made where the CPU twin is chosen by m.
 vobb::Status make_estimator(const vobb::Mesh& mesh, const BuildFlags& f, std::unique_ptr<vobb::GlObvEstimator>* gl,
-                            std::unique_ptr<vobb::CpuObvEstimator>* cpu, vobb::ObvEstimate* estimate) {
+                            std::unique_ptr<vobb::CpuObvEstimator>* cpu, std::unique_ptr<vobb::PolyObvSolver>* poly,
+                            vobb::ObvEstimate* estimate) {
+  if (f.backend == "poly") {  // the polyhedral solver's double evaluation: no m, no GL
+    *poly = std::make_unique<vobb::PolyObvSolver>(mesh);
+    const vobb::PolyObvSolver* p = poly->get();
+    *estimate = [p](const std::vector<vobb::Obb>& boxes) { return p->estimate(boxes); };
+    return vobb::Status::ok();
+  }
   if (f.backend == "gl" || (f.backend == "auto" && f.m >= kAutoGlFromM)) {
     vobb::Status s = vobb::GlObvEstimator::create(mesh, gl, /*device_only=*/f.backend == "auto");
     if (!s && f.backend == "gl") return s;
@@ -141,7 +151,7 @@ std::string build_fingerprint(const vobb::Mesh& mesh, const BuildFlags& f, const
          "; lloyd " + std::to_string(f.lloyd) + "; seed " + std::to_string(f.seed) + "; axis search " +
          (f.no_axis_search ? "off" : "on") + "; adjust " + (f.adjust ? "on" : "off") + "; merge " +
          (f.no_merge ? "off" : "on") + "; sweeps " + std::to_string(f.sweeps) + "; m " + std::to_string(f.m) +
-         "; estimator " + (gl ? "gl " + gl->renderer() : std::string("cpu")) +
+         "; estimator " + (gl ? "gl " + gl->renderer() : f.backend == "poly" ? std::string("poly") : std::string("cpu")) +
          // Named only when set, so that states saved before the option existed still resume.
          (f.collider_margin > 0 ? "; collider margin " + vobb::format_double(f.collider_margin) : std::string()) +
          (f.queries.empty() ? std::string() : "; recorded queries " + f.queries_digest);
@@ -308,6 +318,7 @@ int run_build(const std::string& mesh_path, const std::string& out, BuildFlags f
   }
   std::unique_ptr<vobb::GlObvEstimator> gl;
   std::unique_ptr<vobb::CpuObvEstimator> cpu;
+  std::unique_ptr<vobb::PolyObvSolver> poly;
   std::unique_ptr<vobb::collision::QueryHitObjective> hits;
   vobb::ObvEstimate estimate;
   if (!f.queries.empty()) {
@@ -319,7 +330,7 @@ int run_build(const std::string& mesh_path, const std::string& out, BuildFlags f
     const vobb::collision::QueryHitObjective* h = hits.get();
     estimate = [h](const std::vector<vobb::Obb>& boxes) { return (*h)(boxes); };
   } else if (f.method == "variational") {
-    s = make_estimator(loaded.mesh, f, &gl, &cpu, &estimate);
+    s = make_estimator(loaded.mesh, f, &gl, &cpu, &poly, &estimate);
     if (!s) return refuse(s);
   }
   vobb::Tree tree;
@@ -481,8 +492,15 @@ int run_certify(const std::string& mesh_path, const std::string& tree_path, bool
   return kExitOk;
 }
 
+// The certified error of an estimate E: max(|E - lo|, |E - hi|) for an enclosure [lo, hi] of the
+// exact OBV, rounded up (one ulp above the nearest double is above the true value).
+double certified_error(double e, const vobb::PolyObv& r) {
+  const double d = std::max(std::abs(e - r.lo), std::abs(e - r.hi));
+  return d == 0 ? 0.0 : std::nextafter(d, INFINITY);
+}
+
 int run_obv(const std::string& mesh_path, const std::string& boxes_path, const std::vector<int>& ms,
-            const std::string& backend, bool json, bool rational) {
+            const std::string& backend, bool json, bool rational, bool r_bound) {
   vobb::LoadedMesh mesh;
   vobb::Status s = vobb::load_solid(mesh_path, &mesh);
   if (!s) return refuse(s);
@@ -491,6 +509,7 @@ int run_obv(const std::string& mesh_path, const std::string& boxes_path, const s
   s = vobb::read_boxes(boxes_path, &boxes);
   if (!s) return refuse(s);
   const bool want_exact = backend == "exact" || backend == "all";
+  const bool want_poly = backend == "poly" || backend == "all";
   bool want_cpu = backend == "cpu" || backend == "all";
   // A GL context only where GL is asked for; auto and all fall back to the CPU twin.
   std::unique_ptr<vobb::GlObvEstimator> gl;
@@ -515,82 +534,86 @@ int run_obv(const std::string& mesh_path, const std::string& boxes_path, const s
     }
   }
   const size_t n = boxes.size();
-  // Estimates per backend and m: values and seconds per box (GL: the batch's time amortised).
+  // Estimates per backend and m, each batch on every core: values, and the batch's seconds
+  // amortised per box.
   struct Run {
     std::string backend;
-    int m;
+    int m;  // 0: none (the polyhedral solver)
     std::vector<double> obv, seconds;
   };
-  // A rigorous bound on each estimate's error against the exact OBV (validate/estimators.h):
-  // the CPU twin's own, or GL's with its float deviation; and whether the box was unresolved
-  // (texel_plan.h: estimated at half its volume, the bound the other half).
-  const vobb::validate::EstimatorSet bound_source(mesh.mesh, false);
-  std::vector<char> unresolved(n, 0);
-  auto bounds_of = [&](const Run& r) {
-    std::vector<double> out(n);
-    for (size_t i = 0; i < n; ++i) {
-      bool u = false;
-      out[i] = bound_source.bound(r.backend == "cpu" ? vobb::validate::Backend::kCpu : vobb::validate::Backend::kGl,
-                                  boxes[i], r.m, &u);
-      unresolved[i] |= u;
-    }
-    return out;
+  auto timed = [n](const std::string& name, int m, const std::function<std::vector<double>()>& f) {
+    const auto t0 = std::chrono::steady_clock::now();
+    Run r{name, m, f(), {}};
+    r.seconds.assign(n, n ? seconds_since(t0) / n : 0.0);
+    return r;
   };
   std::vector<Run> runs;
+  const bool any_cubemap = want_cpu || gl;
+  // The polyhedral solver's enclosures: the poly backend's values, and every cubemap
+  // estimate's certified error.
+  std::vector<vobb::PolyObv> poly;
+  if (want_poly || any_cubemap) {
+    const vobb::PolyObvSolver solver(mesh.mesh);
+    Run r = timed("poly", 0, [&] {
+      poly = solver.evaluate(boxes);
+      std::vector<double> e(n);
+      for (size_t i = 0; i < n; ++i) e[i] = poly[i].estimate;
+      return e;
+    });
+    if (want_poly) runs.push_back(std::move(r));
+    for (size_t i = 0; i < n; ++i)
+      if (poly[i].exact_box)
+        std::fprintf(stderr, "vobb: note: box %zu: %s; its interval comes from the exact rational instead\n", i,
+                     poly[i].why.c_str());
+  }
   if (want_cpu) {
     const vobb::CpuObvEstimator cpu(mesh.mesh);
-    for (int m : ms) {
-      Run r{"cpu", m, {}, {}};
-      for (const vobb::Obb& b : boxes) {
-        const auto t0 = std::chrono::steady_clock::now();
-        r.obv.push_back(cpu.estimate(b, m));
-        r.seconds.push_back(seconds_since(t0));
-      }
-      runs.push_back(std::move(r));
-    }
+    for (int m : ms) runs.push_back(timed("cpu", m, [&] { return cpu.estimate(boxes, m); }));
   }
   if (gl)
-    for (int m : ms) {
-      const auto t0 = std::chrono::steady_clock::now();
-      Run r{"gl", m, gl->estimate(boxes, m), {}};
-      r.seconds.assign(n, n ? seconds_since(t0) / n : 0.0);
-      runs.push_back(std::move(r));
-    }
-  std::vector<std::vector<double>> bound;
+    for (int m : ms) runs.push_back(timed("gl", m, [&] { return gl->estimate(boxes, m); }));
+  // Each estimate's certified error from the enclosure; R(m), the texel bound of
+  // validate/estimators.h, only when asked for.
+  std::vector<std::vector<double>> bound, rbound;
+  std::optional<vobb::validate::EstimatorSet> r_source;
+  if (r_bound && any_cubemap) r_source.emplace(mesh.mesh, false);
   for (const Run& r : runs) {
-    bound.push_back(bounds_of(r));
-    // The exact OBV lies between 0 and the box's volume, which bounds the error too.
-    for (size_t i = 0; i < n; ++i)
-      bound.back()[i] = std::min(bound.back()[i], vobb::validate::range_bound(boxes[i], r.obv[i]));
+    bound.emplace_back(n);
+    rbound.emplace_back(n, NAN);
+    for (size_t i = 0; i < n; ++i) {
+      bound.back()[i] = certified_error(r.obv[i], poly[i]);
+      if (r_source && r.m > 0)
+        rbound.back()[i] =
+            std::min(r_source->bound(r.backend == "cpu" ? vobb::validate::Backend::kCpu : vobb::validate::Backend::kGl,
+                                     boxes[i], r.m),
+                     vobb::validate::range_bound(boxes[i], r.obv[i]));
+    }
   }
-  for (size_t i = 0; i < n; ++i)
-    if (unresolved[i])
-      std::fprintf(stderr,
-                   "vobb: warning: box %zu: its view of the mesh does not fit the estimators' doubles (faces "
-                   "beyond 2^300 box units); estimated at half its volume, bound the other half\n",
-                   i);
   std::vector<double> exact_value(n, 0.0), exact_seconds(n, 0.0);
   std::vector<std::string> exact_rational(n);
   if (want_exact) {
     const vobb::exact::ClipSolver exact(mesh.mesh);
-    for (size_t i = 0; i < n; ++i) {
+    tbb::parallel_for(size_t{0}, n, [&](size_t i) {
       const auto t0 = std::chrono::steady_clock::now();
       const vobb::Rational v = exact.obv(boxes[i]);
       exact_seconds[i] = seconds_since(t0);
       exact_value[i] = vobb::to_double_nearest(v);
       exact_rational[i] = v.get_str();
-    }
+    });
   }
 
   nlohmann::ordered_json out = nlohmann::ordered_json::array();
   if (!json)
-    std::printf("%5s %8s %5s %24s %24s %12s %12s %10s\n", "box", "backend", "m", "OBV", "exact", "rel.error", "bound",
-                "seconds");
+    std::printf("%5s %8s %5s %24s %24s %12s %12s %10s%s%s\n", "box", "backend", "m", "OBV", "exact", "rel.error",
+                "bound", "seconds", r_bound ? "         R(m)" : "", want_poly ? "  certified interval" : "");
   for (size_t i = 0; i < n; ++i) {
     nlohmann::ordered_json jb;
     jb["index"] = i;
     jb["box_volume"] = vobb::volume(boxes[i]);
-    if (unresolved[i]) jb["unresolved"] = true;
+    if (!poly.empty()) {
+      jb["interval"] = {poly[i].lo, poly[i].hi};
+      if (poly[i].exact_box) jb["interval_from_exact"] = poly[i].why;
+    }
     if (want_exact) {
       jb["exact"] = exact_value[i];
       if (rational) jb["exact_rational"] = exact_rational[i];
@@ -599,15 +622,24 @@ int run_obv(const std::string& mesh_path, const std::string& boxes_path, const s
     nlohmann::ordered_json est = nlohmann::ordered_json::array();
     for (size_t k = 0; k < runs.size(); ++k) {
       const Run& r = runs[k];
-      est.push_back({{"backend", r.backend}, {"m", r.m}, {"obv", r.obv[i]}, {"bound", bound[k][i]},
-                     {"seconds", r.seconds[i]}});
+      nlohmann::ordered_json e = {{"backend", r.backend}};
+      if (r.m > 0) e["m"] = r.m;
+      e["obv"] = r.obv[i];
+      e["bound"] = bound[k][i];
+      if (r_bound && r.m > 0) e["r_bound"] = rbound[k][i];
+      e["seconds"] = r.seconds[i];
+      est.push_back(e);
       if (json) continue;
-      char rel[32] = "-", ex[40] = "-";
+      char rel[32] = "-", ex[40] = "-", mm[16] = "-", rb[24] = "", iv[64] = "";
       if (want_exact && exact_value[i] != 0)
         std::snprintf(rel, sizeof rel, "%.3e", std::abs(r.obv[i] - exact_value[i]) / exact_value[i]);
       if (want_exact) std::snprintf(ex, sizeof ex, "%.17g", exact_value[i]);
-      std::printf("%5zu %8s %5d %24.17g %24s %12s %12.3e %10.6f\n", i, r.backend.c_str(), r.m, r.obv[i], ex, rel,
-                  bound[k][i], r.seconds[i]);
+      if (r.m > 0) std::snprintf(mm, sizeof mm, "%d", r.m);
+      if (r_bound && r.m > 0) std::snprintf(rb, sizeof rb, " %12.3e", rbound[k][i]);
+      if (r_bound && r.m == 0) std::snprintf(rb, sizeof rb, " %12s", "-");
+      if (want_poly && r.m == 0) std::snprintf(iv, sizeof iv, "  [%.17g, %.17g]", poly[i].lo, poly[i].hi);
+      std::printf("%5zu %8s %5s %24.17g %24s %12s %12.3e %10.6f%s%s\n", i, r.backend.c_str(), mm, r.obv[i], ex, rel,
+                  bound[k][i], r.seconds[i], rb, iv);
     }
     if (!json && runs.empty())
       std::printf("%5zu %8s %5s %24.17g %24s %12s %12s %10.6f\n", i, "exact", "-", exact_value[i], "-", "-", "-",
@@ -677,8 +709,9 @@ int run_compare(const std::string& mesh_path, const BuildFlags& flags, bool json
   vobb::app::note_precision(mesh_path, loaded);
   std::unique_ptr<vobb::GlObvEstimator> gl;
   std::unique_ptr<vobb::CpuObvEstimator> cpu;
+  std::unique_ptr<vobb::PolyObvSolver> poly;
   vobb::ObvEstimate estimate;
-  s = make_estimator(loaded.mesh, flags, &gl, &cpu, &estimate);
+  s = make_estimator(loaded.mesh, flags, &gl, &cpu, &poly, &estimate);
   if (!s) return refuse(s);
   if (!flags.checkpoint.empty()) {
     s = check_compare_checkpoint(loaded.mesh, flags, gl.get());
@@ -829,9 +862,10 @@ int main(int argc, char** argv) {
   build->add_option("--m", bf.m, "Cubemap resolution of the OBV estimator (variational)")
       ->capture_default_str()->check(CLI::Range(1, 4096));
   const std::string backend_help = "OBV estimator: auto (GL on a GPU from --m " + std::to_string(kAutoGlFromM) +
-                                   ", where it was measured faster; else the CPU twin), gl, cpu";
+                                   ", where it was measured faster; else the CPU twin), gl, cpu, or poly (the "
+                                   "polyhedral solver: exact to round-off, no --m)";
   build->add_option("--backend", bf.backend, backend_help)
-      ->capture_default_str()->check(CLI::IsMember({"auto", "gl", "cpu"}));
+      ->capture_default_str()->check(CLI::IsMember({"auto", "gl", "cpu", "poly"}));
   build->add_option("--lloyd", bf.lloyd, "Most Lloyd iterations per node (variational)")
       ->capture_default_str()->check(CLI::Range(0, 1000));
   build->add_option("--seed", bf.seed, "Seed of the orientation search's random starts")
@@ -884,9 +918,12 @@ int main(int argc, char** argv) {
   obv->add_option("--boxes", boxes_path, "Box file {\"boxes\":[{center, axes, half_extents}]}")->required();
   obv->add_option("--m", ms, "Cubemap resolutions, e.g. 8,16,32")->delimiter(',')->check(CLI::Range(1, 4096));
   obv->add_option("--backend", backend,
-                  "gl (EGL: a GPU, else llvmpipe), cpu (the double-precision twin), exact, all, or auto "
-                  "(gl, else cpu with a warning)")
-      ->capture_default_str()->check(CLI::IsMember({"auto", "gl", "cpu", "exact", "all"}));
+                  "gl (EGL: a GPU, else llvmpipe), cpu (the double-precision twin), poly (the polyhedral solver: "
+                  "an estimate and its certified interval), exact, all, or auto (gl, else cpu with a warning)")
+      ->capture_default_str()->check(CLI::IsMember({"auto", "gl", "cpu", "poly", "exact", "all"}));
+  bool r_bound = false;
+  obv->add_flag("--r-bound", r_bound,
+                "Also print R(m), the cubemap's rigorous texel bound, beside each cubemap estimate's certified error");
   obv->add_flag("--json", json, "Print JSON");
   obv->add_flag("--rational", rational, "With the exact backend, also print each exact OBV as a rational");
 
@@ -898,7 +935,8 @@ int main(int argc, char** argv) {
   cmp->add_option("--arity", cf.arity, "Most children per node")->capture_default_str()->check(CLI::Range(2, 64));
   cmp->add_option("--m", cf.m, "Cubemap resolution of the variational builder's estimator")
       ->capture_default_str()->check(CLI::Range(1, 4096));
-  cmp->add_option("--backend", cf.backend, "auto (as for build), gl or cpu")->capture_default_str()->check(CLI::IsMember({"auto", "gl", "cpu"}));
+  cmp->add_option("--backend", cf.backend, "auto (as for build), gl, cpu or poly")
+      ->capture_default_str()->check(CLI::IsMember({"auto", "gl", "cpu", "poly"}));
   cmp->add_option("--lloyd", cf.lloyd, "Most Lloyd iterations per node")->capture_default_str()->check(CLI::Range(0, 1000));
   cmp->add_option("--seed", cf.seed, "Seed of the orientation search's random starts")
       ->capture_default_str()->check(vobb::app::kSeed);
@@ -980,11 +1018,16 @@ int main(int argc, char** argv) {
       // The recorded queries replace the OBV estimator that these two choose.
       if (s && !bf.queries.empty() && (build->count("--m") > 0 || build->count("--backend") > 0))
         s = vobb::Status::error("--m and --backend choose the OBV estimator, which --queries replaces");
+      if (s && bf.backend == "poly" && build->count("--m") > 0)
+        s = vobb::Status::error("--m is the cubemap's resolution; --backend poly uses no cubemap");
+    }
+    if (cmp->parsed() && cf.backend == "poly" && cmp->count("--m") > 0) {
+      s = vobb::Status::error("--m is the cubemap's resolution; --backend poly uses no cubemap");
     }
     if (exp->parsed()) s = vobb::app::check_output_is_not_input("-o", out, {tree_path});
     if (s && build->parsed()) s = vobb::app::check_output_is_not_checkpoint("-o", out, bf.checkpoint, {"state.json"});
     if (s && (build->parsed() || exp->parsed())) s = vobb::app::check_output_is_writable("-o", out);
-    if (cmp->parsed()) s = vobb::app::check_output_is_not_input("--figure", compare_figure, {mesh});
+    if (s && cmp->parsed()) s = vobb::app::check_output_is_not_input("--figure", compare_figure, {mesh});
     if (s && cmp->parsed())
       s = vobb::app::check_output_is_not_checkpoint("--figure", compare_figure, cf.checkpoint, compare_checkpoint_files());
     if (s && cmp->parsed()) s = vobb::app::check_output_is_writable("--figure", compare_figure);
@@ -1008,7 +1051,7 @@ int main(int argc, char** argv) {
     if (exp->parsed()) return run_export(tree_path, level, out);
     if (validate_cmd->parsed()) return vobb::app::run_validate_command(validate_flags);
     if (collide_cmd->parsed()) return vobb::app::run_collide_command(collide_flags);
-    if (obv->parsed()) return run_obv(mesh, boxes_path, ms, backend, json, rational);
+    if (obv->parsed()) return run_obv(mesh, boxes_path, ms, backend, json, rational, r_bound);
     if (cmp->parsed()) return run_compare(mesh, cf, compare_json, rational, compare_figure, compare_figure_up);
     if (cert->parsed()) return run_certify(mesh, tree_path, json, rational, omv_path, certify_checkpoint, quiet);
     return kExitBadInput;

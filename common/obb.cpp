@@ -1,4 +1,5 @@
 #include "common/obb.h"
+#include "common/box_frame_clip.h"
 #include "common/solidity.h"
 #include "common/status.h"
 #include "common/text_util.h"
@@ -129,18 +130,15 @@ Obb fit_obb(const Mesh& mesh, const std::vector<int32_t>& faces, const std::arra
 }
 
 ExactBoxFrame::ExactBoxFrame(const Obb& box) {
+  box_clip::Frame<Rational> f = box_clip::make_frame<Rational>(box);
   for (int k = 0; k < 3; ++k) {
-    c[k] = box.center[k];
-    for (int i = 0; i < 3; ++i) u[k][i] = Rational(box.half[k]) * Rational(box.axes[k][i]);
+    c[k] = std::move(f.c[k]);
+    for (int i = 0; i < 3; ++i) {
+      u[k][i] = std::move(f.u[k][i]);
+      w[k][i] = std::move(f.w[k][i]);
+    }
   }
-  for (int k = 0; k < 3; ++k) {
-    const Rational* a = u[(k + 1) % 3];
-    const Rational* b = u[(k + 2) % 3];
-    w[k][0] = a[1] * b[2] - a[2] * b[1];
-    w[k][1] = a[2] * b[0] - a[0] * b[2];
-    w[k][2] = a[0] * b[1] - a[1] * b[0];
-  }
-  det = u[0][0] * w[0][0] + u[0][1] * w[0][1] + u[0][2] * w[0][2];
+  det = std::move(f.det);
 }
 
 void ExactBoxFrame::corner(int index, Rational out[3]) const {

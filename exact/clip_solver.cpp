@@ -1,5 +1,6 @@
 #include <limits>
 
+#include "common/box_frame_clip.h"
 #include "exact/convex_cell.h"
 #include "exact/outer_volume.h"
 
@@ -58,6 +59,8 @@ ClipSolver::ClipSolver(const Mesh& mesh) : mesh_(mesh), faces_(AabbTree::over_fa
 }
 
 ClipSolver::~ClipSolver() = default;
+
+Rational ClipSolver::obv(const Obb& box) const { return box_clip::box_obv_rational(mesh_, faces_, box); }
 
 Rational ClipSolver::inside_volume(const ConvexCell& cell) const {
   if (cell.empty()) return Rational(0);

@@ -8,7 +8,7 @@
 //  - ClipSolver (path b): everything rests on the signed prism decomposition of X along a
 //    direction d: 1_X = sum_T sign(n_T . -d) 1[prism of T swept along d], so for a convex C,
 //    vol(C ∩ X) = sum_T sign vol(C ∩ prism_T). OBV works in the box's own frame, where most
-//    faces are closed forms (box_obv.cpp). OMV = sum OBV - sum vol(S \ X) over convex cells
+//    faces are closed forms (common/box_frame_clip.h, shared with fast/). OMV = sum OBV - sum vol(S \ X) over convex cells
 //    S that split each box's part inside earlier boxes (half-space splits, disjoint within one
 //    box; d = -z there, each prism a convex clip). Only faces whose column meets a cell are
 //    visited; a layer whose boxes overlap nothing does no union work.

@@ -1,0 +1,117 @@
+// Per-box time of the polyhedral OBV solver (fast/poly_solver.h) against the cubemap at m (the
+// CPU twin and GL, whatever EGL gives), on seeded leaf, mid and root corpora
+// (validate/box_corpus.h), on one thread and on all; and the solver's error against the exact
+// rational on the first --exact-boxes boxes of each corpus. Every configuration runs in this
+// one process, so the ratios compare like with like.
+// Usage: vobb-bench-poly MESH [--m M] [--boxes N] [--exact-boxes N] [--no-gl]
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "common/io/mesh_report.h"
+#include "fast/cpu_estimator.h"
+#include "fast/gl_estimator.h"
+#include "fast/poly_solver.h"
+#include "validate/box_corpus.h"
+
+namespace {
+
+template <typename F>
+double seconds(F&& f) {
+  const auto t0 = std::chrono::steady_clock::now();
+  f();
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+double median(std::vector<double> v) {
+  if (v.empty()) return NAN;
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2) {
+    std::fprintf(stderr, "usage: vobb-bench-poly MESH [--m M] [--boxes N] [--exact-boxes N] [--no-gl]\n");
+    return 2;
+  }
+  int m = 32, count = 200, exact_count = 20;
+  bool want_gl = true;
+  for (int i = 2; i < argc; ++i) {
+    if (!std::strcmp(argv[i], "--no-gl")) want_gl = false;
+    else if (i + 1 < argc && !std::strcmp(argv[i], "--m")) m = std::atoi(argv[++i]);
+    else if (i + 1 < argc && !std::strcmp(argv[i], "--boxes")) count = std::atoi(argv[++i]);
+    else if (i + 1 < argc && !std::strcmp(argv[i], "--exact-boxes")) exact_count = std::atoi(argv[++i]);
+  }
+  vobb::LoadedMesh lm;
+  vobb::Status s = vobb::load_solid(argv[1], &lm);
+  if (!s) {
+    std::fprintf(stderr, "%s\n", s.message().c_str());
+    return 2;
+  }
+  std::unique_ptr<vobb::GlObvEstimator> gl;
+  if (want_gl && !(s = vobb::GlObvEstimator::create(lm.mesh, &gl))) std::fprintf(stderr, "no GL: %s\n", s.message().c_str());
+  const vobb::PolyObvSolver poly(lm.mesh);
+  const vobb::CpuObvEstimator cpu(lm.mesh);
+  std::printf("mesh %s, %zu faces, m = %d, renderer: %s\n", argv[1], lm.mesh.faces.size(), m,
+              gl ? gl->renderer().c_str() : "(none)");
+  std::printf("%-5s %5s %-34s %12s %12s\n", "boxes", "count", "configuration", "ms per box", "median rel");
+  tbb::task_arena one(1);
+  using vobb::validate::BoxSize;
+  for (BoxSize size : {BoxSize::kLeaf, BoxSize::kMid, BoxSize::kRoot}) {
+    const auto boxes = vobb::validate::box_corpus(lm.mesh, size, count, 2026);
+    const char* name = vobb::validate::to_string(size);
+    const int n = static_cast<int>(boxes.size());
+    auto row = [&](const char* what, double t, double rel = NAN) {
+      std::printf("%-5s %5d %-34s %12.4f %12.2e\n", name, n, what, 1e3 * t / n, rel);
+    };
+    std::vector<double> est, cub;
+    std::vector<vobb::PolyObv> ev;
+    // Errors against the exact rational (of the box's volume), on the first exact_count boxes.
+    const int ne = std::min(n, exact_count);
+    std::vector<double> truth(ne);
+    for (int i = 0; i < ne; ++i) truth[i] = vobb::to_double_nearest(poly.exact(boxes[i]));
+    auto rel = [&](const std::vector<double>& v) {
+      std::vector<double> r;
+      for (int i = 0; i < ne; ++i) r.push_back(std::abs(v[i] - truth[i]) / vobb::volume(boxes[i]));
+      return median(r);
+    };
+    double t = seconds([&] { one.execute([&] { est = poly.estimate(boxes); }); });
+    row("poly, double, one thread", t, rel(est));
+    t = seconds([&] { one.execute([&] { ev = poly.evaluate(boxes); }); });
+    std::vector<double> mid, width;
+    int exact_boxes = 0;
+    long exact_faces = 0;
+    for (const vobb::PolyObv& r : ev) {
+      mid.push_back(r.estimate);
+      width.push_back((r.hi - r.lo) / vobb::volume(boxes[&r - ev.data()]));
+      exact_boxes += r.exact_box;
+      exact_faces += r.exact_faces;
+    }
+    row("poly, interval, one thread", t, rel(mid));
+    std::printf("%-5s %5d %-34s %12s %12.2e   (median width / vol; %d exact boxes, %ld exact faces)\n", name, n,
+                "poly, interval width", "-", median(width), exact_boxes, exact_faces);
+    t = seconds([&] { est = poly.estimate(boxes); });
+    row("poly, double, all threads", t);
+    t = seconds([&] { ev = poly.evaluate(boxes); });
+    row("poly, interval, all threads", t);
+    t = seconds([&] { one.execute([&] { cub = cpu.estimate(boxes, m); }); });
+    row("cpu twin, one thread", t, rel(cub));
+    t = seconds([&] { cub = cpu.estimate(boxes, m); });
+    row("cpu twin, all threads", t);
+    if (gl) {
+      gl->estimate(std::vector<vobb::Obb>(boxes.begin(), boxes.begin() + 1), m);  // warm-up
+      t = seconds([&] { cub = gl->estimate(boxes, m); });
+      row("gl, batched", t, rel(cub));
+    }
+  }
+  return 0;
+}

@@ -1,0 +1,77 @@
+#include "common/box_frame_clip.h"
+
+#include <cmath>
+#include <unordered_map>
+
+namespace vobb::box_clip {
+namespace {
+
+// Sum of the absolute components: at least the Euclidean norm, and |a_i b_j| + |a_j b_i| <=
+// l1(a) l1(b) for every pair of components.
+double l1(const double* v) { return std::abs(v[0]) + std::abs(v[1]) + std::abs(v[2]); }
+
+// One unit of rounding in any rounding mode (directed rounding errs by up to 2^-52).
+constexpr double kEps = 0x1p-52;
+
+}  // namespace
+
+ColumnFilter::ColumnFilter(const Obb& box) {
+  const Frame<double> f = make_frame<double>(box);
+  flat_ = box.half[0] == 0 || box.half[1] == 0 || box.half[2] == 0;
+  for (int k = 0; k < 3; ++k) {
+    c_[k] = box.center[k];
+    for (int i = 0; i < 3; ++i) w_[k][i] = f.w[k][i];
+  }
+  R_ = std::abs(f.det);
+  // u carries 1 rounding, each w component 2 more over |a1 b2| + |a2 b1| <= l1(u') l1(u''),
+  // det 3 more over l1(u0) (l1(w0) + w_err): 16 eps and 32 eps leave twice that room
+  // (docs/derivations.md, "The column filter").
+  double nu[3];
+  for (int k = 0; k < 3; ++k) nu[k] = l1(f.u[k]);
+  for (int k = 0; k < 3; ++k) w_err_[k] = 16 * kEps * nu[(k + 1) % 3] * nu[(k + 2) % 3];
+  R_err_ = 32 * kEps * nu[0] * nu[1] * nu[2];
+}
+
+bool ColumnFilter::operator()(const Aabb& b) const {
+  if (b.empty()) return false;
+  for (int k = 0; k < 3; ++k) {
+    double mid = 0, rad = 0, scale = 0, coords = 0;
+    for (int i = 0; i < 3; ++i) {
+      mid += (0.5 * (b.lo[i] + b.hi[i]) - c_[i]) * w_[k][i];
+      rad += std::abs(w_[k][i]) * 0.5 * (b.hi[i] - b.lo[i]);
+      const double size = std::abs(b.lo[i]) + std::abs(b.hi[i]) + std::abs(c_[i]);
+      scale += std::abs(w_[k][i]) * size;
+      coords += size;
+    }
+    // The double sums' own rounding, relative 1e-9 of the magnitudes, and 2^-1060 absolute
+    // where they are subnormal; then the frame's: w off by w_err per component over
+    // sum |p - c| <= coords, and R by R_err.
+    const double pad = 1e-9 * (scale + rad + R_) + 0x1p-1060 * (1 + coords) + w_err_[k] * coords + R_err_;
+    if (mid - rad > R_ + pad && k < 2) return false;  // beyond the +side
+    if (mid + rad < -R_ - pad) return false;           // beyond the -side (or below)
+  }
+  return true;
+}
+
+Rational box_obv_rational(const Mesh& mesh, const AabbTree& faces, const Obb& box) {
+  const ColumnFilter filter(box);
+  if (filter.flat()) return Rational(0);  // a flat box has no volume, inside or out
+  const Frame<Rational> frame = make_frame<Rational>(box);
+  if (sgn(frame.det) == 0) return Rational(0);
+  const Rational R = abs(frame.det);
+  std::unordered_map<int32_t, Point<Rational>> tmap;  // faces share vertices
+  auto to_t = [&](int32_t v) -> const Point<Rational>& {
+    auto it = tmap.find(v);
+    if (it != tmap.end()) return it->second;
+    return tmap.emplace(v, to_frame(frame, mesh.vertices[v])).first->second;
+  };
+  std::vector<Rational> terms;
+  faces.for_each_accepted(filter, [&](int32_t f) {
+    const Point<Rational> tri[3] = {to_t(mesh.faces[f][0]), to_t(mesh.faces[f][1]), to_t(mesh.faces[f][2])};
+    Rational t;
+    if (face_term6(tri, R, &t) && sgn(t) != 0) terms.push_back(std::move(t));
+  });
+  return obv_from_sum6(sum_pairwise(terms), R);
+}
+
+}  // namespace vobb::box_clip

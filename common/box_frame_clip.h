@@ -1,0 +1,231 @@
+// The box-frame clip formula for one box's OBV, written once over the number type
+// (DESIGN §3, §4b; derivation in docs/derivations.md, "OBV in the box's frame").
+//
+// The map T(p) = W (p - c), with rows w_k = u_{k+1} x u_{k+2} (u_k = h_k a_k), sends the box's
+// certified solid to the cube |T_k| <= R = |det U| and scales volumes by det(U)^2. In T-space
+//   6 R^2 vol(X ∩ box) = sum over faces of face_term6(face),
+// the signed prism decomposition of X along -T_2: each face adds 6 x the integral over its
+// clipped shadow of clamp(z, -R, R) + R, signed by the shadow's orientation. So
+//   OBV = 8 R - sum / (6 R^2).
+//
+// NT is one of: Rational (exact, common/exact_predicates.h), double (a point value, rounded),
+// or an interval type (an enclosure). Every branch is taken on ClipTraits<NT>::sign, which an
+// interval type answers only when its enclosure decides the sign and otherwise throws; the
+// caller then evaluates that face in Rational. With the same decisions the three follow the
+// same arithmetic, so they cannot drift apart.
+#pragma once
+
+#include <cstdint>
+#include <utility>
+
+#include "common/bvh.h"
+#include "common/exact_predicates.h"
+#include "common/mesh.h"
+#include "common/obb.h"
+
+namespace vobb::box_clip {
+
+// sign(x) in {-1, 0, +1}. Specialised for double and Rational here; an interval type's
+// specialisation throws where its enclosure holds 0 and other values.
+template <class NT>
+struct ClipTraits;
+
+template <>
+struct ClipTraits<double> {
+  static int sign(double x) { return (x > 0) - (x < 0); }
+};
+
+template <>
+struct ClipTraits<Rational> {
+  static int sign(const Rational& x) { return sgn(x); }
+};
+
+template <class NT>
+struct Point {
+  NT x[3];
+};
+
+// A triangle clipped by the column's four sides and the slab's two planes has at most
+// 3 + 6 vertices.
+inline constexpr int kMaxPolygon = 9;
+
+template <class NT>
+struct Polygon {
+  Point<NT> v[kMaxPolygon];
+  int n = 0;
+};
+
+// The box's frame in NT: centre c, edge vectors u_k = h_k a_k, Cramer rows
+// w_k = u_{k+1} x u_{k+2} and det = det[u0 u1 u2] (ExactBoxFrame is the Rational one).
+template <class NT>
+struct Frame {
+  NT c[3];
+  NT u[3][3];
+  NT w[3][3];
+  NT det;
+};
+
+template <class NT>
+Frame<NT> make_frame(const Obb& box) {
+  Frame<NT> f;
+  auto& u = f.u;
+  for (int k = 0; k < 3; ++k) {
+    f.c[k] = NT(box.center[k]);
+    for (int i = 0; i < 3; ++i) u[k][i] = NT(box.half[k]) * NT(box.axes[k][i]);
+  }
+  for (int k = 0; k < 3; ++k) {
+    const NT* a = u[(k + 1) % 3];
+    const NT* b = u[(k + 2) % 3];
+    f.w[k][0] = a[1] * b[2] - a[2] * b[1];
+    f.w[k][1] = a[2] * b[0] - a[0] * b[2];
+    f.w[k][2] = a[0] * b[1] - a[1] * b[0];
+  }
+  f.det = u[0][0] * f.w[0][0] + u[0][1] * f.w[0][1] + u[0][2] * f.w[0][2];
+  return f;
+}
+
+// T(p) for a mesh vertex p.
+template <class NT>
+Point<NT> to_frame(const Frame<NT>& f, const Vec3& p) {
+  const NT d[3] = {NT(p[0]) - f.c[0], NT(p[1]) - f.c[1], NT(p[2]) - f.c[2]};
+  Point<NT> q;
+  for (int k = 0; k < 3; ++k) q.x[k] = d[0] * f.w[k][0] + d[1] * f.w[k][1] + d[2] * f.w[k][2];
+  return q;
+}
+
+namespace detail {
+
+// Twice the signed area of the shadow (x, y) of triangle abc.
+template <class NT>
+NT cross2(const Point<NT>& a, const Point<NT>& b, const Point<NT>& c) {
+  return (b.x[0] - a.x[0]) * (c.x[1] - a.x[1]) - (b.x[1] - a.x[1]) * (c.x[0] - a.x[0]);
+}
+
+// The part of *in where side * x[axis] <= R (side = +1: x <= R; -1: x >= -R), by
+// Sutherland-Hodgman, which keeps the cycle's orientation. Returns `in` itself when no vertex
+// lies beyond (nothing to cut), else `out` filled (n = 0 when fewer than 3 vertices remain).
+template <class NT>
+const Polygon<NT>* clip(const Polygon<NT>* in, int axis, int side, const NT& R, Polygon<NT>* out) {
+  const int n = in->n;
+  if (n == 0) return in;
+  int s[kMaxPolygon];
+  NT val[kMaxPolygon];
+  bool any_out = false, any_in = false;
+  for (int i = 0; i < n; ++i) {
+    val[i] = side > 0 ? NT(in->v[i].x[axis] - R) : NT(-in->v[i].x[axis] - R);
+    s[i] = ClipTraits<NT>::sign(val[i]);
+    any_out |= s[i] > 0;
+    any_in |= s[i] <= 0;
+  }
+  if (!any_out) return in;
+  out->n = 0;
+  if (any_in) {
+    for (int i = 0; i < n; ++i) {
+      const int j = i + 1 < n ? i + 1 : 0;
+      if (s[i] <= 0) out->v[out->n++] = in->v[i];
+      if (s[i] * s[j] < 0) {
+        const NT t = val[i] / (val[i] - val[j]);
+        Point<NT>& p = out->v[out->n++];
+        for (int k = 0; k < 3; ++k) p.x[k] = in->v[i].x[k] + t * (in->v[j].x[k] - in->v[i].x[k]);
+      }
+    }
+  }
+  if (out->n < 3) out->n = 0;
+  return out;
+}
+
+}  // namespace detail
+
+// 6 x the integral over the clipped shadow of `tri` (vertices in T-space) of
+// clamp(z, -R, R) + R, signed by the shadow's orientation; R > 0. Returns false (and leaves
+// *term alone) when the face adds nothing: its shadow misses the square, it lies below the
+// slab, or its clipped shadow is degenerate. A face above the slab adds 2R x its shadow; a face
+// inside the column and the slab is a closed form; only faces crossing them are clipped, and
+// a face lying in z = R counts as above (the integrand is continuous there).
+template <class NT>
+bool face_term6(const Point<NT> (&tri)[3], const NT& R, NT* term) {
+  using detail::clip;
+  using detail::cross2;
+  auto beyond = [&](int k, int side) {  // all three vertices strictly beyond side * x_k = R
+    for (int i = 0; i < 3; ++i)
+      if (ClipTraits<NT>::sign(side > 0 ? NT(tri[i].x[k] - R) : NT(-tri[i].x[k] - R)) <= 0) return false;
+    return true;
+  };
+  for (int k = 0; k < 2; ++k)
+    if (beyond(k, 1) || beyond(k, -1)) return false;
+  if (beyond(2, -1)) return false;
+  Polygon<NT> buf[3];
+  buf[0].n = 3;
+  for (int i = 0; i < 3; ++i) buf[0].v[i] = tri[i];
+  const Polygon<NT>* cur = &buf[0];
+  for (int k = 0; k < 2; ++k)
+    for (int side : {1, -1}) cur = clip(cur, k, side, R, &buf[cur == &buf[1] ? 2 : 1]);
+  if (cur->n < 3) return false;
+  // Split at the slab's planes: the part above z = R, and the part between.
+  bool all_mid = true, all_top = true;
+  for (int i = 0; i < cur->n; ++i) {
+    const int above = ClipTraits<NT>::sign(NT(cur->v[i].x[2] - R));
+    if (above > 0 || ClipTraits<NT>::sign(NT(cur->v[i].x[2] + R)) < 0) all_mid = false;
+    if (above < 0) all_top = false;
+  }
+  const Polygon<NT>* top = nullptr;
+  const Polygon<NT>* mid = nullptr;
+  Polygon<NT> top_buf, mid_buf[2];
+  if (all_top) {
+    top = cur;
+  } else if (all_mid) {
+    mid = cur;
+  } else {
+    top = clip(cur, 2, -1, NT(-R), &top_buf);  // z >= R
+    mid = clip(cur, 2, 1, R, &mid_buf[0]);     // z <= R
+    mid = clip(mid, 2, -1, R, &mid_buf[mid == &mid_buf[0] ? 1 : 0]);  // z >= -R
+  }
+  NT sum(0);
+  bool any = false;
+  if (top != nullptr && top->n >= 3) {
+    NT area(0);
+    for (int k = 1; k + 1 < top->n; ++k) area += cross2(top->v[0], top->v[k], top->v[k + 1]);
+    sum += NT(6) * R * area;
+    any = true;
+  }
+  if (mid != nullptr && mid->n >= 3) {
+    for (int k = 1; k + 1 < mid->n; ++k)
+      sum += cross2(mid->v[0], mid->v[k], mid->v[k + 1]) *
+             (mid->v[0].x[2] + mid->v[k].x[2] + mid->v[k + 1].x[2] + NT(3) * R);
+    any = true;
+  }
+  if (!any) return false;
+  *term = std::move(sum);
+  return true;
+}
+
+// OBV from the faces' sum: 8 R - sum6 / (6 R^2).
+template <class NT>
+NT obv_from_sum6(const NT& sum6, const NT& R) {
+  return NT(8) * R - sum6 / (NT(6) * R * R);
+}
+
+// Which faces to visit: a conservative test, in double, of whether an axis-aligned box may
+// reach the column {|T_0|, |T_1| <= R, T_2 >= -R} of a box. False means surely not, whatever
+// the rounding of the double frame it is built from (the pad is derived in
+// docs/derivations.md, "The column filter").
+class ColumnFilter {
+ public:
+  explicit ColumnFilter(const Obb& box);
+  bool operator()(const Aabb& b) const;
+  bool flat() const { return flat_; }  // a half extent is 0: the box has no volume
+
+ private:
+  double c_[3];
+  double w_[3][3];
+  double R_;
+  double w_err_[3];  // bound on |w - W| per row, each component
+  double R_err_;
+  bool flat_ = false;
+};
+
+// The exact OBV of one box by this formula, visiting the faces that `filter` accepts through
+// `faces` (AabbTree::over_faces(mesh)). 0 for a flat box.
+Rational box_obv_rational(const Mesh& mesh, const AabbTree& faces, const Obb& box);
+
+}  // namespace vobb::box_clip

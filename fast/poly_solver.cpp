@@ -1,0 +1,167 @@
+#include "fast/poly_solver.h"
+
+#include <tbb/parallel_for.h>
+
+#include <CGAL/Interval_nt.h>
+#include <cmath>
+#include <optional>
+
+#include "common/box_frame_clip.h"
+
+namespace vobb {
+
+using Interval = CGAL::Interval_nt<false>;  // operations assume upward rounding (a Protector)
+
+template <>
+struct box_clip::ClipTraits<Interval> {
+  // Throws CGAL::Uncertain_conversion_exception where the enclosure holds 0 and other values.
+  static int sign(const Interval& x) { return static_cast<int>(CGAL::sign(x).make_certain()); }
+};
+
+namespace {
+
+using box_clip::ColumnFilter;
+using box_clip::Frame;
+using box_clip::Point;
+
+// Magnitudes of T-space coordinates and of R up to which no product or sum in face_term6 can
+// overflow: a clipped vertex stays within 2^301, a doubled shadow area within 2^605, a term
+// within 2^908 and a mesh's sum of terms far below 2^1023 (docs/derivations.md, "Interval
+// range").
+constexpr double kSafe = 0x1p300;
+
+bool in_range(const Interval& x) { return x.inf() >= -kSafe && x.sup() <= kSafe; }
+
+// Calls visit(f) for every face whose column may meet the box's (conservative).
+template <class Visit>
+void for_each_column_face(const AabbTree& faces, const ColumnFilter& filter, Visit&& visit) {
+  faces.for_each_accepted(filter, [&](int32_t f) { visit(f); });
+}
+
+PolyObv exact_result(const Rational& q, int32_t faces, std::string why) {
+  PolyObv r;
+  enclose(q, &r.lo, &r.hi);
+  r.estimate = to_double_nearest(q);
+  r.faces = faces;
+  r.exact_box = true;
+  r.why = std::move(why);
+  return r;
+}
+
+}  // namespace
+
+void enclose(const Rational& q, double* lo, double* hi) {
+  const double d = to_double_nearest(q);
+  const int c = cmp(Rational(d), q);
+  *lo = c > 0 ? std::nextafter(d, -INFINITY) : d;
+  *hi = c < 0 ? std::nextafter(d, INFINITY) : d;
+}
+
+PolyObvSolver::PolyObvSolver(const Mesh& mesh) : mesh_(mesh), faces_(AabbTree::over_faces(mesh)) {}
+
+Rational PolyObvSolver::exact(const Obb& box) const { return box_clip::box_obv_rational(mesh_, faces_, box); }
+
+PolyObv PolyObvSolver::evaluate(const Obb& box) const {
+  const ColumnFilter filter(box);
+  if (filter.flat()) return PolyObv{};  // no volume: [0, 0]
+  Interval::Protector upward;
+  const Frame<Interval> frame = box_clip::make_frame<Interval>(box);
+  const Interval R = CGAL::abs(frame.det);
+  if (!(R.inf() > 0) || !in_range(R)) {
+    const double vol = volume(box);
+    return exact_result(exact(box), 0,
+                        R.inf() > 0 ? "coordinates beyond the intervals' safe range"
+                                    : "a nearly flat box: its volume's enclosure holds 0 (volume " +
+                                          std::to_string(vol) + ")");
+  }
+  // A face the intervals cannot decide is evaluated in the box's exact frame, made once.
+  std::optional<Frame<Rational>> exact_frame;
+  Rational exact_R;
+  Interval sum(0);
+  int32_t visited = 0, exact_faces = 0;
+  bool range_ok = true;
+  for_each_column_face(faces_, filter, [&](int32_t f) {
+    ++visited;
+    if (!range_ok) return;
+    const Point<Interval> tri[3] = {box_clip::to_frame(frame, mesh_.corner(f, 0)),
+                                    box_clip::to_frame(frame, mesh_.corner(f, 1)),
+                                    box_clip::to_frame(frame, mesh_.corner(f, 2))};
+    for (const Point<Interval>& p : tri)
+      for (const Interval& x : p.x) range_ok &= in_range(x);
+    if (!range_ok) return;
+    Interval term(0);
+    try {
+      if (!box_clip::face_term6(tri, R, &term)) return;
+    } catch (const CGAL::Uncertain_conversion_exception&) {
+      if (!exact_frame) {
+        exact_frame = box_clip::make_frame<Rational>(box);
+        exact_R = abs(exact_frame->det);
+      }
+      const Point<Rational> q[3] = {box_clip::to_frame(*exact_frame, mesh_.corner(f, 0)),
+                                    box_clip::to_frame(*exact_frame, mesh_.corner(f, 1)),
+                                    box_clip::to_frame(*exact_frame, mesh_.corner(f, 2))};
+      ++exact_faces;
+      Rational t;
+      if (!box_clip::face_term6(q, exact_R, &t)) return;
+      double lo, hi;
+      enclose(t, &lo, &hi);
+      term = Interval(lo, hi);
+    }
+    if (damage_ != nullptr) {
+      double lo = term.inf(), hi = term.sup();
+      damage_(&lo, &hi, f);
+      term = Interval(lo, hi);
+    }
+    sum += term;
+  });
+  if (!range_ok) return exact_result(exact(box), visited, "coordinates beyond the intervals' safe range");
+  const Interval obv = box_clip::obv_from_sum6(sum, R);
+  const double vol = volume(box);
+  if (!CGAL::is_finite(obv) || !(obv.sup() - obv.inf() <= kMaxRelativeWidth * vol))
+    return exact_result(exact(box), visited, "an ill-conditioned box: the interval is wider than " +
+                                                 std::to_string(kMaxRelativeWidth) + " of its volume");
+  PolyObv r;
+  // The exact OBV lies in [0, vol(B)] too; vol(B)'s double is not an enclosure, so only 0 clips.
+  r.lo = std::max(obv.inf(), 0.0);
+  r.hi = obv.sup();
+  r.faces = visited;
+  r.exact_faces = exact_faces;
+  // Rounded upward, lo + (hi - lo) / 2 still lies in [lo, hi].
+  r.estimate = r.lo + 0.5 * (r.hi - r.lo);
+  return r;
+}
+
+double PolyObvSolver::estimate(const Obb& box) const {
+  const ColumnFilter filter(box);
+  if (filter.flat()) return 0;
+  CGAL::Protect_FPU_rounding<true> nearest(CGAL_FE_TONEAREST);
+  const Frame<double> frame = box_clip::make_frame<double>(box);
+  const double R = std::abs(frame.det);
+  double sum = 0;
+  if (R > 0)
+    for_each_column_face(faces_, filter, [&](int32_t f) {
+      const Point<double> tri[3] = {box_clip::to_frame(frame, mesh_.corner(f, 0)),
+                                    box_clip::to_frame(frame, mesh_.corner(f, 1)),
+                                    box_clip::to_frame(frame, mesh_.corner(f, 2))};
+      double term;
+      if (box_clip::face_term6(tri, R, &term)) sum += term;
+    });
+  const double obv = R > 0 ? box_clip::obv_from_sum6(sum, R) : 0.0;
+  // Beyond double's range (or a nearly flat box): the certified evaluation's midpoint.
+  if (!std::isfinite(obv)) return evaluate(box).estimate;
+  return obv;
+}
+
+std::vector<PolyObv> PolyObvSolver::evaluate(const std::vector<Obb>& boxes) const {
+  std::vector<PolyObv> out(boxes.size());
+  tbb::parallel_for(size_t{0}, boxes.size(), [&](size_t i) { out[i] = evaluate(boxes[i]); });
+  return out;
+}
+
+std::vector<double> PolyObvSolver::estimate(const std::vector<Obb>& boxes) const {
+  std::vector<double> out(boxes.size());
+  tbb::parallel_for(size_t{0}, boxes.size(), [&](size_t i) { out[i] = estimate(boxes[i]); });
+  return out;
+}
+
+}  // namespace vobb
