@@ -2,13 +2,13 @@
 #   P/bin/vobb, P/bin/vobb-make-analytic
 #   P/include/vobb/{common,exact,fast,validate,data}/*.h, included as "common/mesh.h"
 #   P/lib/libvobb_*.a and P/lib/cmake/vobb/: find_package(vobb) gives vobb::common,
-#   vobb::meshio, vobb::exact, vobb::fast, vobb::fast_gl, vobb::png, vobb::analytic,
+#   vobb::meshio, vobb::exact, vobb::fast, vobb::fast_poly, vobb::fast_gl, vobb::png, vobb::analytic,
 #   vobb::validate and vobb::collision (link what you use; each brings what it needs).
 # The libraries are static, so their private dependencies (CGAL, TBB, EGL, ODE, FCL, ...) are
 # found again by vobbConfig.cmake. tests/install/ builds a project against an installed tree.
 include(CMakePackageConfigHelpers)
 
-set(VOBB_EXPORTED vobb_common vobb_meshio vobb_png vobb_analytic vobb_exact vobb_fast
+set(VOBB_EXPORTED vobb_common vobb_meshio vobb_png vobb_analytic vobb_exact vobb_fast vobb_fast_poly
     vobb_fast_gl vobb_validate vobb_collision)
 # Interface targets the libraries link privately: exported too, since a static library's
 # private links are its users' links.

@@ -7,10 +7,13 @@
 #include <limits>
 
 #include "exact/outer_volume.h"
+#include "fast/poly_solver.h"
 #include "common/stopwatch.h"
 
 namespace vobb::validate {
-double StudyEval::abs_error(const StudySample& s) const { return std::abs(estimate - s.exact); }
+double StudyEval::abs_error(const StudySample& s) const {
+  return std::max(std::abs(estimate - s.lo), std::abs(estimate - s.hi));
+}
 
 double StatedBound::per_volume(int m) const { return c * std::pow(double(m), -p); }
 
@@ -140,8 +143,9 @@ DiscretizationResult run_discretization_study(const DiscretizationConfig& config
   for (const NamedMesh& nm : config.fit_meshes) meshes.push_back({nm, false});
   for (const NamedMesh& nm : config.held_out_meshes) meshes.push_back({nm, true});
 
-  double clip_seconds = 0, nef_seconds = 0, clip_on_nef_boxes = 0;
-  size_t clip_n = 0;
+  double clip_seconds = 0, nef_seconds = 0, clip_on_nef_boxes = 0, poly_seconds = 0;
+  size_t clip_n = 0, poly_n = 0;
+  std::vector<double> poly_rel;
   bool gl_ever = false, gl_tried = false;
   for (size_t mi = 0; mi < meshes.size(); ++mi) {
     const auto& [nm, held_out] = meshes[mi];
@@ -153,6 +157,7 @@ DiscretizationResult run_discretization_study(const DiscretizationConfig& config
     }
     gl_ever |= est.has_gl();
     const exact::ClipSolver clip(mesh);
+    const PolyObvSolver poly(mesh);
     const bool time_nef = mi == 0 && config.nef_boxes_per_size > 0;
     std::unique_ptr<exact::NefSolver> nef;
     if (time_nef) {
@@ -165,6 +170,12 @@ DiscretizationResult run_discretization_study(const DiscretizationConfig& config
     for (int si = 0; si < 3; ++si) {
       const uint64_t seed = (held_out ? config.held_out_seed : config.fit_seed) + 10 * mi + si;
       const std::vector<Obb> part = box_corpus(mesh, sizes[si], config.boxes_per_size, seed);
+      // The reference: every box's certified interval, the batch on every core.
+      const auto tp = std::chrono::steady_clock::now();
+      const std::vector<PolyObv> ref = poly.evaluate(part);
+      const double per_box = part.empty() ? 0.0 : seconds_since(tp) / part.size();
+      poly_seconds += per_box * part.size();
+      poly_n += part.size();
       for (size_t i = 0; i < part.size(); ++i) {
         StudySample s;
         s.mesh = nm.name;
@@ -174,26 +185,38 @@ DiscretizationResult run_discretization_study(const DiscretizationConfig& config
         s.box = part[i];
         s.box_volume = volume(part[i]);
         s.centre = est.centre_location(part[i]);
-        const auto te = std::chrono::steady_clock::now();
-        const Rational v = clip.obv(part[i]);
-        s.exact_seconds = seconds_since(te);
-        s.exact = to_double_nearest(v);
-        clip_seconds += s.exact_seconds;
-        ++clip_n;
-        if (nef && static_cast<int>(i) < config.nef_boxes_per_size) {
-          const auto tn = std::chrono::steady_clock::now();
-          const Rational w = nef->obv(part[i]);
-          nef_seconds += seconds_since(tn);
-          clip_on_nef_boxes += s.exact_seconds;
-          ++r.nef_compared;
-          if (!(w == v)) r.nef_agrees = false;  // exact: equal rationals or a finding
+        s.lo = ref[i].lo;
+        s.hi = ref[i].hi;
+        s.exact = ref[i].estimate;
+        s.exact_seconds = per_box;
+        if (s.lo > 0) poly_rel.push_back((s.hi - s.lo) / s.lo);
+        if (static_cast<int>(i) < config.rational_boxes_per_size) {
+          const auto te = std::chrono::steady_clock::now();
+          const Rational v = clip.obv(part[i]);
+          const double t = seconds_since(te);
+          clip_seconds += t;
+          ++clip_n;
+          ++r.rational_checked;
+          const bool inside = Rational(s.lo) <= v && v <= Rational(s.hi);
+          r.rational_outside += !inside;
+          s.rational_checked = inside;
+          s.exact = to_double_nearest(v);
+          if (nef && static_cast<int>(i) < config.nef_boxes_per_size) {
+            const auto tn = std::chrono::steady_clock::now();
+            const Rational w = nef->obv(part[i]);
+            nef_seconds += seconds_since(tn);
+            clip_on_nef_boxes += t;
+            ++r.nef_compared;
+            if (!(w == v)) r.nef_agrees = false;  // exact: equal rationals or a finding
+          }
         }
         r.samples.push_back(s);
         boxes.push_back(part[i]);
       }
     }
     say(nm.name + (held_out ? " (held out)" : " (fit)") + ": " + std::to_string(boxes.size()) +
-        " boxes, exact OBV by clipping done");
+        " boxes, certified intervals done (" + std::to_string(config.rational_boxes_per_size) +
+        " per size checked against the exact rational)");
     for (Backend backend : {Backend::kCpu, Backend::kGl}) {
       if (backend == Backend::kGl && !est.has_gl()) continue;
       if (backend == Backend::kGl) {  // warm-up: shader JIT and the atlas's first pages are not timed
@@ -222,7 +245,9 @@ DiscretizationResult run_discretization_study(const DiscretizationConfig& config
   }
   r.backends.push_back(Backend::kCpu);
   if (gl_ever) r.backends.push_back(Backend::kGl);
-  if (clip_n) r.exact_timings.push_back({"clip", clip_n, clip_seconds / clip_n, "every box of the corpus"});
+  if (poly_n) r.exact_timings.push_back({"poly", poly_n, poly_seconds / poly_n, "every box of the corpus (interval)"});
+  if (!poly_rel.empty()) r.poly_certified_rel_median = median(poly_rel);
+  if (clip_n) r.exact_timings.push_back({"clip", clip_n, clip_seconds / clip_n, "the rational subsample"});
   if (r.nef_compared) {
     r.exact_timings.push_back({"nef", r.nef_compared, nef_seconds / r.nef_compared, "first fit mesh, first boxes of each size"});
     r.exact_timings.push_back({"clip (same boxes as nef)", r.nef_compared, clip_on_nef_boxes / r.nef_compared, ""});

@@ -4,9 +4,14 @@
 // and checked on a held-out one; the Richardson a-posteriori estimate from m and 2m and how
 // often it covers the true error; and the exact solvers' times for the error-against-time plot.
 //
-// Errors: for a box O with exact outer volume V and estimate E,
-//   absolute error |E - V| (mesh units^3), relative error |E - V| / V (boxes with V > 0),
-//   normalised error |E - V| / vol(O), the scale-free quantity that B(m) bounds.
+// The reference for every box is the polyhedral solver's certified interval [lo, hi] of its exact
+// OBV V (fast/poly_solver.h); on a subsample (rational_boxes_per_size per mesh and size) the
+// exact rational is computed too and checked to lie inside it.
+// Errors: for a box O and estimate E, the certified error max(|E - lo|, |E - hi|) >= |E - V|
+//   stands for the absolute error |E - V| (mesh units^3): it exceeds it by at most the interval's
+//   width, about 1e-15 vol(O) (so every coverage figure below is conservative); relative error
+//   is that over V (boxes with V > 0), normalised error over vol(O), the scale-free quantity
+//   that B(m) bounds.
 // The stated bound (see fit_stated_bound): B(m) = C m^-p vol(O), fitted on the fit corpus so
 // that a fraction 1 - alpha/2 of its normalised errors lie below it at every m, and stated at
 // level alpha: at most a fraction alpha of held-out (box, m, backend) errors may exceed it.
@@ -35,6 +40,7 @@ struct DiscretizationConfig {
   int boxes_per_size = 8;                  // per mesh and box size
   uint64_t fit_seed = 1000, held_out_seed = 2000;
   std::vector<int> ms = {4, 8, 16, 32, 64, 128, 256};
+  int rational_boxes_per_size = 2;  // exact rational by clipping, checked inside the interval
   int nef_boxes_per_size = 2;  // timed by Nef (and checked equal to clipping) on the first fit mesh
   double alpha = 0.05;         // stated violation level of B(m)
   bool want_gl = true;
@@ -50,8 +56,10 @@ struct StudySample {
   Location centre = Location::kOutside;
   Obb box;
   double box_volume = 0;
-  double exact = 0;  // exact OBV, nearest double
-  double exact_seconds = 0;
+  double exact = 0;  // the reference: the interval's midpoint (the rational's nearest double where computed)
+  double lo = 0, hi = 0;  // the certified interval of the exact OBV
+  double exact_seconds = 0;  // the polyhedral solver's time for this box (batch time amortised)
+  bool rational_checked = false;  // the exact rational was computed, and lies in [lo, hi]
 };
 
 struct StudyEval {
@@ -62,7 +70,7 @@ struct StudyEval {
   double seconds = 0;   // per evaluation
   double rigorous = 0;   // EstimatorSet::rigorous_bound
   double deviation = 0;  // gl_deviation_bound + round-off: the allowed |GL - CPU|
-  double abs_error(const StudySample& s) const;
+  double abs_error(const StudySample& s) const;  // certified: max(|E - lo|, |E - hi|)
 };
 
 struct ErrorStats {  // over a set of evaluations
@@ -133,6 +141,8 @@ struct DiscretizationResult {
   std::vector<ExactTiming> exact_timings;
   bool nef_agrees = true;  // Nef == clipping on every box timed by both
   size_t nef_compared = 0;
+  size_t rational_checked = 0, rational_outside = 0;  // rationals outside their interval: a defect
+  double poly_certified_rel_median = 0;  // median over boxes with V > 0 of the interval's width / lo
   std::vector<Backend> backends;  // those that ran
   std::string gl_note;            // why GL did not run, or the renderer
   double seconds = 0;

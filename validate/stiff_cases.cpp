@@ -9,6 +9,7 @@
 #include "common/solidity.h"
 #include "data/analytic_meshes.h"
 #include "exact/outer_volume.h"
+#include "fast/poly_solver.h"
 
 namespace vobb::validate {
 namespace {
@@ -86,9 +87,26 @@ class Runner {
     EstimatorSet est(mesh, config_.want_gl, config_.perturb);
     const exact::ClipSolver clip(mesh);
     std::vector<double> exact;
-    for (const Obb& b : boxes) exact.push_back(to_double_nearest(clip.obv(b)));
+    std::vector<Rational> exact_q;
+    for (const Obb& b : boxes) {
+      exact_q.push_back(clip.obv(b));
+      exact.push_back(to_double_nearest(exact_q.back()));
+    }
     bool ok = true;
     std::string notes;
+    // The polyhedral solver's certified interval holds the exact rational on every box.
+    const std::vector<PolyObv> poly = PolyObvSolver(mesh).evaluate(boxes);
+    int held = 0, exact_boxes = 0, exact_faces = 0;
+    for (size_t i = 0; i < boxes.size(); ++i) {
+      held += std::isfinite(poly[i].lo) && std::isfinite(poly[i].hi) && Rational(poly[i].lo) <= exact_q[i] &&
+              exact_q[i] <= Rational(poly[i].hi);
+      exact_boxes += poly[i].exact_box;
+      exact_faces += poly[i].exact_faces;
+    }
+    r.poly_enclosed = held == static_cast<int>(boxes.size());
+    ok = ok && r.poly_enclosed;
+    notes += "; poly interval holds the exact value on " + std::to_string(held) + "/" + std::to_string(boxes.size()) +
+             " (" + std::to_string(exact_faces) + " faces, " + std::to_string(exact_boxes) + " boxes in rationals)";
     size_t n = 0;
     for (Backend backend : {Backend::kCpu, Backend::kGl}) {
       if (backend == Backend::kGl && !est.has_gl()) {

@@ -4,6 +4,8 @@
 //    the rigorous per-box bound R(m) of EstimatorSet::rigorous_bound;
 //  - "finite, within R(m) and B(m)": also within the stated statistical bound B(m) vol(O)
 //    (for boxes of the kind B(m) was fitted on: real meshes, moved or scaled);
+// and, on every case that estimates, the polyhedral solver's certified interval
+// (fast/poly_solver.h) holds the exact rational OBV of every box;
 //  - "refused with a clear message": the input is refused by a Status whose one-line message
 //    names the defect, and nothing crashes.
 // The cases: sliver and needle triangles; a box of aspect ratio 1e-4; a mesh offset by 1e6
@@ -31,6 +33,7 @@ struct StiffCaseResult {
   double worst_rigorous_ratio = 0;  // max |E - V| / R(m) over the case's estimates
   double worst_bound_ratio = 0;     // max |E - V| / (B(m) vol(O))
   double tightest_rigorous = INFINITY;  // min R(m) / vol(O) over the case's estimates
+  bool poly_enclosed = false;  // the polyhedral solver's interval held the exact OBV of every box
 };
 
 struct StiffConfig {

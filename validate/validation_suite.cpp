@@ -44,10 +44,11 @@ const char* location_name(Location l) {
 }
 
 // The suite's sizes. quick: 4 meshes x 3 sizes x 5 boxes x 7 m x 2 backends; full: 8 meshes x 3
-// sizes x 12 boxes.
+// sizes x 2,100 boxes (50,400), each with its certified interval; the exact rational on the
+// first rational_boxes_per_size of each.
 struct Plan {
   std::vector<std::string> fit, held_out, trees;
-  int boxes_per_size = 5, nef_boxes_per_size = 1, depth = 4, lloyd = 4, sweeps = 3;
+  int boxes_per_size = 5, rational_boxes_per_size = 2, nef_boxes_per_size = 1, depth = 4, lloyd = 4, sweeps = 3;
 };
 
 Plan suite_plan(SuiteKind kind) {
@@ -65,7 +66,8 @@ Plan suite_plan(SuiteKind kind) {
     p.fit = {"dino", "elephant", "fandisk"};
     p.held_out = {"knot1", "armadillo", "triceratops", "homer", "bunny00"};
     p.trees = {"dino", "elephant", "knot1"};
-    p.boxes_per_size = 20;
+    p.boxes_per_size = 2100;
+    p.rational_boxes_per_size = 10;
     p.nef_boxes_per_size = 3;
     p.depth = 8;
     p.lloyd = 4;
@@ -184,6 +186,7 @@ Status run_validation_suite(const SuiteOptions& options, SuiteReport* report) {
   dc.fit_meshes = named(plan.fit);
   dc.held_out_meshes = named(plan.held_out);
   dc.boxes_per_size = plan.boxes_per_size;
+  dc.rational_boxes_per_size = plan.rational_boxes_per_size;
   dc.nef_boxes_per_size = plan.nef_boxes_per_size;
   dc.want_gl = options.want_gl;
   dc.perturb = options.perturb;
@@ -292,6 +295,9 @@ Status run_validation_suite(const SuiteOptions& options, SuiteReport* report) {
               " vol(O); stated level " + pct(dc.alpha));
   }
   check("Nef == clipping (exact)", d.nef_agrees, std::to_string(d.nef_compared) + " boxes compared as rationals");
+  check("certified intervals hold the exact rational", d.rational_checked > 0 && d.rational_outside == 0,
+        std::to_string(d.rational_outside) + " of " + std::to_string(d.rational_checked) +
+            " exact rationals outside the polyhedral solver's interval");
   {
     size_t layers = 0, hold = 0;
     for (const LayerBoundRow& l : ub.layers) ++layers, hold += l.exact_holds;
@@ -310,10 +316,10 @@ Status run_validation_suite(const SuiteOptions& options, SuiteReport* report) {
   // ---- CSV files ------------------------------------------------------------------------
   std::vector<Status> writes;
   {
-    Csv c("mesh,corpus,size,box,centre,box_volume,exact_obv,exact_seconds");
+    Csv c("mesh,corpus,size,box,centre,box_volume,reference_obv,interval_lo,interval_hi,rational_checked,poly_seconds");
     for (const StudySample& s : d.samples)
       c.row(s.mesh, s.held_out ? "held_out" : "fit", to_string(s.size), s.index, location_name(s.centre), full(s.box_volume),
-            full(s.exact), g(s.exact_seconds, 4));
+            full(s.exact), full(s.lo), full(s.hi), s.rational_checked ? "yes" : "no", g(s.exact_seconds, 4));
     writes.push_back(out.write("samples.csv", c.str()));
   }
   {
@@ -359,7 +365,9 @@ Status run_validation_suite(const SuiteOptions& options, SuiteReport* report) {
     Csv c("solver,m,seconds_per_eval,rel_median,rel_p95");
     for (const PerMStats& p : d.per_m)
       c.row(std::string(to_string(p.backend)) + "_cubemap", p.m, g(p.all.seconds_mean), g(p.all.rel_median), g(p.all.rel_p95));
-    for (const ExactTiming& t : d.exact_timings) c.row(t.solver, "", g(t.mean_seconds), 0, 0);
+    for (const ExactTiming& t : d.exact_timings)
+      c.row(t.solver, "", g(t.mean_seconds), t.solver == "poly" ? g(d.poly_certified_rel_median) : "0",
+            t.solver == "poly" ? g(d.poly_certified_rel_median) : "0");
     writes.push_back(out.write("pareto.csv", c.str()));
   }
   {
@@ -432,10 +440,11 @@ Status run_validation_suite(const SuiteOptions& options, SuiteReport* report) {
     writes.push_back(out.write("bound.gp", s));
     plots.push_back("bound");
 
-    double clip_t = 0, nef_t = 0;
+    double clip_t = 0, nef_t = 0, poly_t = 0;
     for (const ExactTiming& t : d.exact_timings) {
       if (t.solver == "clip") clip_t = t.mean_seconds;
       if (t.solver == "nef") nef_t = t.mean_seconds;
+      if (t.solver == "poly") poly_t = t.mean_seconds;
     }
     s = gp_header("pareto", "Error against run time per evaluation (exact solvers: error 0, time only)") +
         "set logscale xy\nset xlabel 'seconds per evaluation (2 cores, llvmpipe)'\nset ylabel 'median |E - V| / V'\n"
@@ -448,13 +457,16 @@ Status run_validation_suite(const SuiteOptions& options, SuiteReport* report) {
       s += "set arrow from " + full(nef_t) + ", graph 0 to " + full(nef_t) +
            ", graph 1 nohead lw 2 lc rgb '#8c564b'\nset label 'exact Nef' at " + full(nef_t) +
            ", graph 0.95 rotate by 90 right offset -1,0 tc rgb '#8c564b'\n";
-    const double lo = std::min({clip_t > 0 ? clip_t : 1.0, nef_t > 0 ? nef_t : 1.0, 1e-4});
+    const double lo = std::min({clip_t > 0 ? clip_t : 1.0, nef_t > 0 ? nef_t : 1.0, poly_t > 0 ? poly_t : 1.0, 1e-4});
     s += "set xrange [" + full(lo / 3) + ":" + full(std::max(nef_t, clip_t) * 3 + 1e-3) + "]\n";
     s += "plot 'pareto.csv' using (strcol(1) eq 'cpu_cubemap' ? $3 : NaN):4 with linespoints lw 2 pt 7 lc rgb '#1f77b4' title 'CPU cubemap', \\\n"
          " '' using (strcol(1) eq 'cpu_cubemap' ? $3 : NaN):4:(sprintf('%d', $2)) with labels offset 0,1 notitle";
     if (gl)
       s += ", \\\n '' using (strcol(1) eq 'gl_cubemap' ? $3 : NaN):4 with linespoints lw 2 pt 5 lc rgb '#ff7f0e' title 'GL cubemap (llvmpipe)', \\\n"
            " '' using (strcol(1) eq 'gl_cubemap' ? $3 : NaN):4:(sprintf('%d', $2)) with labels offset 0,-1 tc rgb '#ff7f0e' notitle";
+    if (poly_t > 0)
+      s += ", \\\n '' using (strcol(1) eq 'poly' ? $3 : NaN):4 with points pt 9 ps 2.5 lc rgb '#2ca02c' "
+           "title 'polyhedral solver (its certified interval width / V, median)'";
     s += "\n";
     writes.push_back(out.write("pareto.gp", s));
     plots.push_back("pareto");
@@ -513,8 +525,12 @@ Status run_validation_suite(const SuiteOptions& options, SuiteReport* report) {
       md << "| " << cell(k.name) << " | " << (k.passed ? "pass" : "**FAIL**") << " | " << cell(k.detail) << " |\n";
 
     md << "\n## 1. Discretization error against m\n\n";
-    md << "Errors of the cubemap estimate E against the exact OBV V (clipping path), over "
-       << d.samples.size() << " boxes (fit and held-out corpora together). Relative: |E-V|/V; absolute: |E-V| in "
+    md << "Errors of the cubemap estimate E against the exact OBV V, over " << d.samples.size()
+       << " boxes (fit and held-out corpora together). The reference is the polyhedral solver's certified interval "
+          "[lo, hi] of V (fast/poly_solver.h; median width " << g(d.poly_certified_rel_median, 3)
+       << " of V), and the error taken is max(|E-lo|, |E-hi|) >= |E-V|; " << d.rational_checked
+       << " boxes were checked against the exact rational (clipping path), " << d.rational_outside
+       << " outside their interval. Relative: |E-V|/V; absolute: |E-V| in "
           "mesh units³ (meshes differ in scale); normalised: |E-V|/vol(O). Seconds: per evaluation (CPU: per box, one "
           "core; GL: the batch's time over its boxes).\n\n";
     md << "| backend | m | n | rel median | rel p95 | rel max | abs median | abs p95 | abs max | norm p95 | R(m)/vol median | s/eval |\n"
@@ -582,9 +598,12 @@ Status run_validation_suite(const SuiteOptions& options, SuiteReport* report) {
     for (const PerMStats& p : d.per_m)
       md << "| " << to_string(p.backend) << " cubemap | " << p.m << " | " << g(p.all.seconds_mean, 3) << " | "
          << g(p.all.rel_median, 3) << " | " << g(p.all.rel_p95, 3) << " |\n";
-    for (const ExactTiming& t : d.exact_timings)
-      md << "| exact " << t.solver << " | – | " << g(t.mean_seconds, 3) << " (n = " << t.n << (t.note.empty() ? "" : "; ")
-         << t.note << ") | 0 | 0 |\n";
+    for (const ExactTiming& t : d.exact_timings) {
+      const bool poly = t.solver == "poly";
+      md << "| " << (poly ? "polyhedral (certified interval)" : "exact " + t.solver) << " | – | " << g(t.mean_seconds, 3)
+         << " (n = " << t.n << (t.note.empty() ? "" : "; ") << t.note << ") | "
+         << (poly ? "≤ " + g(d.poly_certified_rel_median, 3) : "0") << " | " << (poly ? "(certified width)" : "0") << " |\n";
+    }
     md << "\nNef and clipping were compared as rationals on " << d.nef_compared << " boxes: "
        << (d.nef_agrees ? "all equal" : "**they differ**") << ".\n\n![error against time](pareto.png)\n";
 

@@ -20,6 +20,7 @@
 
 #include "common/exact_predicates.h"
 #include "common/tree_io.h"
+#include "data/analytic_meshes.h"
 #include "test_common.h"
 
 namespace vobb {
@@ -664,18 +665,23 @@ TEST(Cli, BuildExportAndInfoOnAnAnalyticMesh) {
     ASSERT_TRUE(write_boxes({t.nodes[0].box}, boxes));
     r = vobb_cli("obv " + mesh + " --boxes " + boxes + " --m 4,8 --backend all --json --rational");
     ASSERT_EQ(r.code, 0) << r.err;
-    for (const char* key : {"\"index\"", "\"box_volume\"", "\"exact\"", "\"estimates\"", "\"backend\": \"cpu\"",
-                            "\"backend\": \"gl\"", "\"m\": 8", "\"obv\"", "\"seconds\"", "\"renderer\""})
+    for (const char* key : {"\"index\"", "\"box_volume\"", "\"interval\"", "\"exact\"", "\"estimates\"",
+                            "\"backend\": \"cpu\"", "\"backend\": \"gl\"", "\"backend\": \"poly\"", "\"m\": 8",
+                            "\"obv\"", "\"seconds\"", "\"renderer\""})
       EXPECT_NE(r.out.find(key), std::string::npos) << key << r.out;
-    // The exact OBV as a rational too, whose nearest double is "exact"; and every estimate
-    // within its rigorous bound of it.
+    // The exact OBV as a rational too, whose nearest double is "exact"; the interval holds it,
+    // and every estimate lies within its certified bound of it (compared as rationals).
     const nlohmann::json doc = nlohmann::json::parse(r.out);
     for (const auto& box : doc["boxes"]) {
       const Rational q(box["exact_rational"].get<std::string>());
       EXPECT_EQ(to_double_nearest(q), box["exact"].get<double>());
-      ASSERT_EQ(box["estimates"].size(), 4u);  // cpu and gl at m = 4 and 8
-      for (const auto& e : box["estimates"])
-        EXPECT_LE(std::abs(e["obv"].get<double>() - box["exact"].get<double>()), e["bound"].get<double>()) << e;
+      EXPECT_LE(Rational(box["interval"][0].get<double>()), q);
+      EXPECT_LE(q, Rational(box["interval"][1].get<double>()));
+      ASSERT_EQ(box["estimates"].size(), 5u);  // poly, then cpu and gl at m = 4 and 8
+      for (const auto& e : box["estimates"]) {
+        EXPECT_LE(abs(Rational(e["obv"].get<double>()) - q), Rational(e["bound"].get<double>())) << e;
+        EXPECT_FALSE(e.contains("r_bound")) << e;  // R(m) only when asked for
+      }
     }
     // The rationals only when asked for (they run to thousands of digits); in text, one line
     // per box after the table, the same value.
@@ -708,15 +714,16 @@ TEST(Cli, BuildExportAndInfoOnAnAnalyticMesh) {
   for (const std::string& p : {mesh, tree, boxes, margin_tree, plain_tree}) std::remove(p.c_str());
 }
 
-// The exact OBV lies between 0 and the box's volume, so no error bound needs to be larger than
-// the box: at m = 1 on the unit cube, the rigorous bound of a box over the cube's top face is
-// 0.18 (CPU) and 0.32 (GL) of a box of volume 0.216 (measured before obv clipped it); obv
+// R(m), the cubemap's texel bound (--r-bound), never exceeds the box: the exact OBV lies
+// between 0 and the box's volume. At m = 1 on the unit cube, R(m) of a box over the cube's top
+// face is 0.18 (CPU) and 0.32 (GL) of a box of volume 0.216 before the range clips it; obv
 // reports at most max(E, vol - E) plus its derived round-off (validate/estimators.h,
-// range_bound), and the bound still holds against the exact value. The round-off, relative to
+// range_bound), and it still holds against the exact value. The round-off, relative to
 // max(E, vol - E) >= vol / 2: range_bound's volume U is at most vol (1 + 32 eps)(1 + 12 eps),
 // so U - E exceeds vol - E by 44 eps vol, 88 eps of the maximum; the reported box volume is
 // off by at most 5 eps (volume()'s 5 products), 10 eps of it; and the final factor 1 + 4 eps:
-// under 102 eps in all, taken as 128 eps.
+// under 102 eps in all, taken as 128 eps. The certified bound (from the polyhedral solver's
+// interval) holds too, and is far below R(m).
 TEST(Cli, ObvBoundIsNeverAboveTheBoxVolume) {
   const std::string mesh = write_cube("range_cube.off", 1);
   Obb b;
@@ -724,22 +731,76 @@ TEST(Cli, ObvBoundIsNeverAboveTheBoxVolume) {
   b.half = Vec3(0.3, 0.3, 0.3);
   const std::string boxes = test::temp_path("range_boxes.json");
   ASSERT_TRUE(write_boxes({b}, boxes));
-  const CliRun r = vobb_cli("obv " + mesh + " --boxes " + boxes + " --m 1,2 --backend all --json");
+  const CliRun r = vobb_cli("obv " + mesh + " --boxes " + boxes + " --m 1,2 --backend all --json --r-bound --rational");
   ASSERT_EQ(r.code, 0) << r.err;
   const nlohmann::json doc = nlohmann::json::parse(r.out);
   ASSERT_EQ(doc["boxes"].size(), 1u);
   const auto& box = doc["boxes"][0];
   const double vol = box["box_volume"].get<double>(), exact = box["exact"].get<double>();
+  const Rational q(box["exact_rational"].get<std::string>());
   EXPECT_DOUBLE_EQ(vol, 0.216);
-  ASSERT_EQ(box["estimates"].size(), 4u);
+  ASSERT_EQ(box["estimates"].size(), 5u);
+  int cubemap = 0;
   for (const auto& e : box["estimates"]) {
     const double obv = e["obv"].get<double>(), bound = e["bound"].get<double>();
-    EXPECT_LE(std::abs(obv - exact), bound) << e;
-    EXPECT_LE(bound, std::max(obv, vol - obv) * (1 + 128 * std::numeric_limits<double>::epsilon())) << e;
-    EXPECT_LT(bound, vol) << e;
+    EXPECT_LE(abs(Rational(obv) - q), Rational(bound)) << e;
+    if (e["backend"] == "poly") {
+      EXPECT_FALSE(e.contains("r_bound")) << e;
+      continue;
+    }
+    ++cubemap;
+    const double rb = e["r_bound"].get<double>();
+    EXPECT_LE(std::abs(obv - exact), rb) << e;
+    EXPECT_LE(rb, std::max(obv, vol - obv) * (1 + 128 * std::numeric_limits<double>::epsilon())) << e;
+    EXPECT_LT(rb, vol) << e;
   }
+  EXPECT_EQ(cubemap, 4);
   std::remove(boxes.c_str());
   std::remove(mesh.c_str());
+}
+
+// The polyhedral solver through the command line: obv --backend poly prints each estimate with
+// its certified interval, which holds the exact rational; build --backend poly (which takes no
+// --m) writes a tree that certifies on both exact paths.
+TEST(Cli, PolyBackendEstimatesAndBuilds) {
+  const std::string mesh = write_cube("poly_cube.off", 1);
+  Obb b;
+  b.center = Vec3(0.4, 0.55, 0.9);
+  b.half = Vec3(0.3, 0.2, 0.25);
+  b.axes = {Vec3(0.6, 0.8, 0), Vec3(-0.8, 0.6, 0), Vec3(0, 0, 1)};
+  const std::string boxes = test::temp_path("poly_boxes.json");
+  ASSERT_TRUE(write_boxes({b}, boxes));
+  CliRun r = vobb_cli("obv " + mesh + " --boxes " + boxes + " --backend poly --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const nlohmann::json doc = nlohmann::json::parse(r.out);
+  const auto& box = doc["boxes"][0];
+  ASSERT_EQ(box["estimates"].size(), 1u);
+  EXPECT_EQ(box["estimates"][0]["backend"], "poly");
+  EXPECT_FALSE(box["estimates"][0].contains("m"));
+  EXPECT_FALSE(doc.contains("renderer"));  // no GL context for poly
+  r = vobb_cli("obv " + mesh + " --boxes " + boxes + " --backend exact --json --rational");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const Rational exact(nlohmann::json::parse(r.out)["boxes"][0]["exact_rational"].get<std::string>());
+  EXPECT_LE(Rational(box["interval"][0].get<double>()), exact);
+  EXPECT_LE(exact, Rational(box["interval"][1].get<double>()));
+  r = vobb_cli("obv " + mesh + " --boxes " + boxes + " --backend poly");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("certified interval"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("poly"), std::string::npos) << r.out;
+  // build: no --m with poly, refused in one line with exit 2 and nothing written.
+  const std::string tree = test::temp_path("poly_tree.json");
+  r = vobb_cli("build " + mesh + " -o " + tree + " --backend poly --m 8");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(line_count(r.err), 1u) << r.err;
+  EXPECT_FALSE(test::exists(tree));
+  const std::string torus_path = test::temp_path("poly_torus.off");
+  test::write_off(analytic::polygonal_torus().mesh, torus_path);
+  r = vobb_cli("build " + torus_path + " -o " + tree + " --depth 4 --backend poly --quiet");
+  ASSERT_EQ(r.code, 0) << r.err;
+  r = vobb_cli("certify " + torus_path + " " + tree + " --path both --quiet");
+  EXPECT_EQ(r.code, 0) << r.out << r.err;
+  EXPECT_NE(r.out.find("containment: ok"), std::string::npos) << r.out;
+  for (const std::string& p : {mesh, boxes, tree, torus_path}) std::remove(p.c_str());
 }
 
 // The library prints nothing about GL; the command line names the renderer once on stderr,
