@@ -20,7 +20,11 @@ ColumnFilter::ColumnFilter(const Obb& box) {
   flat_ = box.half[0] == 0 || box.half[1] == 0 || box.half[2] == 0;
   for (int k = 0; k < 3; ++k) {
     c_[k] = box.center[k];
-    for (int i = 0; i < 3; ++i) w_[k][i] = f.w[k][i];
+    abs_c_[k] = std::abs(c_[k]);
+    for (int i = 0; i < 3; ++i) {
+      w_[k][i] = f.w[k][i];
+      abs_w_[k][i] = std::abs(w_[k][i]);
+    }
   }
   R_ = std::abs(f.det);
   // u carries 1 rounding, each w component 2 more over |a1 b2| + |a2 b1| <= l1(u') l1(u''),
@@ -30,27 +34,6 @@ ColumnFilter::ColumnFilter(const Obb& box) {
   for (int k = 0; k < 3; ++k) nu[k] = l1(f.u[k]);
   for (int k = 0; k < 3; ++k) w_err_[k] = 16 * kEps * nu[(k + 1) % 3] * nu[(k + 2) % 3];
   R_err_ = 32 * kEps * nu[0] * nu[1] * nu[2];
-}
-
-bool ColumnFilter::operator()(const Aabb& b) const {
-  if (b.empty()) return false;
-  for (int k = 0; k < 3; ++k) {
-    double mid = 0, rad = 0, scale = 0, coords = 0;
-    for (int i = 0; i < 3; ++i) {
-      mid += (0.5 * (b.lo[i] + b.hi[i]) - c_[i]) * w_[k][i];
-      rad += std::abs(w_[k][i]) * 0.5 * (b.hi[i] - b.lo[i]);
-      const double size = std::abs(b.lo[i]) + std::abs(b.hi[i]) + std::abs(c_[i]);
-      scale += std::abs(w_[k][i]) * size;
-      coords += size;
-    }
-    // The double sums' own rounding, relative 1e-9 of the magnitudes, and 2^-1060 absolute
-    // where they are subnormal; then the frame's: w off by w_err per component over
-    // sum |p - c| <= coords, and R by R_err.
-    const double pad = 1e-9 * (scale + rad + R_) + 0x1p-1060 * (1 + coords) + w_err_[k] * coords + R_err_;
-    if (mid - rad > R_ + pad && k < 2) return false;  // beyond the +side
-    if (mid + rad < -R_ - pad) return false;           // beyond the -side (or below)
-  }
-  return true;
 }
 
 Rational box_obv_rational(const Mesh& mesh, const AabbTree& faces, const Obb& box) {
@@ -66,7 +49,7 @@ Rational box_obv_rational(const Mesh& mesh, const AabbTree& faces, const Obb& bo
     return tmap.emplace(v, to_frame(frame, mesh.vertices[v])).first->second;
   };
   std::vector<Rational> terms;
-  faces.for_each_accepted(filter, [&](int32_t f) {
+  faces.visit_accepted(filter, [&](int32_t f) {
     const Point<Rational> tri[3] = {to_t(mesh.faces[f][0]), to_t(mesh.faces[f][1]), to_t(mesh.faces[f][2])};
     Rational t;
     if (face_term6(tri, R, &t) && sgn(t) != 0) terms.push_back(std::move(t));

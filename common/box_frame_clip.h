@@ -15,6 +15,7 @@
 // same arithmetic, so they cannot drift apart.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <utility>
 
@@ -212,12 +213,33 @@ NT obv_from_sum6(const NT& sum6, const NT& R) {
 class ColumnFilter {
  public:
   explicit ColumnFilter(const Obb& box);
-  bool operator()(const Aabb& b) const;
+  bool operator()(const Aabb& b) const {
+    if (b.empty()) return false;
+    double ctr[3], ext[3], size[3], coords = 0;
+    for (int i = 0; i < 3; ++i) {
+      ctr[i] = 0.5 * (b.lo[i] + b.hi[i]) - c_[i];
+      ext[i] = 0.5 * (b.hi[i] - b.lo[i]);
+      size[i] = std::abs(b.lo[i]) + std::abs(b.hi[i]) + abs_c_[i];
+      coords += size[i];
+    }
+    for (int k = 0; k < 3; ++k) {
+      const double mid = ctr[0] * w_[k][0] + ctr[1] * w_[k][1] + ctr[2] * w_[k][2];
+      const double rad = abs_w_[k][0] * ext[0] + abs_w_[k][1] * ext[1] + abs_w_[k][2] * ext[2];
+      const double scale = abs_w_[k][0] * size[0] + abs_w_[k][1] * size[1] + abs_w_[k][2] * size[2];
+      // The double sums' own rounding, relative 1e-9 of the magnitudes, and 2^-1060 absolute
+      // where they are subnormal; then the frame's: w off by w_err per component over
+      // sum |p - c| <= coords, and R by R_err.
+      const double pad = 1e-9 * (scale + rad + R_) + 0x1p-1060 * (1 + coords) + w_err_[k] * coords + R_err_;
+      if (mid - rad > R_ + pad && k < 2) return false;  // beyond the +side
+      if (mid + rad < -R_ - pad) return false;           // beyond the -side (or below)
+    }
+    return true;
+  }
   bool flat() const { return flat_; }  // a half extent is 0: the box has no volume
 
  private:
-  double c_[3];
-  double w_[3][3];
+  double c_[3], abs_c_[3];
+  double w_[3][3], abs_w_[3][3];
   double R_;
   double w_err_[3];  // bound on |w - W| per row, each component
   double R_err_;

@@ -67,21 +67,7 @@ void AabbTree::for_each_overlap(const Aabb& query, const std::function<void(int3
 
 void AabbTree::for_each_accepted(const std::function<bool(const Aabb&)>& accept,
                                  const std::function<void(int32_t)>& visit) const {
-  if (nodes_.empty()) return;
-  int32_t stack[128];
-  int top = 0;
-  stack[top++] = 0;
-  while (top > 0) {
-    const Node& n = nodes_[stack[--top]];
-    if (!accept(n.bounds)) continue;
-    if (n.count > 0) {
-      for (int32_t i = n.first; i < n.first + n.count; ++i)
-        if (accept(boxes_[order_[i]])) visit(order_[i]);
-    } else {
-      stack[top++] = n.first + 1;
-      stack[top++] = n.first;
-    }
-  }
+  visit_accepted(accept, visit);
 }
 
 }  // namespace vobb

@@ -28,6 +28,25 @@ class AabbTree {
   // primitive.
   void for_each_accepted(const std::function<bool(const Aabb&)>& accept,
                          const std::function<void(int32_t)>& visit) const;
+  // The same, with both calls inlined (for inner loops).
+  template <class Accept, class Visit>
+  void visit_accepted(const Accept& accept, Visit&& visit) const {
+    if (nodes_.empty()) return;
+    int32_t stack[128];
+    int top = 0;
+    stack[top++] = 0;
+    while (top > 0) {
+      const Node& n = nodes_[stack[--top]];
+      if (!accept(n.bounds)) continue;
+      if (n.count > 0) {
+        for (int32_t i = n.first; i < n.first + n.count; ++i)
+          if (accept(boxes_[order_[i]])) visit(order_[i]);
+      } else {
+        stack[top++] = n.first + 1;
+        stack[top++] = n.first;
+      }
+    }
+  }
   const Aabb& primitive_bounds(int32_t i) const { return boxes_[i]; }
   size_t size() const { return boxes_.size(); }
   // Bounds of all primitives (empty for an empty tree).

@@ -32,12 +32,6 @@ constexpr double kSafe = 0x1p300;
 
 bool in_range(const Interval& x) { return x.inf() >= -kSafe && x.sup() <= kSafe; }
 
-// Calls visit(f) for every face whose column may meet the box's (conservative).
-template <class Visit>
-void for_each_column_face(const AabbTree& faces, const ColumnFilter& filter, Visit&& visit) {
-  faces.for_each_accepted(filter, [&](int32_t f) { visit(f); });
-}
-
 PolyObv exact_result(const Rational& q, int32_t faces, std::string why) {
   PolyObv r;
   enclose(q, &r.lo, &r.hi);
@@ -80,7 +74,7 @@ PolyObv PolyObvSolver::evaluate(const Obb& box) const {
   Interval sum(0);
   int32_t visited = 0, exact_faces = 0;
   bool range_ok = true;
-  for_each_column_face(faces_, filter, [&](int32_t f) {
+  faces_.visit_accepted(filter, [&](int32_t f) {
     ++visited;
     if (!range_ok) return;
     const Point<Interval> tri[3] = {box_clip::to_frame(frame, mesh_.corner(f, 0)),
@@ -139,7 +133,7 @@ double PolyObvSolver::estimate(const Obb& box) const {
   const double R = std::abs(frame.det);
   double sum = 0;
   if (R > 0)
-    for_each_column_face(faces_, filter, [&](int32_t f) {
+    faces_.visit_accepted(filter, [&](int32_t f) {
       const Point<double> tri[3] = {box_clip::to_frame(frame, mesh_.corner(f, 0)),
                                     box_clip::to_frame(frame, mesh_.corner(f, 1)),
                                     box_clip::to_frame(frame, mesh_.corner(f, 2))};
