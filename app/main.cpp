@@ -577,18 +577,30 @@ int run_obv(const std::string& mesh_path, const std::string& boxes_path, const s
   std::vector<std::vector<double>> bound, rbound;
   std::optional<vobb::validate::EstimatorSet> r_source;
   if (r_bound && any_cubemap) r_source.emplace(mesh.mesh, false);
+  // A box whose view of the mesh the cubemap's doubles cannot hold is estimated at half its
+  // volume (texel_plan.h); R(m)'s plan finds it.
+  std::vector<char> unresolved(n, 0);
   for (const Run& r : runs) {
     bound.emplace_back(n);
     rbound.emplace_back(n, NAN);
     for (size_t i = 0; i < n; ++i) {
       bound.back()[i] = certified_error(r.obv[i], poly[i]);
-      if (r_source && r.m > 0)
+      if (r_source && r.m > 0) {
+        bool u = false;
         rbound.back()[i] =
             std::min(r_source->bound(r.backend == "cpu" ? vobb::validate::Backend::kCpu : vobb::validate::Backend::kGl,
-                                     boxes[i], r.m),
+                                     boxes[i], r.m, &u),
                      vobb::validate::range_bound(boxes[i], r.obv[i]));
+        unresolved[i] |= u;
+      }
     }
   }
+  for (size_t i = 0; i < n; ++i)
+    if (unresolved[i])
+      std::fprintf(stderr,
+                   "vobb: warning: box %zu: its view of the mesh does not fit the cubemap's doubles (faces beyond "
+                   "2^300 box units); estimated at half its volume\n",
+                   i);
   std::vector<double> exact_value(n, 0.0), exact_seconds(n, 0.0);
   std::vector<std::string> exact_rational(n);
   if (want_exact) {
@@ -610,8 +622,12 @@ int run_obv(const std::string& mesh_path, const std::string& boxes_path, const s
     nlohmann::ordered_json jb;
     jb["index"] = i;
     jb["box_volume"] = vobb::volume(boxes[i]);
+    if (unresolved[i]) jb["unresolved"] = true;
     if (!poly.empty()) {
       jb["interval"] = {poly[i].lo, poly[i].hi};
+      jb["interval_faces"] = poly[i].faces;              // faces visited
+      jb["interval_exact_signs"] = poly[i].exact_signs;  // vertex signs decided in rationals
+      jb["interval_exact_faces"] = poly[i].exact_faces;  // faces evaluated in rationals
       if (poly[i].exact_box) jb["interval_from_exact"] = poly[i].why;
     }
     if (want_exact) {

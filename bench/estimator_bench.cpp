@@ -13,6 +13,7 @@
 
 #include <tbb/task_arena.h>
 
+#include "bench/bench_timing.h"
 #include "common/io/mesh_report.h"
 #include "fast/cpu_estimator.h"
 #include "fast/gl_estimator.h"
@@ -20,12 +21,7 @@
 
 namespace {
 
-template <typename F>
-double seconds(F&& f) {
-  const auto t0 = std::chrono::steady_clock::now();
-  f();
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
+using vobb::bench::seconds;
 
 double max_abs_diff(const std::vector<double>& a, const std::vector<double>& b) {
   double d = 0;

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/bench_timing.h"
 #include "common/io/mesh_io.h"
 #include "exact/outer_volume.h"
 #include "fast/obbtree_builder.h"
@@ -19,12 +20,7 @@ double median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
-template <typename F>
-double seconds(F&& f) {
-  const auto t0 = std::chrono::steady_clock::now();
-  f();
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
+using vobb::bench::seconds;
 
 }  // namespace
 

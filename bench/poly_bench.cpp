@@ -1,7 +1,8 @@
 // Per-box time of the polyhedral OBV solver (fast/poly_solver.h) against the cubemap at m (the
 // CPU twin and GL, whatever EGL gives), on seeded leaf, mid and root corpora
-// (validate/box_corpus.h), on one thread and on all; and the solver's error against the exact
-// rational on the first --exact-boxes boxes of each corpus. Every configuration runs in this
+// (validate/box_corpus.h) and on the baseline tree's level-8 boxes as built, on one thread and
+// on all; and the solver's error against the exact rational on the first --exact-boxes boxes of
+// each corpus. Every configuration runs in this
 // one process, so the ratios compare like with like.
 // Usage: vobb-bench-poly MESH [--m M] [--boxes N] [--exact-boxes N] [--no-gl]
 #include <tbb/task_arena.h>
@@ -15,20 +16,17 @@
 #include <string>
 #include <vector>
 
+#include "bench/bench_timing.h"
 #include "common/io/mesh_report.h"
 #include "fast/cpu_estimator.h"
 #include "fast/gl_estimator.h"
+#include "fast/obbtree_builder.h"
 #include "fast/poly_solver.h"
 #include "validate/box_corpus.h"
 
 namespace {
 
-template <typename F>
-double seconds(F&& f) {
-  const auto t0 = std::chrono::steady_clock::now();
-  f();
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
+using vobb::bench::seconds;
 
 double median(std::vector<double> v) {
   if (v.empty()) return NAN;
@@ -66,9 +64,16 @@ int main(int argc, char** argv) {
   std::printf("%-5s %5s %-34s %12s %12s\n", "boxes", "count", "configuration", "ms per box", "median rel");
   tbb::task_arena one(1);
   using vobb::validate::BoxSize;
-  for (BoxSize size : {BoxSize::kLeaf, BoxSize::kMid, BoxSize::kRoot}) {
-    const auto boxes = vobb::validate::box_corpus(lm.mesh, size, count, 2026);
-    const char* name = vobb::validate::to_string(size);
+  // The seeded corpora, then the level-8 boxes of the baseline tree as they are (tight boxes:
+  // a mesh vertex lies within round-off of each of their faces).
+  const vobb::Tree tree = vobb::build_obbtree(lm.mesh, vobb::ObbTreeOptions{});
+  std::vector<vobb::Obb> tree8;
+  for (const vobb::TreeNode& node : tree.nodes)
+    if (node.level == tree.depth && static_cast<int>(tree8.size()) < count) tree8.push_back(node.box);
+  for (int corpus = 0; corpus < 4; ++corpus) {
+    const BoxSize size = corpus == 1 ? BoxSize::kMid : corpus == 2 ? BoxSize::kRoot : BoxSize::kLeaf;
+    const auto boxes = corpus == 3 ? tree8 : vobb::validate::box_corpus(lm.mesh, size, count, 2026);
+    const char* name = corpus == 3 ? "tree8" : vobb::validate::to_string(size);
     const int n = static_cast<int>(boxes.size());
     auto row = [&](const char* what, double t, double rel = NAN) {
       std::printf("%-5s %5d %-34s %12.4f %12.2e\n", name, n, what, 1e3 * t / n, rel);
@@ -90,18 +95,20 @@ int main(int argc, char** argv) {
     t = seconds([&] { one.execute([&] { ev = poly.evaluate(boxes); }); });
     std::vector<double> mid, width, visited;
     int exact_boxes = 0;
-    long exact_faces = 0;
+    long exact_faces = 0, exact_signs = 0;
     for (const vobb::PolyObv& r : ev) {
       mid.push_back(r.estimate);
       visited.push_back(r.faces);
       width.push_back((r.hi - r.lo) / vobb::volume(boxes[&r - ev.data()]));
       exact_boxes += r.exact_box;
       exact_faces += r.exact_faces;
+      exact_signs += r.exact_signs;
     }
     row("poly, interval, one thread", t, rel(mid));
     std::printf("%-5s %5d %-34s %12s %12.2e   (median width / vol; median %g faces visited; %d exact boxes, %ld exact "
-                "faces)\n",
-                name, n, "poly, interval width", "-", median(width), median(visited), exact_boxes, exact_faces);
+                "faces, %ld exact signs)\n",
+                name, n, "poly, interval width", "-", median(width), median(visited), exact_boxes, exact_faces,
+                exact_signs);
     t = seconds([&] { est = poly.estimate(boxes); });
     row("poly, double, all threads", t);
     t = seconds([&] { ev = poly.evaluate(boxes); });

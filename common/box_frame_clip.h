@@ -41,9 +41,12 @@ struct ClipTraits<Rational> {
   static int sign(const Rational& x) { return sgn(x); }
 };
 
+// A vertex in T-space; `origin` is the mesh vertex it is (-1 for a point a clip made), so that
+// a decider may settle its signs from the mesh's own coordinates.
 template <class NT>
 struct Point {
   NT x[3];
+  int32_t origin = -1;
 };
 
 // A triangle clipped by the column's four sides and the slab's two planes has at most
@@ -85,16 +88,33 @@ Frame<NT> make_frame(const Obb& box) {
   return f;
 }
 
-// T(p) for a mesh vertex p.
+// T(p) for a mesh vertex p (its index `origin`, or -1).
 template <class NT>
-Point<NT> to_frame(const Frame<NT>& f, const Vec3& p) {
+Point<NT> to_frame(const Frame<NT>& f, const Vec3& p, int32_t origin = -1) {
   const NT d[3] = {NT(p[0]) - f.c[0], NT(p[1]) - f.c[1], NT(p[2]) - f.c[2]};
   Point<NT> q;
   for (int k = 0; k < 3; ++k) q.x[k] = d[0] * f.w[k][0] + d[1] * f.w[k][1] + d[2] * f.w[k][2];
+  q.origin = origin;
   return q;
 }
 
+// Every branch of face_term6 is sign(side x_axis - bound R) for a point, with side and bound
+// in {+1, -1}, given its value `val` in NT. The default decider takes ClipTraits' sign of it;
+// another (fast/poly_solver.cpp) may settle a mesh vertex's sign exactly where NT cannot.
+struct SignOf {
+  template <class NT>
+  int operator()(const Point<NT>&, int /*axis*/, int /*side*/, int /*bound*/, const NT& val) const {
+    return ClipTraits<NT>::sign(val);
+  }
+};
+
 namespace detail {
+
+template <class NT, class Decide>
+int side_sign(const Decide& decide, const Point<NT>& p, int axis, int side, int bound, const NT& R) {
+  const NT val = side > 0 ? NT(p.x[axis] - (bound > 0 ? R : NT(-R))) : NT(-p.x[axis] - (bound > 0 ? R : NT(-R)));
+  return decide(p, axis, side, bound, val);
+}
 
 // Twice the signed area of the shadow (x, y) of triangle abc.
 template <class NT>
@@ -102,19 +122,21 @@ NT cross2(const Point<NT>& a, const Point<NT>& b, const Point<NT>& c) {
   return (b.x[0] - a.x[0]) * (c.x[1] - a.x[1]) - (b.x[1] - a.x[1]) * (c.x[0] - a.x[0]);
 }
 
-// The part of *in where side * x[axis] <= R (side = +1: x <= R; -1: x >= -R), by
-// Sutherland-Hodgman, which keeps the cycle's orientation. Returns `in` itself when no vertex
-// lies beyond (nothing to cut), else `out` filled (n = 0 when fewer than 3 vertices remain).
-template <class NT>
-const Polygon<NT>* clip(const Polygon<NT>* in, int axis, int side, const NT& R, Polygon<NT>* out) {
+// The part of *in where side * x[axis] <= bound * R, by Sutherland-Hodgman, which keeps the
+// cycle's orientation. Returns `in` itself when no vertex lies beyond (nothing to cut), else
+// `out` filled (n = 0 when fewer than 3 vertices remain).
+template <class NT, class Decide>
+const Polygon<NT>* clip(const Decide& decide, const Polygon<NT>* in, int axis, int side, int bound, const NT& R,
+                        Polygon<NT>* out) {
   const int n = in->n;
   if (n == 0) return in;
   int s[kMaxPolygon];
   NT val[kMaxPolygon];
   bool any_out = false, any_in = false;
+  const NT b = bound > 0 ? R : NT(-R);
   for (int i = 0; i < n; ++i) {
-    val[i] = side > 0 ? NT(in->v[i].x[axis] - R) : NT(-in->v[i].x[axis] - R);
-    s[i] = ClipTraits<NT>::sign(val[i]);
+    val[i] = side > 0 ? NT(in->v[i].x[axis] - b) : NT(-in->v[i].x[axis] - b);
+    s[i] = decide(in->v[i], axis, side, bound, val[i]);
     any_out |= s[i] > 0;
     any_in |= s[i] <= 0;
   }
@@ -128,6 +150,7 @@ const Polygon<NT>* clip(const Polygon<NT>* in, int axis, int side, const NT& R, 
         const NT t = val[i] / (val[i] - val[j]);
         Point<NT>& p = out->v[out->n++];
         for (int k = 0; k < 3; ++k) p.x[k] = in->v[i].x[k] + t * (in->v[j].x[k] - in->v[i].x[k]);
+        p.origin = -1;
       }
     }
   }
@@ -143,13 +166,16 @@ const Polygon<NT>* clip(const Polygon<NT>* in, int axis, int side, const NT& R, 
 // slab, or its clipped shadow is degenerate. A face above the slab adds 2R x its shadow; a face
 // inside the column and the slab is a closed form; only faces crossing them are clipped, and
 // a face lying in z = R counts as above (the integrand is continuous there).
-template <class NT>
-bool face_term6(const Point<NT> (&tri)[3], const NT& R, NT* term) {
-  using detail::clip;
+template <class NT, class Decide = SignOf>
+bool face_term6(const Point<NT> (&tri)[3], const NT& R, NT* term, const Decide& decide = Decide()) {
   using detail::cross2;
+  using detail::side_sign;
+  auto clip = [&](const Polygon<NT>* in, int axis, int side, int bound, Polygon<NT>* out) {
+    return detail::clip(decide, in, axis, side, bound, R, out);
+  };
   auto beyond = [&](int k, int side) {  // all three vertices strictly beyond side * x_k = R
     for (int i = 0; i < 3; ++i)
-      if (ClipTraits<NT>::sign(side > 0 ? NT(tri[i].x[k] - R) : NT(-tri[i].x[k] - R)) <= 0) return false;
+      if (side_sign(decide, tri[i], k, side, 1, R) <= 0) return false;
     return true;
   };
   for (int k = 0; k < 2; ++k)
@@ -160,13 +186,13 @@ bool face_term6(const Point<NT> (&tri)[3], const NT& R, NT* term) {
   for (int i = 0; i < 3; ++i) buf[0].v[i] = tri[i];
   const Polygon<NT>* cur = &buf[0];
   for (int k = 0; k < 2; ++k)
-    for (int side : {1, -1}) cur = clip(cur, k, side, R, &buf[cur == &buf[1] ? 2 : 1]);
+    for (int side : {1, -1}) cur = clip(cur, k, side, 1, &buf[cur == &buf[1] ? 2 : 1]);
   if (cur->n < 3) return false;
   // Split at the slab's planes: the part above z = R, and the part between.
   bool all_mid = true, all_top = true;
   for (int i = 0; i < cur->n; ++i) {
-    const int above = ClipTraits<NT>::sign(NT(cur->v[i].x[2] - R));
-    if (above > 0 || ClipTraits<NT>::sign(NT(cur->v[i].x[2] + R)) < 0) all_mid = false;
+    const int above = side_sign(decide, cur->v[i], 2, 1, 1, R);                       // sign(z - R)
+    if (above > 0 || side_sign(decide, cur->v[i], 2, 1, -1, R) < 0) all_mid = false;  // z < -R
     if (above < 0) all_top = false;
   }
   const Polygon<NT>* top = nullptr;
@@ -177,9 +203,9 @@ bool face_term6(const Point<NT> (&tri)[3], const NT& R, NT* term) {
   } else if (all_mid) {
     mid = cur;
   } else {
-    top = clip(cur, 2, -1, NT(-R), &top_buf);  // z >= R
-    mid = clip(cur, 2, 1, R, &mid_buf[0]);     // z <= R
-    mid = clip(mid, 2, -1, R, &mid_buf[mid == &mid_buf[0] ? 1 : 0]);  // z >= -R
+    top = clip(cur, 2, -1, -1, &top_buf);                              // z >= R
+    mid = clip(cur, 2, 1, 1, &mid_buf[0]);                             // z <= R
+    mid = clip(mid, 2, -1, 1, &mid_buf[mid == &mid_buf[0] ? 1 : 0]);  // z >= -R
   }
   NT sum(0);
   bool any = false;

@@ -15,7 +15,12 @@ using Interval = CGAL::Interval_nt<false>;  // operations assume upward rounding
 template <>
 struct box_clip::ClipTraits<Interval> {
   // Throws CGAL::Uncertain_conversion_exception where the enclosure holds 0 and other values.
-  static int sign(const Interval& x) { return static_cast<int>(CGAL::sign(x).make_certain()); }
+  static int sign(const Interval& x) {
+    if (x.inf() > 0) return 1;
+    if (x.sup() < 0) return -1;
+    if (x.inf() == 0 && x.sup() == 0) return 0;
+    throw CGAL::Uncertain_conversion_exception("an undecided sign");
+  }
 };
 
 namespace {
@@ -31,6 +36,58 @@ using box_clip::Point;
 constexpr double kSafe = 0x1p300;
 
 bool in_range(const Interval& x) { return x.inf() >= -kSafe && x.sup() <= kSafe; }
+
+// The box's frame in rationals, made at the first question: the signs and faces that the
+// intervals cannot decide are settled here.
+class ExactBox {
+ public:
+  ExactBox(const Mesh& mesh, const Obb& box) : mesh_(mesh), box_(box) {}
+  // sign(side T_axis(v) - bound R) for mesh vertex v, exactly.
+  int sign(int32_t v, int axis, int side, int bound) {
+    make();
+    ++signs_;
+    const Point<Rational> p = box_clip::to_frame(*frame_, mesh_.vertices[v], v);
+    return sgn(Rational(side * p.x[axis] - bound * R_));
+  }
+  bool face_term6(const Face& face, Rational* term) {
+    make();
+    const Point<Rational> q[3] = {box_clip::to_frame(*frame_, mesh_.vertices[face[0]], face[0]),
+                                  box_clip::to_frame(*frame_, mesh_.vertices[face[1]], face[1]),
+                                  box_clip::to_frame(*frame_, mesh_.vertices[face[2]], face[2])};
+    return box_clip::face_term6(q, R_, term);
+  }
+  int32_t signs() const { return signs_; }
+
+ private:
+  void make() {
+    if (frame_) return;
+    frame_ = box_clip::make_frame<Rational>(box_);
+    R_ = abs(frame_->det);
+  }
+  const Mesh& mesh_;
+  const Obb& box_;
+  std::optional<Frame<Rational>> frame_;
+  Rational R_;
+  int32_t signs_ = 0;
+};
+
+// The interval path's decider: the interval's sign where it decides; at a mesh vertex, the
+// exact sign from the box's exact frame; at a point a clip made, an exception (the caller then
+// evaluates the whole face exactly). The exact signs keep every branch the exact one, and the
+// arithmetic stays in intervals, which then enclose the exact values.
+struct ExactVertexSigns {
+  ExactBox* exact;
+  int operator()(const Point<Interval>& p, int axis, int side, int bound, const Interval& val) const {
+    if (val.inf() > 0) return 1;
+    if (val.sup() < 0) return -1;
+    if (val.inf() == 0 && val.sup() == 0) return 0;
+    return undecided(p, axis, side, bound);
+  }
+  int undecided(const Point<Interval>& p, int axis, int side, int bound) const {
+    if (p.origin < 0) throw CGAL::Uncertain_conversion_exception("a clipped point on a box plane");
+    return exact->sign(p.origin, axis, side, bound);
+  }
+};
 
 PolyObv exact_result(const Rational& q, int32_t faces, std::string why) {
   PolyObv r;
@@ -68,35 +125,29 @@ PolyObv PolyObvSolver::evaluate(const Obb& box) const {
                                     : "a nearly flat box: its volume's enclosure holds 0 (volume " +
                                           std::to_string(vol) + ")");
   }
-  // A face the intervals cannot decide is evaluated in the box's exact frame, made once.
-  std::optional<Frame<Rational>> exact_frame;
-  Rational exact_R;
+  ExactBox exact_box(mesh_, box);
+  const ExactVertexSigns decide{&exact_box};
   Interval sum(0);
   int32_t visited = 0, exact_faces = 0;
   bool range_ok = true;
   faces_.visit_accepted(filter, [&](int32_t f) {
     ++visited;
     if (!range_ok) return;
-    const Point<Interval> tri[3] = {box_clip::to_frame(frame, mesh_.corner(f, 0)),
-                                    box_clip::to_frame(frame, mesh_.corner(f, 1)),
-                                    box_clip::to_frame(frame, mesh_.corner(f, 2))};
-    for (const Point<Interval>& p : tri)
-      for (const Interval& x : p.x) range_ok &= in_range(x);
+    const Face& face = mesh_.faces[f];
+    Point<Interval> tri[3];
+    for (int i = 0; i < 3; ++i) {
+      tri[i] = box_clip::to_frame(frame, mesh_.vertices[face[i]], face[i]);
+      for (const Interval& x : tri[i].x) range_ok &= in_range(x);
+    }
     if (!range_ok) return;
     Interval term(0);
     try {
-      if (!box_clip::face_term6(tri, R, &term)) return;
+      if (!box_clip::face_term6(tri, R, &term, decide)) return;
     } catch (const CGAL::Uncertain_conversion_exception&) {
-      if (!exact_frame) {
-        exact_frame = box_clip::make_frame<Rational>(box);
-        exact_R = abs(exact_frame->det);
-      }
-      const Point<Rational> q[3] = {box_clip::to_frame(*exact_frame, mesh_.corner(f, 0)),
-                                    box_clip::to_frame(*exact_frame, mesh_.corner(f, 1)),
-                                    box_clip::to_frame(*exact_frame, mesh_.corner(f, 2))};
+      // A sign at a point that a clip made: the whole face in the box's exact frame.
       ++exact_faces;
       Rational t;
-      if (!box_clip::face_term6(q, exact_R, &t)) return;
+      if (!exact_box.face_term6(face, &t)) return;
       double lo, hi;
       enclose(t, &lo, &hi);
       term = Interval(lo, hi);
@@ -120,6 +171,7 @@ PolyObv PolyObvSolver::evaluate(const Obb& box) const {
   r.hi = obv.sup();
   r.faces = visited;
   r.exact_faces = exact_faces;
+  r.exact_signs = exact_box.signs();
   // Rounded upward, lo + (hi - lo) / 2 still lies in [lo, hi].
   r.estimate = r.lo + 0.5 * (r.hi - r.lo);
   return r;

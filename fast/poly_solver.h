@@ -5,13 +5,14 @@
 // path runs in rationals) on the faces whose column meets the box, found through the faces'
 // AABB tree:
 //  - evaluate(): in interval arithmetic (CGAL::Interval_nt, under upward rounding). The result's
-//    [lo, hi] provably contains the exact OBV of the box's certified solid. A face whose
-//    branch the intervals cannot decide (a vertex on a box plane, within round-off) is evaluated
-//    in rationals and enclosed; a box whose enclosure cannot be made tight (coordinates beyond
+//    [lo, hi] provably contains the exact OBV of the box's certified solid. A branch the
+//    intervals cannot decide at a mesh vertex (a vertex on a box plane, within round-off, as a
+//    tight box's are) is decided exactly; one at a point a clip made sends the whole face to
+//    rationals, enclosed; a box whose enclosure cannot be made tight (coordinates beyond
 //    the doubles' safe range, a nearly flat box, a width above kMaxRelativeWidth of the box's
 //    volume) is evaluated wholly in rationals, and says so. No interval is ever widened.
 //  - estimate(): the same formula in plain double, for the builder's loop (ObvEstimate): about
-//    1e-15 of the box's volume off the exact value on ordinary boxes (docs/BENCHMARKS.md), with
+//    1e-16 of the box's volume off the exact value on ordinary boxes (docs/BENCHMARKS.md), with
 //    no enclosure. What a user is shown comes from evaluate().
 // Both are functions of the box alone. Batches run in parallel (TBB, as many threads as the
 // caller's arena allows), each box on one thread exactly as alone, so the values do not depend
@@ -37,13 +38,14 @@ struct PolyObv {
   double lo = 0, hi = 0;  // lo <= exact OBV <= hi, both finite
   double estimate = 0;    // the midpoint of [lo, hi] (the nearest double when exact)
   int32_t faces = 0;         // faces visited (their column met the box's, by the filter)
-  int32_t exact_faces = 0;   // faces whose term the intervals could not decide: rationals
+  int32_t exact_signs = 0;   // signs at mesh vertices the intervals could not decide: rationals
+  int32_t exact_faces = 0;   // faces with such a sign at a clipped point: the face in rationals
   bool exact_box = false;    // the whole box in rationals; `why` says what the intervals lacked
   std::string why;
 };
 
 // The interval's width, relative to the box's volume, above which a box is evaluated in
-// rationals instead. Ordinary boxes come out near 1e-15 (docs/BENCHMARKS.md).
+// rationals instead. Ordinary boxes come out near 1e-13 (docs/BENCHMARKS.md).
 inline constexpr double kMaxRelativeWidth = 1e-9;
 
 class PolyObvSolver {

@@ -9,7 +9,7 @@
 // exact rational is computed too and checked to lie inside it.
 // Errors: for a box O and estimate E, the certified error max(|E - lo|, |E - hi|) >= |E - V|
 //   stands for the absolute error |E - V| (mesh units^3): it exceeds it by at most the interval's
-//   width, about 1e-15 vol(O) (so every coverage figure below is conservative); relative error
+//   width, about 1e-13 vol(O) (so every coverage figure below is conservative); relative error
 //   is that over V (boxes with V > 0), normalised error over vol(O), the scale-free quantity
 //   that B(m) bounds.
 // The stated bound (see fit_stated_bound): B(m) = C m^-p vol(O), fitted on the fit corpus so

@@ -71,7 +71,7 @@ std::vector<Obb> random_boxes(const Mesh& mesh, int count, uint64_t seed) {
 }
 
 struct Tally {
-  int boxes = 0, exact_boxes = 0, exact_faces = 0;
+  int boxes = 0, exact_boxes = 0, exact_faces = 0, exact_signs = 0;
   double worst_width_ratio = 0;  // width / width_bound over the interval-evaluated boxes
 };
 
@@ -87,6 +87,7 @@ void check_all(const Mesh& mesh, const std::vector<Obb>& boxes, Tally* tally, co
     EXPECT_TRUE(encloses(r, poly.exact(boxes[i])));
     ++tally->boxes;
     tally->exact_faces += r.exact_faces;
+    tally->exact_signs += r.exact_signs;
     if (r.exact_box) {
       ++tally->exact_boxes;
       continue;
@@ -96,16 +97,21 @@ void check_all(const Mesh& mesh, const std::vector<Obb>& boxes, Tally* tally, co
   }
 }
 
+// Seeded boxes in general position: at least 1,000 checked, the intervals decided every box,
+// and every width lies within its bound.
+void expect_ordinary(const Tally& tally, const char* what) {
+  EXPECT_GE(tally.boxes, 1000);
+  EXPECT_EQ(tally.exact_boxes, 0);
+  EXPECT_LE(tally.worst_width_ratio, 1.0);
+  std::printf("%s: %d boxes, %d exact signs, %d exact faces, worst width / bound %.3g\n", what, tally.boxes,
+              tally.exact_signs, tally.exact_faces, tally.worst_width_ratio);
+}
+
 TEST(PolySolver, EnclosesTheExactValueOnAnalyticMeshes) {
   Tally tally;
   uint64_t seed = 1;
   for (const AnalyticMesh& a : analytic::all()) check_all(a.mesh, random_boxes(a.mesh, 200, seed++), &tally, a.name);
-  EXPECT_GE(tally.boxes, 1000);
-  // Seeded boxes in general position: the intervals decide every face and every box.
-  EXPECT_EQ(tally.exact_boxes, 0);
-  EXPECT_LE(tally.worst_width_ratio, 1.0);
-  std::printf("analytic: %d boxes, %d exact faces, worst width / bound %.3g\n", tally.boxes, tally.exact_faces,
-              tally.worst_width_ratio);
+  expect_ordinary(tally, "analytic");
 }
 
 TEST(PolySolver, EnclosesTheExactValueOnRealMeshesAtEverySize) {
@@ -123,11 +129,7 @@ TEST(PolySolver, EnclosesTheExactValueOnRealMeshesAtEverySize) {
                 std::string(name) + " " + validate::to_string(size));
   }
   if (meshes < 3) VOBB_SKIP_WITHOUT_REAL_MESHES("dino, knot1 and elephant are needed");
-  EXPECT_GE(tally.boxes, 1000);
-  EXPECT_EQ(tally.exact_boxes, 0);
-  EXPECT_LE(tally.worst_width_ratio, 1.0);
-  std::printf("real: %d boxes, %d exact faces, worst width / bound %.3g\n", tally.boxes, tally.exact_faces,
-              tally.worst_width_ratio);
+  expect_ordinary(tally, "real");
 }
 
 // The double estimate (the builder's) against the exact value: the target, a median
@@ -191,7 +193,7 @@ TEST(PolySolver, SpecialPositionsFallBackToRationalsAndStillEnclose) {
   for (size_t i = 0; i < boxes.size(); ++i) {
     const PolyObv r = poly.evaluate(boxes[i]);
     EXPECT_TRUE(encloses(r, poly.exact(boxes[i]))) << "box " << i;
-    fell_back += r.exact_faces > 0 || r.exact_box;
+    fell_back += r.exact_signs > 0 || r.exact_faces > 0 || r.exact_box;
   }
   EXPECT_GT(fell_back, 0);
   EXPECT_EQ(poly.exact(boxes[0]), Rational(0));  // the cube has no outer volume in itself
@@ -202,7 +204,7 @@ TEST(PolySolver, SpecialPositionsFallBackToRationalsAndStillEnclose) {
   const Obb cavity = box_at(Vec3(2, 2, 2), Vec3(1, 1, 1));
   const PolyObv rc = pc.evaluate(cavity);
   EXPECT_TRUE(encloses(rc, Rational(8)));
-  EXPECT_GT(rc.exact_faces + int(rc.exact_box), 0);
+  EXPECT_GT(rc.exact_signs + rc.exact_faces + int(rc.exact_box), 0);
   const Obb turned = box_at(Vec3(2, 2, 2), Vec3(1, 1, 1), 1e-9);
   EXPECT_TRUE(encloses(pc.evaluate(turned), pc.exact(turned)));
 }
