@@ -17,6 +17,8 @@
 // level alpha: at most a fraction alpha of held-out (box, m, backend) errors may exceed it.
 #pragma once
 
+#include <cmath>
+
 #include <functional>
 #include <string>
 #include <vector>
@@ -41,6 +43,9 @@ struct DiscretizationConfig {
   uint64_t fit_seed = 1000, held_out_seed = 2000;
   std::vector<int> ms = {4, 8, 16, 32, 64, 128, 256};
   int rational_boxes_per_size = 2;  // exact rational by clipping, checked inside the interval
+  // R(m) and the GL estimator on the first this many boxes per mesh and size (the CPU twin on
+  // every box): R(m)'s texel plans and GL cost most of the study.
+  int detail_boxes_per_size = 1 << 30;
   int nef_boxes_per_size = 2;  // timed by Nef (and checked equal to clipping) on the first fit mesh
   double alpha = 0.05;         // stated violation level of B(m)
   bool want_gl = true;
@@ -68,8 +73,11 @@ struct StudyEval {
   int m = 0;
   double estimate = 0;
   double seconds = 0;   // per evaluation
-  double rigorous = 0;   // EstimatorSet::rigorous_bound
-  double deviation = 0;  // gl_deviation_bound + round-off: the allowed |GL - CPU|
+  // On the detail subsample only (NaN elsewhere): EstimatorSet::rigorous_bound, and
+  // gl_deviation_bound + round-off, the allowed |GL - CPU|.
+  double rigorous = NAN;
+  double deviation = NAN;
+  bool has_rigorous() const { return !std::isnan(rigorous); }
   double abs_error(const StudySample& s) const;  // certified: max(|E - lo|, |E - hi|)
 };
 
@@ -79,8 +87,8 @@ struct ErrorStats {  // over a set of evaluations
   double abs_median = 0, abs_p95 = 0, abs_max = 0;
   double norm_median = 0, norm_p95 = 0, norm_max = 0;
   double seconds_mean = 0;
-  double rigorous_norm_median = 0;  // rigorous bound / vol(O), median
-  size_t rigorous_violations = 0;   // evaluations outside the rigorous bound
+  double rigorous_norm_median = 0;  // rigorous bound / vol(O), median (where computed)
+  size_t rigorous_violations = 0;   // evaluations outside the rigorous bound (where computed)
   size_t non_finite = 0;
 };
 
