@@ -13,7 +13,7 @@
 
 #include <tbb/task_arena.h>
 
-#include "bench/bench_timing.h"
+#include "bench/bench_util.h"
 #include "common/io/mesh_report.h"
 #include "fast/cpu_estimator.h"
 #include "fast/gl_estimator.h"
@@ -44,13 +44,9 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--ablation-boxes")) ablation = std::atoi(argv[i + 1]);
   }
   vobb::LoadedMesh lm;
-  vobb::Status s = vobb::load_solid(argv[1], &lm);
-  if (!s) {
-    std::fprintf(stderr, "%s\n", s.message().c_str());
-    return 2;
-  }
+  if (!vobb::bench::load_or_say(argv[1], &lm)) return 2;
   std::unique_ptr<vobb::GlObvEstimator> gl;
-  s = vobb::GlObvEstimator::create(lm.mesh, &gl);
+  vobb::Status s = vobb::GlObvEstimator::create(lm.mesh, &gl);
   if (!s) {
     std::fprintf(stderr, "%s\n", s.message().c_str());
     return 2;

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "bench/bench_timing.h"
+#include "bench/bench_util.h"
 #include "common/io/mesh_io.h"
 #include "exact/outer_volume.h"
 #include "fast/obbtree_builder.h"

@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-#include "bench/bench_timing.h"
+#include "bench/bench_util.h"
 #include "common/io/mesh_report.h"
 #include "fast/cpu_estimator.h"
 #include "fast/gl_estimator.h"
@@ -50,12 +50,9 @@ int main(int argc, char** argv) {
     else if (i + 1 < argc && !std::strcmp(argv[i], "--exact-boxes")) exact_count = std::atoi(argv[++i]);
   }
   vobb::LoadedMesh lm;
-  vobb::Status s = vobb::load_solid(argv[1], &lm);
-  if (!s) {
-    std::fprintf(stderr, "%s\n", s.message().c_str());
-    return 2;
-  }
+  if (!vobb::bench::load_or_say(argv[1], &lm)) return 2;
   std::unique_ptr<vobb::GlObvEstimator> gl;
+  vobb::Status s;
   if (want_gl && !(s = vobb::GlObvEstimator::create(lm.mesh, &gl))) std::fprintf(stderr, "no GL: %s\n", s.message().c_str());
   const vobb::PolyObvSolver poly(lm.mesh);
   const vobb::CpuObvEstimator cpu(lm.mesh);
