@@ -50,8 +50,11 @@ struct Point {
 };
 
 // A triangle clipped by the column's four sides and the slab's two planes has at most
-// 3 + 6 vertices.
+// 3 + 6 vertices, when the signs are the exact ones (a convex polygon gains at most one vertex
+// per clip). Rounded signs (NT = double) can be inconsistent and make more: clip() then throws
+// PolygonOverflow, and the double caller falls back to a certified evaluation.
 inline constexpr int kMaxPolygon = 9;
+struct PolygonOverflow {};
 
 template <class NT>
 struct Polygon {
@@ -145,8 +148,12 @@ const Polygon<NT>* clip(const Decide& decide, const Polygon<NT>* in, int axis, i
   if (any_in) {
     for (int i = 0; i < n; ++i) {
       const int j = i + 1 < n ? i + 1 : 0;
-      if (s[i] <= 0) out->v[out->n++] = in->v[i];
+      if (s[i] <= 0) {
+        if (out->n == kMaxPolygon) throw PolygonOverflow{};
+        out->v[out->n++] = in->v[i];
+      }
       if (s[i] * s[j] < 0) {
+        if (out->n == kMaxPolygon) throw PolygonOverflow{};
         const NT t = val[i] / (val[i] - val[j]);
         Point<NT>& p = out->v[out->n++];
         for (int k = 0; k < 3; ++k) p.x[k] = in->v[i].x[k] + t * (in->v[j].x[k] - in->v[i].x[k]);

@@ -184,14 +184,19 @@ double PolyObvSolver::estimate(const Obb& box) const {
   const Frame<double> frame = box_clip::make_frame<double>(box);
   const double R = std::abs(frame.det);
   double sum = 0;
-  if (R > 0)
-    faces_.visit_accepted(filter, [&](int32_t f) {
-      const Point<double> tri[3] = {box_clip::to_frame(frame, mesh_.corner(f, 0)),
-                                    box_clip::to_frame(frame, mesh_.corner(f, 1)),
-                                    box_clip::to_frame(frame, mesh_.corner(f, 2))};
-      double term;
-      if (box_clip::face_term6(tri, R, &term)) sum += term;
-    });
+  if (R > 0) {
+    try {
+      faces_.visit_accepted(filter, [&](int32_t f) {
+        const Point<double> tri[3] = {box_clip::to_frame(frame, mesh_.corner(f, 0)),
+                                      box_clip::to_frame(frame, mesh_.corner(f, 1)),
+                                      box_clip::to_frame(frame, mesh_.corner(f, 2))};
+        double term;
+        if (box_clip::face_term6(tri, R, &term)) sum += term;
+      });
+    } catch (const box_clip::PolygonOverflow&) {  // rounded signs contradicted each other
+      return evaluate(box).estimate;
+    }
+  }
   const double obv = R > 0 ? box_clip::obv_from_sum6(sum, R) : 0.0;
   // Beyond double's range (or a nearly flat box): the certified evaluation's midpoint.
   if (!std::isfinite(obv)) return evaluate(box).estimate;

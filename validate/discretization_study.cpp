@@ -12,7 +12,9 @@
 
 namespace vobb::validate {
 double StudyEval::abs_error(const StudySample& s) const {
-  return std::max(std::abs(estimate - s.lo), std::abs(estimate - s.hi));
+  // Rounded up: one ulp above the nearest double lies above the true difference.
+  const double d = std::max(std::abs(estimate - s.lo), std::abs(estimate - s.hi));
+  return d == 0 ? 0.0 : std::nextafter(d, INFINITY);
 }
 
 double StatedBound::per_volume(int m) const { return c * std::pow(double(m), -p); }
@@ -50,7 +52,7 @@ ErrorStats error_stats(const DiscretizationResult& r, const std::function<bool(c
     secs += e.seconds;
     if (!std::isfinite(e.estimate)) {
       ++st.non_finite;
-      ++st.rigorous_violations;
+      st.rigorous_violations += e.has_rigorous();
       continue;
     }
     const double a = e.abs_error(s);
@@ -201,7 +203,7 @@ DiscretizationResult run_discretization_study(const DiscretizationConfig& config
           ++r.rational_checked;
           const bool inside = Rational(s.lo) <= v && v <= Rational(s.hi);
           r.rational_outside += !inside;
-          s.rational_checked = inside;
+          s.rational = inside ? 1 : -1;
           s.exact = to_double_nearest(v);
           if (nef && static_cast<int>(i) < config.nef_boxes_per_size) {
             const auto tn = std::chrono::steady_clock::now();

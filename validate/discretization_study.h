@@ -64,7 +64,7 @@ struct StudySample {
   double exact = 0;  // the reference: the interval's midpoint (the rational's nearest double where computed)
   double lo = 0, hi = 0;  // the certified interval of the exact OBV
   double exact_seconds = 0;  // the polyhedral solver's time for this box (batch time amortised)
-  bool rational_checked = false;  // the exact rational was computed, and lies in [lo, hi]
+  int rational = 0;  // the exact rational: 0 not computed, 1 inside [lo, hi], -1 outside (a defect)
 };
 
 struct StudyEval {

@@ -322,10 +322,11 @@ Status run_validation_suite(const SuiteOptions& options, SuiteReport* report) {
   // ---- CSV files ------------------------------------------------------------------------
   std::vector<Status> writes;
   {
-    Csv c("mesh,corpus,size,box,centre,box_volume,reference_obv,interval_lo,interval_hi,rational_checked,poly_seconds");
+    Csv c("mesh,corpus,size,box,centre,box_volume,reference_obv,interval_lo,interval_hi,rational,poly_seconds");
     for (const StudySample& s : d.samples)
       c.row(s.mesh, s.held_out ? "held_out" : "fit", to_string(s.size), s.index, location_name(s.centre), full(s.box_volume),
-            full(s.exact), full(s.lo), full(s.hi), s.rational_checked ? "yes" : "no", g(s.exact_seconds, 4));
+            full(s.exact), full(s.lo), full(s.hi), s.rational == 0 ? "-" : s.rational > 0 ? "inside" : "OUTSIDE",
+            g(s.exact_seconds, 4));
     writes.push_back(out.write("samples.csv", c.str()));
   }
   {
