@@ -67,6 +67,10 @@ class PolyObvSolver {
   void set_damage_for_tests(Damage d) { damage_ = d; }
 
  private:
+  // The same, for the box as labelled (evaluate and estimate first choose its labelling).
+  PolyObv evaluate_as(const Obb& box) const;
+  double estimate_as(const Obb& box) const;
+
   const Mesh& mesh_;
   AabbTree faces_;
   Damage damage_ = nullptr;
