@@ -4,6 +4,7 @@
 #include "common/status.h"
 #include "common/text_util.h"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -127,6 +128,15 @@ Obb fit_obb(const Mesh& mesh, const std::vector<int32_t>& faces, const std::arra
   }
   VOBB_ASSERT(false, "fit_obb could not make a conservative box");
   return box;
+}
+
+Obb rotated_box(const Vec3& c, const Vec3& half, double angle, const Vec3& axis) {
+  Obb b;
+  b.center = c;
+  b.half = half;
+  const Eigen::Matrix3d r = Eigen::AngleAxisd(angle, axis.normalized()).toRotationMatrix();
+  b.axes = {r.col(0), r.col(1), r.col(2)};
+  return b;
 }
 
 ExactBoxFrame::ExactBoxFrame(const Obb& box) {

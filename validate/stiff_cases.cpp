@@ -1,6 +1,5 @@
 #include "validate/stiff_cases.h"
 
-#include <Eigen/Geometry>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -45,15 +44,6 @@ Mesh needle_prism(double w, double len) {
 // for small h all four faces are nearly coplanar (slivers).
 Mesh sliver_tetrahedron(double h) {
   return convex_mesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0.3, 0.3, h}}, {{0, 1, 2}, {0, 1, 3}, {1, 2, 3}, {2, 0, 3}});
-}
-
-Obb make_box(const Vec3& c, const Vec3& half, double angle = 0, Vec3 axis = Vec3(1, 2, 3)) {
-  Obb b;
-  b.center = c;
-  b.half = half;
-  const Eigen::Matrix3d r = Eigen::AngleAxisd(angle, axis.normalized()).toRotationMatrix();
-  b.axes = {r.col(0), r.col(1), r.col(2)};
-  return b;
 }
 
 Mesh transformed(const Mesh& mesh, double s, const Vec3& o) {
@@ -186,18 +176,18 @@ std::vector<StiffCaseResult> run_stiff_cases(const StiffConfig& config, const St
     const double w = 1e-3;
     const Mesh needle = needle_prism(w, 1.0);
     out.push_back(run.run("needle triangles (aspect 1000)", needle,
-                          {make_box({w / 3, w / 3, 0.5}, {w, w, 0.6}), make_box({w / 4, w / 4, 0.5}, {2 * w, 2 * w, 0.1}, 0.2)},
+                          {rotated_box({w / 3, w / 3, 0.5}, {w, w, 0.6}), rotated_box({w / 4, w / 4, 0.5}, {2 * w, 2 * w, 0.1}, 0.2)},
                           ms, false));
   }
   {  // slivers: a tetrahedron of height 1e-3 over a unit triangle
     const Mesh sliver = sliver_tetrahedron(1e-3);
     out.push_back(run.run("sliver triangles (height 1e-3)", sliver,
-                          {make_box({0.4, 0.4, 0}, {0.7, 0.7, 0.01}), make_box({0.3, 0.3, 5e-4}, {0.2, 0.2, 0.2}, 0.3)}, ms,
+                          {rotated_box({0.4, 0.4, 0}, {0.7, 0.7, 0.01}), rotated_box({0.3, 0.3, 5e-4}, {0.2, 0.2, 0.2}, 0.3)}, ms,
                           false));
   }
   const analytic::AnalyticMesh torus = analytic::polygonal_torus();
   out.push_back(run.run("box aspect ratio 1e-4", torus.mesh,
-                        {make_box({2.0, 0.1, 0.5}, {1.0, 1.0, 1e-4}, 0.1), make_box({0.0, 2.2, 0.3}, {1e-4, 0.8, 0.8}, 0.05)},
+                        {rotated_box({2.0, 0.1, 0.5}, {1.0, 1.0, 1e-4}, 0.1), rotated_box({0.0, 2.2, 0.3}, {1e-4, 0.8, 0.8}, 0.05)},
                         ms, false));
 
   if (config.real_mesh) {
@@ -221,9 +211,9 @@ std::vector<StiffCaseResult> run_stiff_cases(const StiffConfig& config, const St
     const Aabb bb = real.bounds();
     const Vec3 mid = 0.5 * (bb.lo + bb.hi), ext = bb.hi - bb.lo;
     out.push_back(run.run("box holding the whole mesh (" + config.real_mesh_name + ")", real,
-                          {make_box(mid, 0.625 * ext), make_box(mid, Vec3::Constant(0.9 * ext.norm()), 0.4)}, ms, true));
+                          {rotated_box(mid, 0.625 * ext), rotated_box(mid, Vec3::Constant(0.9 * ext.norm()), 0.4)}, ms, true));
     out.push_back(run.run("box disjoint from the mesh (" + config.real_mesh_name + ")", real,
-                          {make_box(bb.hi + ext, 0.1 * ext, 0.3)}, ms, true));
+                          {rotated_box(bb.hi + ext, 0.1 * ext, 0.3)}, ms, true));
     const std::vector<Obb> leaves = box_corpus(real, BoxSize::kLeaf, 2, 78);
     out.push_back(run.run("m = 1 (" + config.real_mesh_name + " leaf boxes)", real, leaves, {1}, false));
     out.push_back(run.run("m = 1024 (" + config.real_mesh_name + " leaf boxes)", real, leaves, {1024}, false,
@@ -237,22 +227,22 @@ std::vector<StiffCaseResult> run_stiff_cases(const StiffConfig& config, const St
 
   // Centre on the surface of the unit cube [0, 1]^3 (far-count mode), boxes turned off-axis.
   const analytic::AnalyticMesh cube = analytic::cube();
-  out.push_back(run.run("centre on a face", cube.mesh, {make_box({0.25, 0.5, 1.0}, {0.3, 0.2, 0.25}, 0.3)}, ms, false));
-  out.push_back(run.run("centre on an edge", cube.mesh, {make_box({0.5, 1.0, 1.0}, {0.3, 0.2, 0.25}, 0.3)}, ms, false));
-  out.push_back(run.run("centre on a vertex", cube.mesh, {make_box({1.0, 1.0, 1.0}, {0.3, 0.2, 0.25}, 0.3)}, ms, false));
+  out.push_back(run.run("centre on a face", cube.mesh, {rotated_box({0.25, 0.5, 1.0}, {0.3, 0.2, 0.25}, 0.3)}, ms, false));
+  out.push_back(run.run("centre on an edge", cube.mesh, {rotated_box({0.5, 1.0, 1.0}, {0.3, 0.2, 0.25}, 0.3)}, ms, false));
+  out.push_back(run.run("centre on a vertex", cube.mesh, {rotated_box({1.0, 1.0, 1.0}, {0.3, 0.2, 0.25}, 0.3)}, ms, false));
   // The faces x = 1 seen edge-on: the centre lies in their plane, outside the cube; and an
   // axis-aligned box about the cube, every face parallel to a cubemap face.
   out.push_back(run.run("faces parallel to the view rays", cube.mesh,
-                        {make_box({1.0, 1.5, 0.5}, {0.5, 0.75, 0.5}), make_box({0.5, 0.5, 0.5}, {0.75, 0.75, 0.75})}, ms,
+                        {rotated_box({1.0, 1.5, 0.5}, {0.5, 0.75, 0.5}), rotated_box({0.5, 0.5, 0.5}, {0.75, 0.75, 0.75})}, ms,
                         false));
   const analytic::AnalyticMesh cavity = analytic::cube_with_cavity();
   out.push_back(run.run("nested shells (cube with a cubic cavity)", cavity.mesh,
-                        {make_box({2, 2, 2}, {1.5, 1.2, 1.3}, 0.35), make_box({1, 2, 2}, {0.6, 0.6, 0.6}, 0.2)}, ms, false));
+                        {rotated_box({2, 2, 2}, {1.5, 1.2, 1.3}, 0.35), rotated_box({1, 2, 2}, {0.6, 0.6, 0.6}, 0.2)}, ms, false));
 
   // Refusals.
   {
     EstimatorSet est(cube.mesh, config.want_gl, config.perturb);
-    const Obb ok_box = make_box({0.5, 0.5, 0.5}, {0.3, 0.3, 0.3});
+    const Obb ok_box = rotated_box({0.5, 0.5, 0.5}, {0.3, 0.3, 0.3});
     out.push_back(run.refusal("m = 0", est.check_request(Backend::kCpu, ok_box, 0)));
     Obb nan_box = ok_box;
     nan_box.center.x() = std::numeric_limits<double>::quiet_NaN();

@@ -4,7 +4,6 @@
 
 #include <gtest/gtest.h>
 
-#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <random>
@@ -42,15 +41,6 @@ double width_bound(const PolyObv& r, const Obb& b, const Mesh& mesh) {
                                        << "]";
 }
 
-Obb box_at(const Vec3& c, const Vec3& half, double angle = 0, const Vec3& axis = Vec3(1, 2, 3)) {
-  Obb b;
-  b.center = c;
-  b.half = half;
-  const Eigen::Matrix3d rot = Eigen::AngleAxisd(angle, axis.normalized()).toRotationMatrix();
-  b.axes = {rot.col(0), rot.col(1), rot.col(2)};
-  return b;
-}
-
 // Seeded boxes over the analytic meshes: centres anywhere in the mesh's bounds (grown by a
 // half), sizes from 1 % to the whole mesh, any orientation.
 std::vector<Obb> random_boxes(const Mesh& mesh, int count, uint64_t seed) {
@@ -65,7 +55,7 @@ std::vector<Obb> random_boxes(const Mesh& mesh, int count, uint64_t seed) {
     for (int k = 0; k < 3; ++k) c[k] = uniform(bounds.lo[k] - 0.5 * size[k], bounds.hi[k] + 0.5 * size[k]);
     const double s = std::exp(uniform(std::log(0.01), std::log(1.0))) * size.maxCoeff();
     for (int k = 0; k < 3; ++k) h[k] = s * uniform(0.2, 1.0);
-    boxes.push_back(box_at(c, h, uniform(0, 3.14159), Vec3(uniform(-1, 1), uniform(-1, 1), uniform(0.1, 1))));
+    boxes.push_back(rotated_box(c, h, uniform(0, 3.14159), Vec3(uniform(-1, 1), uniform(-1, 1), uniform(0.1, 1))));
   }
   return boxes;
 }
@@ -164,7 +154,7 @@ TEST(PolySolver, PlaneCutBoxIsHalfOutside) {
     for (double angle : {0.0, 0.3, 1e-9, 1.2}) {
       Vec3 c = mid;
       c[face] = bounds.hi[face];
-      const Obb b = box_at(c, Vec3(0.3, 0.2, 0.25), angle, Vec3(0.2, 1, 0.5));
+      const Obb b = rotated_box(c, Vec3(0.3, 0.2, 0.25), angle, Vec3(0.2, 1, 0.5));
       const Rational half_volume = abs(ExactBoxFrame(b).det) * 4;
       const PolyObv r = poly.evaluate(b);
       SCOPED_TRACE("face " + std::to_string(face) + " angle " + std::to_string(angle));
@@ -184,11 +174,11 @@ TEST(PolySolver, SpecialPositionsFallBackToRationalsAndStillEnclose) {
   for (const Vec3& v : cube.mesh.vertices) bounds.extend(v);
   const Vec3 mid = 0.5 * (bounds.lo + bounds.hi), half = 0.5 * (bounds.hi - bounds.lo);
   const PolyObvSolver poly(cube.mesh);
-  std::vector<Obb> boxes = {box_at(mid, half),                             // the cube itself
-                            box_at(bounds.hi, 0.25 * half),                // centred on a vertex
-                            box_at(Vec3(mid[0], bounds.hi[1], bounds.hi[2]), 0.25 * half),  // an edge
-                            box_at(Vec3(mid[0], mid[1], bounds.hi[2]), 0.25 * half),        // a face
-                            box_at(mid + Vec3(0, 0, 0.5 * half[2]), Vec3(half[0], half[1], 0.5 * half[2]))};
+  std::vector<Obb> boxes = {rotated_box(mid, half),                             // the cube itself
+                            rotated_box(bounds.hi, 0.25 * half),                // centred on a vertex
+                            rotated_box(Vec3(mid[0], bounds.hi[1], bounds.hi[2]), 0.25 * half),  // an edge
+                            rotated_box(Vec3(mid[0], mid[1], bounds.hi[2]), 0.25 * half),        // a face
+                            rotated_box(mid + Vec3(0, 0, 0.5 * half[2]), Vec3(half[0], half[1], 0.5 * half[2]))};
   int fell_back = 0;
   for (size_t i = 0; i < boxes.size(); ++i) {
     const PolyObv r = poly.evaluate(boxes[i]);
@@ -201,11 +191,11 @@ TEST(PolySolver, SpecialPositionsFallBackToRationalsAndStillEnclose) {
   // outside the solid whole, 8 units; and the same turned by 1e-9 rad.
   const AnalyticMesh cav = analytic::cube_with_cavity();
   const PolyObvSolver pc(cav.mesh);
-  const Obb cavity = box_at(Vec3(2, 2, 2), Vec3(1, 1, 1));
+  const Obb cavity = rotated_box(Vec3(2, 2, 2), Vec3(1, 1, 1));
   const PolyObv rc = pc.evaluate(cavity);
   EXPECT_TRUE(encloses(rc, Rational(8)));
   EXPECT_GT(rc.exact_signs + rc.exact_faces + int(rc.exact_box), 0);
-  const Obb turned = box_at(Vec3(2, 2, 2), Vec3(1, 1, 1), 1e-9);
+  const Obb turned = rotated_box(Vec3(2, 2, 2), Vec3(1, 1, 1), 1e-9);
   EXPECT_TRUE(encloses(pc.evaluate(turned), pc.exact(turned)));
 }
 
@@ -233,13 +223,13 @@ TEST(PolySolver, StiffScalesAndShapes) {
 TEST(PolySolver, DegenerateAndOutOfRangeBoxes) {
   const AnalyticMesh cube = analytic::cube(2.0);
   const PolyObvSolver poly(cube.mesh);
-  Obb flat = box_at(Vec3(0.5, 0.5, 0.5), Vec3(0.3, 0, 0.2));
+  Obb flat = rotated_box(Vec3(0.5, 0.5, 0.5), Vec3(0.3, 0, 0.2));
   const PolyObv f = poly.evaluate(flat);
   EXPECT_EQ(f.lo, 0.0);
   EXPECT_EQ(f.hi, 0.0);
   EXPECT_EQ(poly.estimate(flat), 0.0);
   // Half extents of 2^110: R = |det U| = 2^330 lies beyond the safe range 2^300.
-  const Obb huge = box_at(Vec3(0.5, 0.5, 0.5), Vec3(0x1p110, 0x1p110, 0x1p110), 0.4);
+  const Obb huge = rotated_box(Vec3(0.5, 0.5, 0.5), Vec3(0x1p110, 0x1p110, 0x1p110), 0.4);
   const PolyObv h = poly.evaluate(huge);
   EXPECT_TRUE(h.exact_box);
   EXPECT_NE(h.why.find("range"), std::string::npos) << h.why;
@@ -247,7 +237,7 @@ TEST(PolySolver, DegenerateAndOutOfRangeBoxes) {
   EXPECT_TRUE(std::isfinite(poly.estimate(huge)));
   // Tiny: half extents of 2^-60 about a point inside: no outer volume, and all of it outside.
   for (const Vec3& c : {Vec3(0.5, 0.5, 0.5), Vec3(7, 7, 7)}) {
-    const Obb tiny = box_at(c, Vec3(0x1p-60, 0x1p-61, 0x1p-59), 0.7);
+    const Obb tiny = rotated_box(c, Vec3(0x1p-60, 0x1p-61, 0x1p-59), 0.7);
     const PolyObv t = poly.evaluate(tiny);
     EXPECT_TRUE(std::isfinite(t.lo) && std::isfinite(t.hi));
     EXPECT_TRUE(encloses(t, poly.exact(tiny)));
