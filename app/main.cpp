@@ -1034,12 +1034,11 @@ int main(int argc, char** argv) {
       // The recorded queries replace the OBV estimator that these two choose.
       if (s && !bf.queries.empty() && (build->count("--m") > 0 || build->count("--backend") > 0))
         s = vobb::Status::error("--m and --backend choose the OBV estimator, which --queries replaces");
-      if (s && bf.backend == "poly" && build->count("--m") > 0)
+    }
+    // The polyhedral solver has no resolution: an explicit --m with it is a mistake.
+    for (const auto& [cmd, flags] : {std::pair{build, &bf}, {cmp, &cf}})
+      if (s && cmd->parsed() && flags->backend == "poly" && cmd->count("--m") > 0)
         s = vobb::Status::error("--m is the cubemap's resolution; --backend poly uses no cubemap");
-    }
-    if (cmp->parsed() && cf.backend == "poly" && cmp->count("--m") > 0) {
-      s = vobb::Status::error("--m is the cubemap's resolution; --backend poly uses no cubemap");
-    }
     if (exp->parsed()) s = vobb::app::check_output_is_not_input("-o", out, {tree_path});
     if (s && build->parsed()) s = vobb::app::check_output_is_not_checkpoint("-o", out, bf.checkpoint, {"state.json"});
     if (s && (build->parsed() || exp->parsed())) s = vobb::app::check_output_is_writable("-o", out);

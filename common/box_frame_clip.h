@@ -9,9 +9,9 @@
 //   OBV = 8 R - sum / (6 R^2).
 //
 // NT is one of: Rational (exact, common/exact_predicates.h), double (a point value, rounded),
-// or an interval type (an enclosure). Every branch is taken on ClipTraits<NT>::sign, which an
-// interval type answers only when its enclosure decides the sign and otherwise throws; the
-// caller then evaluates that face in Rational. With the same decisions the three follow the
+// or an interval type (an enclosure). Every branch is a sign taken through a decider (SignOf,
+// ClipTraits<NT>::sign, by default); for an interval type the caller's decider answers only
+// what the enclosure or exact arithmetic decides. With the same decisions the three follow the
 // same arithmetic, so they cannot drift apart.
 #pragma once
 
@@ -113,10 +113,15 @@ struct SignOf {
 
 namespace detail {
 
+// side * x_axis - b, where b = bound * R: positive beyond the plane.
+template <class NT>
+NT side_value(const Point<NT>& p, int axis, int side, const NT& b) {
+  return side > 0 ? NT(p.x[axis] - b) : NT(-p.x[axis] - b);
+}
+
 template <class NT, class Decide>
 int side_sign(const Decide& decide, const Point<NT>& p, int axis, int side, int bound, const NT& R) {
-  const NT val = side > 0 ? NT(p.x[axis] - (bound > 0 ? R : NT(-R))) : NT(-p.x[axis] - (bound > 0 ? R : NT(-R)));
-  return decide(p, axis, side, bound, val);
+  return decide(p, axis, side, bound, side_value(p, axis, side, bound > 0 ? R : NT(-R)));
 }
 
 // Twice the signed area of the shadow (x, y) of triangle abc.
@@ -138,7 +143,7 @@ const Polygon<NT>* clip(const Decide& decide, const Polygon<NT>* in, int axis, i
   bool any_out = false, any_in = false;
   const NT b = bound > 0 ? R : NT(-R);
   for (int i = 0; i < n; ++i) {
-    val[i] = side > 0 ? NT(in->v[i].x[axis] - b) : NT(-in->v[i].x[axis] - b);
+    val[i] = side_value(in->v[i], axis, side, b);
     s[i] = decide(in->v[i], axis, side, bound, val[i]);
     any_out |= s[i] > 0;
     any_in |= s[i] <= 0;

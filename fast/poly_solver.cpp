@@ -12,14 +12,19 @@ namespace vobb {
 
 using Interval = CGAL::Interval_nt<false>;  // operations assume upward rounding (a Protector)
 
+// The sign of x into *s where its enclosure decides it; false where it holds 0 and other values.
+inline bool decided_sign(const Interval& x, int* s) {
+  *s = x.inf() > 0 ? 1 : x.sup() < 0 ? -1 : 0;
+  return *s != 0 || (x.inf() == 0 && x.sup() == 0);
+}
+
 template <>
 struct box_clip::ClipTraits<Interval> {
-  // Throws CGAL::Uncertain_conversion_exception where the enclosure holds 0 and other values.
+  // Throws CGAL::Uncertain_conversion_exception where the enclosure does not decide the sign.
   static int sign(const Interval& x) {
-    if (x.inf() > 0) return 1;
-    if (x.sup() < 0) return -1;
-    if (x.inf() == 0 && x.sup() == 0) return 0;
-    throw CGAL::Uncertain_conversion_exception("an undecided sign");
+    int s;
+    if (!decided_sign(x, &s)) throw CGAL::Uncertain_conversion_exception("an undecided sign");
+    return s;
   }
 };
 
@@ -78,10 +83,8 @@ class ExactBox {
 struct ExactVertexSigns {
   ExactBox* exact;
   int operator()(const Point<Interval>& p, int axis, int side, int bound, const Interval& val) const {
-    if (val.inf() > 0) return 1;
-    if (val.sup() < 0) return -1;
-    if (val.inf() == 0 && val.sup() == 0) return 0;
-    return undecided(p, axis, side, bound);
+    int s;
+    return decided_sign(val, &s) ? s : undecided(p, axis, side, bound);
   }
   int undecided(const Point<Interval>& p, int axis, int side, int bound) const {
     if (p.origin < 0) throw CGAL::Uncertain_conversion_exception("a clipped point on a box plane");

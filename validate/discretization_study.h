@@ -63,7 +63,7 @@ struct StudySample {
   double box_volume = 0;
   double exact = 0;  // the reference: the interval's midpoint (the rational's nearest double where computed)
   double lo = 0, hi = 0;  // the certified interval of the exact OBV
-  double exact_seconds = 0;  // the polyhedral solver's time for this box (batch time amortised)
+  double poly_seconds = 0;  // the polyhedral solver's time for this box (batch time amortised)
   int rational = 0;  // the exact rational: 0 not computed, 1 inside [lo, hi], -1 outside (a defect)
 };
 

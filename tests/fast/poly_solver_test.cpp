@@ -149,7 +149,6 @@ TEST(PolySolver, PlaneCutBoxIsHalfOutside) {
   for (const Vec3& v : cube.mesh.vertices) bounds.extend(v);
   const Vec3 mid = 0.5 * (bounds.lo + bounds.hi);
   const PolyObvSolver poly(cube.mesh);
-  int checked = 0;
   for (int face = 0; face < 3; ++face)
     for (double angle : {0.0, 0.3, 1e-9, 1.2}) {
       Vec3 c = mid;
@@ -160,9 +159,7 @@ TEST(PolySolver, PlaneCutBoxIsHalfOutside) {
       SCOPED_TRACE("face " + std::to_string(face) + " angle " + std::to_string(angle));
       EXPECT_TRUE(encloses(r, half_volume));
       EXPECT_EQ(poly.exact(b), half_volume);
-      ++checked;
     }
-  EXPECT_EQ(checked, 12);
 }
 
 // Boxes in special position: faces in the mesh's planes, centres on a vertex, an edge and a
