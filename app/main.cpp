@@ -432,10 +432,12 @@ int run_certify(const std::string& mesh_path, const std::string& tree_path, bool
   if (!quiet) opt.progress = [](const std::string& line) { std::fprintf(stderr, "certify: %s\n", line.c_str()); };
   CertifySaver saver;
   if (!checkpoint.empty()) {
-    s = saver.attach(checkpoint, mesh.mesh, tree, path, &opt);
+    s = saver.attach(checkpoint, mesh.mesh, tree, path + (rational ? "; rational" : ""), &opt);
     if (!s) return refuse(s);
   }
+  opt.rational = rational;
   const vobb::exact::Certificate c = vobb::exact::certify(mesh.mesh, tree, opt);
+  auto enclosure = [](const vobb::exact::MpInterval& x) { return nlohmann::ordered_json::array({x.inf(), x.sup()}); };
   if (json) {
     nlohmann::ordered_json j;
     nlohmann::ordered_json levels = nlohmann::ordered_json::array();
@@ -443,10 +445,18 @@ int run_certify(const std::string& mesh_path, const std::string& tree_path, bool
       nlohmann::ordered_json jl;
       jl["level"] = l.level;
       jl["boxes"] = l.boxes;
-      jl["omv"] = vobb::to_double_nearest(l.omv);
-      jl["sum_obv"] = vobb::to_double_nearest(l.sum_obv);
-      jl["overlap"] = vobb::to_double_nearest(l.overlap());
+      jl["omv"] = l.omv_nearest;
+      jl["sum_obv"] = l.sum_obv_nearest;
+      jl["overlap"] = l.overlap_nearest;
+      // Outward doubles around the exact values, and what decided the doubles above.
+      jl["omv_enclosure"] = enclosure(l.omv_enclosure);
+      jl["sum_obv_enclosure"] = enclosure(l.sum_obv_enclosure);
+      jl["overlap_enclosure"] = enclosure(l.overlap_enclosure);
+      jl["rounded_by"] = l.rounded_by;
       jl["upper_bound_holds"] = l.upper_bound_holds();
+      jl["bound_by"] = l.bound_by;
+      jl["exact_obv"] = l.exact_obv;
+      jl["exact_overlap"] = l.exact_overlap;
       jl["overlapping_boxes"] = l.overlapping_boxes;
       jl["omv_path"] = l.omv_path;
       if (l.omv_path == "both") {
@@ -464,8 +474,11 @@ int run_certify(const std::string& mesh_path, const std::string& tree_path, bool
     }
     j["levels"] = levels;
     j["mesh_single_precision"] = mesh.single_precision;
-    j["weighted_error"] = vobb::to_double_nearest(c.weighted_error);
+    j["weighted_error"] = c.weighted_error_nearest;
+    j["weighted_error_enclosure"] = enclosure(c.weighted_error_enclosure);
+    j["weighted_error_rounded_by"] = c.weighted_error_rounded_by;
     if (rational) j["weighted_error_rational"] = c.weighted_error.get_str();
+    j["exact_obv"] = c.exact_obv;
     nlohmann::ordered_json first = nlohmann::ordered_json::array();
     for (const auto& [node, face] : c.containment.first) first.push_back({{"node", node}, {"face", face}});
     j["containment"] = {{"ok", c.containment.ok()}, {"violations", c.containment.violations},
@@ -475,10 +488,9 @@ int run_certify(const std::string& mesh_path, const std::string& tree_path, bool
   } else {
     std::printf("%5s %7s %24s %24s %24s %6s\n", "level", "boxes", "OMV", "sum OBV", "overlap", "bound");
     for (const auto& l : c.layers)
-      std::printf("%5d %7zu %24s %24s %24s %6s\n", l.level, l.boxes, vobb::format_nearest(l.omv).c_str(),
-                  vobb::format_nearest(l.sum_obv).c_str(), vobb::format_nearest(l.overlap()).c_str(),
-                  l.upper_bound_holds() ? "holds" : "FAILS");
-    std::printf("weighted error e: %s\n", vobb::format_nearest(c.weighted_error).c_str());
+      std::printf("%5d %7zu %24.17g %24.17g %24.17g %6s\n", l.level, l.boxes, l.omv_nearest, l.sum_obv_nearest,
+                  l.overlap_nearest, l.upper_bound_holds() ? "holds" : "FAILS");
+    std::printf("weighted error e: %.17g\n", c.weighted_error_nearest);
     if (rational) std::printf("e (rational): %s\n", c.weighted_error.get_str().c_str());
     std::printf("containment: %s (%zu violations in %zu node-face pairs)", c.containment.ok() ? "ok" : "FAILED",
                 c.containment.violations, c.containment.checked_pairs);
@@ -735,6 +747,7 @@ int run_compare(const std::string& mesh_path, const BuildFlags& flags, bool json
   }
   vobb::exact::CertifyOptions copt;
   if (!flags.quiet) copt.progress = [](const std::string& line) { std::fprintf(stderr, "vobb: %s\n", line.c_str()); };
+  copt.rational = rational;
   struct Result {
     vobb::Tree tree;
     vobb::exact::Certificate cert;
@@ -752,25 +765,39 @@ int run_compare(const std::string& mesh_path, const BuildFlags& flags, bool json
     vobb::exact::CertifyOptions o = copt;
     if (!flags.checkpoint.empty()) {
       s = saver.attach(certify_folder(flags.checkpoint, f.method), loaded.mesh,
-                       r[i].tree, "auto", &o);
+                       r[i].tree, rational ? "auto; rational" : "auto", &o);
       if (!s) return refuse(s);
     }
     r[i].cert = vobb::exact::certify(loaded.mesh, r[i].tree, o);
   }
   const bool ok = r[0].cert.ok() && r[1].cert.ok();
   const size_t levels = std::max(r[0].cert.layers.size(), r[1].cert.layers.size());
-  auto omv_exact = [&](int i, size_t l) -> const vobb::Rational& {
+  auto layer_of = [&](int i, size_t l) -> const vobb::exact::LayerCertificate& {
     const auto& layers = r[i].cert.layers;
-    return layers[std::min(l, layers.size() - 1)].omv;
+    return layers[std::min(l, layers.size() - 1)];
   };
-  auto omv = [&](int i, size_t l) { return vobb::to_double_nearest(omv_exact(i, l)); };
+  auto omv_exact = [&](int i, size_t l) -> const vobb::Rational& { return layer_of(i, l).omv; };
+  auto omv = [&](int i, size_t l) { return layer_of(i, l).omv_nearest; };
   auto change = [](double a, double b) { return a == 0 ? 0.0 : 100.0 * (b - a) / a; };
   // e over layers 0 .. D of the deeper tree, with ω(l) = D - l + 1 (DESIGN §1). For a tree of
-  // depth D this is certify's e, exactly.
+  // depth D this is certify's e. Its enclosure gives the nearest double; where it cannot (a
+  // rounding tie within 1e-35), or with --rational, the layers' rationals do.
   vobb::Rational e_exact[2];
-  for (int i = 0; i < 2; ++i)
+  double e_nearest[2];
+  for (int i = 0; i < 2; ++i) {
+    vobb::exact::MpInterval e(0);
+    for (size_t l = 0; l < levels; ++l)
+      e += vobb::exact::MpInterval(static_cast<int>(levels - l)) * layer_of(i, l).omv_enclosure;
+    if (e.nearest(&e_nearest[i]) && !rational) continue;
+    if (!r[i].cert.rational) {
+      vobb::exact::CertifyOptions o = copt;
+      o.rational = true;
+      r[i].cert = vobb::exact::certify(loaded.mesh, r[i].tree, o);
+    }
     for (size_t l = 0; l < levels; ++l) e_exact[i] += static_cast<long>(levels - l) * omv_exact(i, l);
-  const double e0 = vobb::to_double_nearest(e_exact[0]), e1 = vobb::to_double_nearest(e_exact[1]);
+    e_nearest[i] = vobb::to_double_nearest(e_exact[i]);
+  }
+  const double e0 = e_nearest[0], e1 = e_nearest[1];
   if (json) {
     nlohmann::ordered_json doc, rows = nlohmann::ordered_json::array();
     for (size_t l = 0; l < levels; ++l) {
@@ -915,8 +942,8 @@ int main(int argc, char** argv) {
   cert->add_option("MESH", mesh, "The solid mesh the tree was built for")->required();
   cert->add_option("TREE", tree_path, "Tree file")->required();
   cert->add_flag("--json", json, "Print JSON");
-  cert->add_flag("--rational", rational, "Also print exact values as rationals");
-  cert->add_option("--path", omv_path, "Exact path for OMV: auto, clip, nef, or both (and compare)")
+  cert->add_flag("--rational", rational, "Also compute and print the exact values as rationals (OMV by Nef where boxes overlap)");
+  cert->add_option("--path", omv_path, "auto: enclosures, rationals only where a sign or a rounding needs them; clip or nef: every value in rationals by that path; both: auto, and Nef's and clipping's rationals compared with it")
       ->capture_default_str()->check(CLI::IsMember({"auto", "clip", "nef", "both"}));
   cert->add_flag("--quiet", quiet, "No per-layer progress on stderr");
   std::string certify_checkpoint;

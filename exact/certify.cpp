@@ -40,13 +40,17 @@ bool Certificate::ok() const {
 namespace {
 
 // The path a layer takes: "none" for boxes that overlap nothing (OMV = sum of OBV) unless both
-// paths are asked for; auto takes Nef for layers with overlaps (measured on dino,
-// docs/BENCHMARKS.md: Nef's union beats the clipping path's overlap cells on every
-// overlapping layer of baseline trees).
+// paths are asked for.
 std::string layer_path(OmvPath path, size_t overlapping_boxes) {
   if (path == OmvPath::kBoth) return "both";
   if (overlapping_boxes == 0) return "none";
-  return path == OmvPath::kClip ? "clip" : "nef";
+  return path == OmvPath::kClip ? "clip" : path == OmvPath::kNef ? "nef" : "filtered";
+}
+
+MpInterval sum_of(const std::vector<MpInterval>& xs) {
+  MpInterval s(0);
+  for (const MpInterval& x : xs) s += x;  // in order: the same enclosure on every run
+  return s;
 }
 
 }  // namespace
@@ -64,7 +68,6 @@ Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& op
   say("containment: " + std::to_string(cert.containment.violations) + " violations in " +
       std::to_string(cert.containment.checked_pairs) + " (node, face) pairs");
 
-  // What is finished, for the checkpoint callback; saved one call at a time.
   CertifyState done;
   std::mutex done_mutex;
   auto finished = [&](const LayerCertificate* lc) {
@@ -77,27 +80,43 @@ Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& op
   VOBB_ASSERT(!resume || resume->obv.empty() || resume->obv.size() == tree.nodes.size(),
               "a resumed state fits the tree (CertifyCheckpoint::load checks it)");
 
-  // OBV once per node (a leaf above level i belongs to every later layer too), by clipping,
-  // one node per task: every node belongs to the layer of its own level.
-  const ClipSolver clip(mesh);
-  std::vector<Rational> obv(tree.nodes.size());
+  // Every value in rationals too: asked for, or a rational path.
+  const bool all_rational = options.rational || options.path == OmvPath::kClip || options.path == OmvPath::kNef;
+  const FilteredSolver filtered(mesh);
+  const ClipSolver& clip = filtered.rational();
+
+  // OBV once per node, enclosed by the filter (or exactly, where it sends the box to
+  // rationals; or by clipping in rationals on a rational path).
+  std::vector<Enclosed> obv(tree.nodes.size());
   if (resume && !resume->obv.empty()) {
     obv = resume->obv;
     say("OBV of " + std::to_string(tree.nodes.size()) + " boxes: from the checkpoint");
   } else {
     const auto tobv = std::chrono::steady_clock::now();
-    tbb::parallel_for(size_t{0}, tree.nodes.size(), [&](size_t id) { obv[id] = clip.obv(tree.nodes[id].box); });
-    char buf[96];
-    std::snprintf(buf, sizeof buf, "OBV of %zu boxes in %.2f s", tree.nodes.size(), seconds_since(tobv));
+    tbb::parallel_for(size_t{0}, tree.nodes.size(), [&](size_t id) {
+      const Obb& box = tree.nodes[id].box;
+      if (options.path == OmvPath::kClip || options.path == OmvPath::kNef) {
+        obv[id].q = clip.obv(box);
+        obv[id].value = MpInterval(obv[id].q);
+        obv[id].exact = true;
+        return;
+      }
+      obv[id] = filtered.obv(box);
+      if (options.rational && !obv[id].exact) obv[id].q = clip.obv(box);
+    });
+    size_t fallbacks = 0;
+    for (const Enclosed& e : obv) fallbacks += e.exact ? 1 : 0;
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "OBV of %zu boxes in %.2f s (%zu in rationals)", tree.nodes.size(),
+                  seconds_since(tobv), fallbacks);
     say(buf);
   }
+  if (options.rational)  // every rational inside its enclosure, or the filter is broken
+    for (size_t id = 0; id < obv.size(); ++id)
+      VOBB_ASSERT(obv[id].value.contains(obv[id].q), "the OBV of a box lies outside its enclosure");
+  for (const Enclosed& e : obv) cert.exact_obv += e.exact ? 1 : 0;
   if (options.checkpoint) done.obv = obv;
 
-  // One task per layer, the layers with most boxes (the costly unions) first, each taken by
-  // the next free thread. A thread builds its own Nef(X) when a layer first needs it. A layer
-  // a resumed state finished is taken from it when its boxes, their overlap count (bounds
-  // alone: cheap), its sum of OBV and its path are what this run would give; its OMV is taken
-  // as saved (the costly part). Any other is certified again.
   const int levels = tree.depth + 1;
   cert.layers.resize(levels);
   std::vector<std::vector<int32_t>> ids(levels);
@@ -108,9 +127,22 @@ Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& op
     return boxes;
   };
   auto layer_sum_obv = [&](int level) {
-    std::vector<Rational> obvs;
-    for (int32_t id : ids[level]) obvs.push_back(obv[id]);
-    return sum_pairwise(obvs);
+    std::vector<MpInterval> xs;
+    for (int32_t id : ids[level]) xs.push_back(obv[id].value);
+    return sum_of(xs);
+  };
+  // The boxes that may meet another box of the layer, by bounds: box j with an earlier
+  // neighbour, and each such neighbour.
+  auto overlap_count = [&](const std::vector<std::vector<int32_t>>& earlier) {
+    std::vector<char> o(earlier.size(), 0);
+    for (size_t j = 0; j < earlier.size(); ++j)
+      for (int32_t i : earlier[j]) o[j] = o[i] = 1;
+    size_t n = 0;
+    for (char c : o) n += c ? 1 : 0;
+    return n;
+  };
+  auto same = [](const MpInterval& a, const MpInterval& b) {
+    return a.lo_rational() == b.lo_rational() && a.hi_rational() == b.hi_rational();
   };
   std::vector<char> resumed(levels, 0);
   size_t taken = 0, again = 0;
@@ -118,12 +150,10 @@ Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& op
     for (const LayerCertificate& lc : resume->layers) {
       VOBB_ASSERT(lc.level >= 0 && lc.level < levels && !resumed[lc.level],
                   "a resumed state fits the tree (CertifyCheckpoint::load checks it)");
-      size_t overlapping = 0;
-      for (char o : clip.may_overlap(layer_boxes(lc.level))) overlapping += o ? 1 : 0;
+      const size_t overlapping = overlap_count(clip.earlier_neighbours(layer_boxes(lc.level)));
       if (lc.boxes != ids[lc.level].size() || lc.overlapping_boxes != overlapping ||
-          lc.omv_path != layer_path(options.path, overlapping) || lc.sum_obv != layer_sum_obv(lc.level) ||
-          (lc.omv_path == "none" && lc.omv != lc.sum_obv) ||
-          (lc.omv_path == "both" && lc.paths_agree != (lc.omv == lc.omv_clip))) {
+          lc.omv_path != layer_path(options.path, overlapping) || !same(lc.sum_obv_enclosure, layer_sum_obv(lc.level)) ||
+          (all_rational && !lc.rational)) {
         ++again;
         continue;
       }
@@ -164,30 +194,95 @@ Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& op
       lc.level = level;
       lc.boxes = ids[level].size();
       const std::vector<Obb> boxes = layer_boxes(level);
-      lc.sum_obv = layer_sum_obv(level);
-      // Which boxes may meet another one (conservative bounds): boxes that overlap nothing
-      // skip the union work.
-      std::vector<char> overlapped = clip.may_overlap(boxes);
-      for (char o : overlapped) lc.overlapping_boxes += o ? 1 : 0;
+      const std::vector<std::vector<int32_t>> earlier = clip.earlier_neighbours(boxes);
+      lc.overlapping_boxes = overlap_count(earlier);
       lc.omv_path = layer_path(options.path, lc.overlapping_boxes);
+      lc.sum_obv_enclosure = layer_sum_obv(level);
+      for (int32_t id : ids[level]) lc.exact_obv += obv[id].exact ? 1 : 0;
+      // The filter's overlap term, box by box, the boxes split across the threads.
+      std::vector<Enclosed> terms(boxes.size());
+      const bool filter_overlap = lc.omv_path == "filtered" || lc.omv_path == "both";
+      if (filter_overlap)
+        tbb::parallel_for(size_t{0}, boxes.size(),
+                          [&](size_t j) { terms[j] = filtered.overlap_term(boxes, j, earlier[j]); });
+      for (const Enclosed& t : terms) lc.exact_overlap += t.exact ? 1 : 0;
+      // The exact values: on a rational path, when asked, or where the filter cannot decide.
+      auto make_rational = [&]() {
+        if (lc.rational) return;
+        std::vector<Rational> qs;
+        for (int32_t id : ids[level]) qs.push_back(obv[id].exact || options.rational ? obv[id].q : clip.obv(tree.nodes[id].box));
+        lc.sum_obv = sum_pairwise(qs);
+        if (lc.omv_path == "none") {
+          lc.omv = lc.sum_obv;  // disjoint boxes: the union's outer volume is the sum
+        } else if (lc.omv_path == "nef" || ((lc.omv_path == "filtered") && options.rational)) {
+          lc.omv = need_nef().omv(boxes);
+        } else {  // the clipping path's overlap terms, box by box (filtered: where not yet exact)
+          std::vector<Rational> over(boxes.size());
+          tbb::parallel_for(size_t{0}, boxes.size(), [&](size_t j) {
+            over[j] = terms[j].exact ? terms[j].q : clip.overlap_term(boxes, j, earlier[j]);
+          });
+          lc.omv = lc.sum_obv - sum_pairwise(over);
+        }
+        lc.rational = true;
+      };
+      if (filter_overlap) {
+        std::vector<MpInterval> xs;
+        for (const Enclosed& t : terms) xs.push_back(t.value);
+        lc.overlap_enclosure = sum_of(xs);
+        lc.omv_enclosure = lc.sum_obv_enclosure - lc.overlap_enclosure;
+      } else if (lc.omv_path == "none") {
+        lc.overlap_enclosure = MpInterval(0);
+        lc.omv_enclosure = lc.sum_obv_enclosure;
+      }
+      if (all_rational) make_rational();
+      if (!filter_overlap && lc.omv_path != "none") {  // a rational path: its own rationals
+        lc.omv_enclosure = MpInterval(lc.omv);
+        lc.overlap_enclosure = MpInterval(lc.overlap());
+        lc.sum_obv_enclosure = MpInterval(lc.sum_obv);
+      }
+      if (lc.omv_path == "both") {  // Nef is the arbiter; clipping's and the filter's must agree
+        make_rational();
+        lc.omv_clip = lc.omv;
+        lc.omv = need_nef().omv(boxes);
+        lc.paths_agree = lc.omv == lc.omv_clip && lc.omv_enclosure.contains(lc.omv);
+      }
+      if (lc.rational)
+        VOBB_ASSERT(lc.omv_enclosure.contains(lc.omv) || !lc.paths_agree,
+                    "a layer's exact OMV lies outside its enclosure");
+      // Sum OBV >= OMV: the overlap term's sign. No overlapping boxes: 0, exactly.
       if (lc.omv_path == "none") {
-        lc.omv = lc.sum_obv;  // disjoint boxes: the union's outer volume is the sum
-      } else if (lc.omv_path == "nef") {
-        lc.omv = need_nef().omv(boxes);
-      } else if (lc.omv_path == "clip") {
-        lc.omv = clip.omv(boxes, lc.sum_obv);
-      } else {  // both: Nef is the arbiter, and a disagreement fails the certificate
-        lc.omv_clip = clip.omv(boxes, lc.sum_obv);
-        lc.omv = need_nef().omv(boxes);
-        lc.paths_agree = lc.omv == lc.omv_clip;
+        lc.upper_bound = true;
+        lc.bound_by = "exact";
+      } else if (lc.overlap_enclosure.inf() >= 0 && !lc.rational) {
+        lc.upper_bound = true;
+      } else if (lc.overlap_enclosure.sup() < 0 && !lc.rational) {
+        lc.upper_bound = false;
+      } else {
+        make_rational();
+        lc.upper_bound = lc.sum_obv >= lc.omv;
+        lc.bound_by = "exact";
+      }
+      // The nearest doubles: the filter's where its enclosure lies in one rounding cell.
+      const bool filtered_rounding = lc.omv_enclosure.nearest(&lc.omv_nearest) &&
+                                     lc.sum_obv_enclosure.nearest(&lc.sum_obv_nearest) &&
+                                     lc.overlap_enclosure.nearest(&lc.overlap_nearest);
+      if (!filtered_rounding || lc.rational) {
+        make_rational();
+        lc.omv_nearest = to_double_nearest(lc.omv);
+        lc.sum_obv_nearest = to_double_nearest(lc.sum_obv);
+        lc.overlap_nearest = to_double_nearest(lc.overlap());
+        if (!filtered_rounding) lc.rounded_by = "exact";
       }
       lc.seconds = seconds_since(tl) - nef_build_seconds;
       const std::string disagree =
           lc.paths_agree ? "" : ", PATHS DISAGREE (Nef's OMV above; clipping's " + format_nearest(lc.omv_clip) + ")";
-      char buf[300];
-      std::snprintf(buf, sizeof buf, "layer %d/%d: %zu boxes (%zu overlapping), OMV %s, sum OBV %s%s, %.2f s",
-                    level, tree.depth, lc.boxes, lc.overlapping_boxes, format_nearest(lc.omv).c_str(),
-                    format_nearest(lc.sum_obv).c_str(), disagree.c_str(), lc.seconds);
+      char buf[400];
+      std::snprintf(buf, sizeof buf,
+                    "layer %d/%d: %zu boxes (%zu overlapping), OMV %.17g, sum OBV %.17g%s; in rationals: %zu OBV, "
+                    "%zu overlap terms%s, %.2f s",
+                    level, tree.depth, lc.boxes, lc.overlapping_boxes, lc.omv_nearest, lc.sum_obv_nearest,
+                    disagree.c_str(), lc.exact_obv, lc.exact_overlap,
+                    lc.rounded_by == "exact" ? ", rounding" : "", lc.seconds);
       say(buf);
       finished(&lc);
     };
@@ -199,7 +294,7 @@ Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& op
     }
   };
   const int concurrency = tbb::this_task_arena::max_concurrency();
-  const bool uses_nef = options.path != OmvPath::kClip;
+  const bool uses_nef = options.path != OmvPath::kClip && (options.path != OmvPath::kAuto || options.rational);
   const double available = options.memory_bytes >= 0 ? options.memory_bytes : available_memory_bytes();
   const int workers = layer_workers(todo, concurrency, uses_nef, mesh.faces.size(), available);
   if (workers < std::min(todo, concurrency)) {
@@ -213,9 +308,6 @@ Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& op
   }
   tbb::task_group group;
   for (int w = 1; w < workers; ++w) group.run(certify_layers);
-  // This thread takes layers too. Its failure is held until the workers have stopped: the
-  // group must be waited for before it is destroyed, and its wait rethrows a worker's failure,
-  // which during the unwinding of this thread's own would end the process.
   std::exception_ptr failed;
   try {
     certify_layers();
@@ -225,9 +317,34 @@ Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& op
   group.wait();  // a worker's failure, if any, goes on from here
   if (failed) std::rethrow_exception(failed);
 
-  std::vector<Rational> weighted;
-  for (const LayerCertificate& lc : cert.layers) weighted.push_back(Rational(tree.depth - lc.level + 1) * lc.omv);
-  cert.weighted_error = sum_pairwise(weighted);
+  // e = sum (D - l + 1) OMV(l): its enclosure, rounded by the filter or, failing that, exactly.
+  std::vector<MpInterval> weighted;
+  for (const LayerCertificate& lc : cert.layers)
+    weighted.push_back(MpInterval(tree.depth - lc.level + 1) * lc.omv_enclosure);
+  cert.weighted_error_enclosure = sum_of(weighted);
+  cert.rational = true;
+  for (const LayerCertificate& lc : cert.layers) cert.rational &= lc.rational;
+  const bool filtered_rounding = cert.weighted_error_enclosure.nearest(&cert.weighted_error_nearest);
+  if (!filtered_rounding && !cert.rational) {
+    // Rare (e within 1e-35 of a rounding tie): the layers' rationals, as a rational path has them.
+    CertifyOptions exact = options;
+    exact.rational = true;
+    exact.resume = nullptr;
+    exact.checkpoint = nullptr;
+    exact.progress = nullptr;
+    say("e: its enclosure does not decide the rounding; every layer in rationals");
+    const Certificate c = certify(mesh, tree, exact);
+    cert.weighted_error = c.weighted_error;
+    cert.rational = true;
+  } else if (cert.rational) {
+    std::vector<Rational> terms;
+    for (const LayerCertificate& lc : cert.layers) terms.push_back(Rational(tree.depth - lc.level + 1) * lc.omv);
+    cert.weighted_error = sum_pairwise(terms);
+  }
+  if (!filtered_rounding) {
+    cert.weighted_error_nearest = to_double_nearest(cert.weighted_error);
+    cert.weighted_error_rounded_by = "exact";
+  }
   cert.seconds = seconds_since(t0);
   return cert;
 }
@@ -256,6 +373,7 @@ namespace {
 
 constexpr const char* kObvFormat = "vobb-certify-obv";
 constexpr const char* kLayersFormat = "vobb-certify-layers";
+constexpr int64_t kFileVersion = 2;  // 2: enclosures and the rationals where computed
 
 // "p/q" (or "p") in base 10, q > 0, as mpq_class writes it; false for anything else, and for a
 // zero denominator, which mpq would divide by.
@@ -279,6 +397,52 @@ bool parse_rational(const nlohmann::json& v, Rational* out) {
   return true;
 }
 
+nlohmann::json interval_to_json(const MpInterval& x) {
+  std::string lo, hi;
+  x.to_text(&lo, &hi);
+  return nlohmann::json::array({lo, hi});
+}
+
+bool parse_interval(const nlohmann::json& v, MpInterval* out) {
+  return v.is_array() && v.size() == 2 && v[0].is_string() && v[1].is_string() &&
+         MpInterval::from_text(v[0].get<std::string>(), v[1].get<std::string>(), out);
+}
+
+nlohmann::json enclosed_to_json(const Enclosed& e) {
+  nlohmann::json j = {{"enclosure", interval_to_json(e.value)}, {"exact", e.exact}};
+  if (e.exact || sgn(e.q) != 0) j["rational"] = e.q.get_str();
+  return j;
+}
+
+nlohmann::json layer_to_json(const LayerCertificate& l) {
+  nlohmann::json jl = {{"level", l.level},
+                       {"boxes", l.boxes},
+                       {"overlapping_boxes", l.overlapping_boxes},
+                       {"omv_path", l.omv_path},
+                       {"omv_enclosure", interval_to_json(l.omv_enclosure)},
+                       {"sum_obv_enclosure", interval_to_json(l.sum_obv_enclosure)},
+                       {"overlap_enclosure", interval_to_json(l.overlap_enclosure)},
+                       {"omv_nearest", l.omv_nearest},
+                       {"sum_obv_nearest", l.sum_obv_nearest},
+                       {"overlap_nearest", l.overlap_nearest},
+                       {"rounded_by", l.rounded_by},
+                       {"upper_bound", l.upper_bound},
+                       {"bound_by", l.bound_by},
+                       {"exact_obv", l.exact_obv},
+                       {"exact_overlap", l.exact_overlap},
+                       {"rational", l.rational},
+                       {"seconds", l.seconds}};
+  if (l.rational) {
+    jl["omv"] = l.omv.get_str();
+    jl["sum_obv"] = l.sum_obv.get_str();
+  }
+  if (l.omv_path == "both") {
+    jl["paths_agree"] = l.paths_agree;
+    jl["omv_clip"] = l.omv_clip.get_str();
+  }
+  return jl;
+}
+
 // Reads one of the two files: JSON object, format, known fields, checksum, fingerprint.
 // *text gets the file's bytes.
 // `fingerprint` null: the file is checked as a file (JSON, format, fields, checksum), not as
@@ -294,8 +458,13 @@ Status read_checkpoint_file(const std::string& path, const char* format, const s
     return bad(too_deep ? "nested deeper than a checkpoint can be" : "not JSON");
   // Types first: value() throws on a field of another type ("format": 5).
   const bool format_ok = j->contains("format") && (*j)["format"].is_string() && (*j)["format"].get<std::string>() == format;
-  const bool version_ok = j->contains("version") && (*j)["version"].is_number_integer() && (*j)["version"].get<int64_t>() == 1;
-  if (!format_ok || !version_ok) return bad("not a vobb certify checkpoint");
+  const bool has_version = j->contains("version") && (*j)["version"].is_number_integer();
+  if (!format_ok || !has_version) return bad("not a vobb certify checkpoint");
+  const int64_t version = (*j)["version"].get<int64_t>();
+  if (version == 1)
+    return Status::error(path + ": a certify checkpoint of an older vobb (format 1, rationals only); this one "
+                         "keeps enclosures: remove the folder or use another --checkpoint");
+  if (version != kFileVersion) return bad("not a vobb certify checkpoint");
   for (const auto& item : j->items())
     if (!known.count(item.key())) return bad("unknown field '" + item.key().substr(0, 40) + "'");
   if (!j->contains("sha256") || !(*j)["sha256"].is_string() || (*j)["sha256"].get<std::string>() != json_checksum(*j))
@@ -366,10 +535,10 @@ Status CertifyCheckpoint::save(const CertifyState& state) {
   if (!state.obv.empty() && obv_sha256_.empty()) {
     nlohmann::json j;
     j["format"] = kObvFormat;
-    j["version"] = 1;
+    j["version"] = kFileVersion;
     j["fingerprint"] = fingerprint_;
     nlohmann::json obv = nlohmann::json::array();
-    for (const Rational& q : state.obv) obv.push_back(q.get_str());
+    for (const Enclosed& e : state.obv) obv.push_back(enclosed_to_json(e));
     j["obv"] = std::move(obv);
     j["sha256"] = json_checksum(j);
     const std::string text = j.dump() + "\n";
@@ -380,7 +549,7 @@ Status CertifyCheckpoint::save(const CertifyState& state) {
   if (obv_sha256_.empty()) return Status::ok();  // nothing finished yet
   nlohmann::json j;
   j["format"] = kLayersFormat;
-  j["version"] = 1;
+  j["version"] = kFileVersion;
   j["fingerprint"] = fingerprint_;
   j["obv_sha256"] = obv_sha256_;
   nlohmann::json layers = nlohmann::json::array();
@@ -392,17 +561,7 @@ Status CertifyCheckpoint::save(const CertifyState& state) {
       layers.push_back(cached->second);
       continue;
     }
-    nlohmann::json jl = {{"level", l.level},
-                         {"boxes", l.boxes},
-                         {"overlapping_boxes", l.overlapping_boxes},
-                         {"omv", l.omv.get_str()},
-                         {"sum_obv", l.sum_obv.get_str()},
-                         {"omv_path", l.omv_path},
-                         {"seconds", l.seconds}};
-    if (l.omv_path == "both") {
-      jl["paths_agree"] = l.paths_agree;
-      jl["omv_clip"] = l.omv_clip.get_str();
-    }
+    nlohmann::json jl = layer_to_json(l);
     layers.push_back(jl);
     written_->layers.emplace(l.level, std::move(jl));
   }
@@ -429,9 +588,19 @@ Status CertifyCheckpoint::load(const Tree& tree, CertifyState* state, bool* foun
     if (!obv.is_array() || obv.size() != tree.nodes.size())
       return bad("OBV of " + std::to_string(obv.size()) + " boxes for a tree of " + std::to_string(tree.nodes.size()));
     for (size_t i = 0; i < obv.size(); ++i) {
-      Rational q;
-      if (!parse_rational(obv[i], &q)) return bad("OBV of node " + std::to_string(i) + " is not a rational");
-      s.obv.push_back(q);
+      Enclosed e;
+      const nlohmann::json& jo_i = obv[i];
+      const std::string at = "OBV of node " + std::to_string(i);
+      if (!jo_i.is_object() || !parse_interval(jo_i.at("enclosure"), &e.value) || !jo_i.at("exact").is_boolean())
+        return bad(at + " is not an enclosure");
+      e.exact = jo_i["exact"].get<bool>();
+      for (const auto& item : jo_i.items())
+        if (item.key() != "enclosure" && item.key() != "exact" && item.key() != "rational")
+          return bad(at + ": unknown field '" + item.key().substr(0, 40) + "'");
+      if (jo_i.contains("rational") && (!parse_rational(jo_i["rational"], &e.q) || !e.value.contains(e.q)))
+        return bad(at + ": its rational is not one, or lies outside its enclosure");
+      if (e.exact && !jo_i.contains("rational")) return bad(at + ": exact, without its rational");
+      s.obv.push_back(std::move(e));
     }
     if (!j.is_null()) {
       current = layers_file;
@@ -449,14 +618,13 @@ Status CertifyCheckpoint::load(const Tree& tree, CertifyState* state, bool* foun
         const std::string at = "layer " + std::to_string(l.level) + ": ";
         if (seen[l.level]) return bad(at + "given twice");
         seen[l.level] = 1;
-        // Every field must be one the writer puts there for the layer's path.
-        const bool both = jl.contains("omv_path") && jl["omv_path"] == "both";
-        for (const auto& item : jl.items()) {
-          static const std::set<std::string> kLayerFields{"level", "boxes",    "overlapping_boxes", "omv",
-                                                          "sum_obv", "omv_path", "seconds"};
-          if (!kLayerFields.count(item.key()) && !(both && (item.key() == "paths_agree" || item.key() == "omv_clip")))
-            return bad(at + "unknown field '" + item.key().substr(0, 40) + "'");
-        }
+        // Every field must be one the writer puts there.
+        static const std::set<std::string> kLayerFields{
+            "level", "boxes", "overlapping_boxes", "omv_path", "omv_enclosure", "sum_obv_enclosure",
+            "overlap_enclosure", "omv_nearest", "sum_obv_nearest", "overlap_nearest", "rounded_by", "upper_bound",
+            "bound_by", "exact_obv", "exact_overlap", "rational", "seconds", "omv", "sum_obv", "paths_agree", "omv_clip"};
+        for (const auto& item : jl.items())
+          if (!kLayerFields.count(item.key())) return bad(at + "unknown field '" + item.key().substr(0, 40) + "'");
         const std::vector<int32_t> ids = layer(tree, l.level);
         const nlohmann::json& boxes = jl.at("boxes");
         const nlohmann::json& overlapping = jl.at("overlapping_boxes");
@@ -466,22 +634,48 @@ Status CertifyCheckpoint::load(const Tree& tree, CertifyState* state, bool* foun
           return bad(at + "overlapping boxes are not a count up to its boxes");
         l.boxes = ids.size();
         l.overlapping_boxes = overlapping.get<uint64_t>();
-        if (!parse_rational(jl.at("omv"), &l.omv) || !parse_rational(jl.at("sum_obv"), &l.sum_obv))
-          return bad(at + "OMV or sum of OBV is not a rational");
-        std::vector<Rational> obvs;
-        for (int32_t id : ids) obvs.push_back(s.obv[id]);
-        if (sum_pairwise(obvs) != l.sum_obv) return bad(at + "sum of OBV is not the sum of its boxes' OBV");
+        if (!parse_interval(jl.at("omv_enclosure"), &l.omv_enclosure) ||
+            !parse_interval(jl.at("sum_obv_enclosure"), &l.sum_obv_enclosure) ||
+            !parse_interval(jl.at("overlap_enclosure"), &l.overlap_enclosure))
+          return bad(at + "an enclosure is not one");
+        MpInterval sum(0);
+        for (int32_t id : ids) sum += s.obv[id].value;
+        if (sum.lo_rational() != l.sum_obv_enclosure.lo_rational() || sum.hi_rational() != l.sum_obv_enclosure.hi_rational())
+          return bad(at + "sum of OBV is not the sum of its boxes' OBV");
+        for (const char* key : {"omv_nearest", "sum_obv_nearest", "overlap_nearest"})
+          if (!jl.at(key).is_number()) return bad(at + key + " is not a number");
+        l.omv_nearest = jl["omv_nearest"].get<double>();
+        l.sum_obv_nearest = jl["sum_obv_nearest"].get<double>();
+        l.overlap_nearest = jl["overlap_nearest"].get<double>();
+        l.rounded_by = jl.at("rounded_by").get<std::string>();
+        l.bound_by = jl.at("bound_by").get<std::string>();
+        if ((l.rounded_by != "filter" && l.rounded_by != "exact") || (l.bound_by != "filter" && l.bound_by != "exact"))
+          return bad(at + "rounded_by or bound_by is neither filter nor exact");
+        l.upper_bound = jl.at("upper_bound").get<bool>();
+        l.exact_obv = jl.at("exact_obv").get<uint64_t>();
+        l.exact_overlap = jl.at("exact_overlap").get<uint64_t>();
+        l.rational = jl.at("rational").get<bool>();
+        if (l.rational) {
+          if (!parse_rational(jl.at("omv"), &l.omv) || !parse_rational(jl.at("sum_obv"), &l.sum_obv))
+            return bad(at + "OMV or sum of OBV is not a rational");
+          if (!l.sum_obv_enclosure.contains(l.sum_obv)) return bad(at + "sum of OBV lies outside its enclosure");
+        } else if (jl.contains("omv") || jl.contains("sum_obv")) {
+          return bad(at + "rationals in a layer that says it has none");
+        }
         l.omv_path = jl.at("omv_path").get<std::string>();
         if (l.omv_path == "none") {
-          if (l.omv != l.sum_obv || l.overlapping_boxes != 0)
-            return bad(at + "path none, but OMV is not the sum of OBV or boxes overlap");
+          if (l.overlapping_boxes != 0 || l.overlap_enclosure.lo_rational() != 0 || l.overlap_enclosure.hi_rational() != 0)
+            return bad(at + "path none, but boxes overlap");
         } else if (l.omv_path == "both") {
-          if (!parse_rational(jl.at("omv_clip"), &l.omv_clip)) return bad(at + "clipping's OMV is not a rational");
+          if (!l.rational || !parse_rational(jl.at("omv_clip"), &l.omv_clip)) return bad(at + "clipping's OMV is not a rational");
           l.paths_agree = jl.at("paths_agree").get<bool>();
-          if (l.paths_agree != (l.omv == l.omv_clip)) return bad(at + "paths_agree contradicts the two OMV");
-        } else if (l.omv_path != "nef" && l.omv_path != "clip") {
+          if (l.paths_agree != (l.omv == l.omv_clip && l.omv_enclosure.contains(l.omv)))
+            return bad(at + "paths_agree contradicts the two OMV");
+        } else if (l.omv_path != "nef" && l.omv_path != "clip" && l.omv_path != "filtered") {
           return bad(at + "unknown path '" + l.omv_path.substr(0, 20) + "'");
         }
+        if (l.omv_path != "both" && (jl.contains("paths_agree") || jl.contains("omv_clip")))
+          return bad(at + "a second path's OMV on a layer of path " + l.omv_path);
         const nlohmann::json& seconds = jl.at("seconds");
         if (!seconds.is_number() || !(seconds.get<double>() >= 0)) return bad(at + "seconds is not a time");
         l.seconds = seconds.get<double>();

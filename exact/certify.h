@@ -1,7 +1,10 @@
-// Certification of a finished tree (DESIGN §1, §7): per layer the exact OMV, the exact
-// sum of OBV, their difference (the overlap term) and whether sum OBV >= OMV holds as
-// rationals; for the whole tree the weighted error e = sum_i (D - i + 1) OMV(layer i) and the
-// exact containment check (every face of every node inside its box).
+// Certification of a finished tree (DESIGN §1, §7): per layer the OMV, the sum of OBV and
+// their difference (the overlap term), each as an enclosure of the exact value and its
+// correctly rounded double, and whether sum OBV >= OMV holds, decided exactly; for the whole
+// tree the weighted error e = sum_i (D - i + 1) OMV(layer i), and the exact containment check
+// (every face of every node inside its box). By default the enclosures come from the filter
+// (exact/filtered_solver.h) and rationals are computed only where a sign or a rounding needs
+// them (the certificate says where); the rational paths compute every value exactly.
 #pragma once
 
 #include <functional>
@@ -13,37 +16,58 @@
 #include "common/mesh.h"
 #include "common/status.h"
 #include "common/tree.h"
+#include "exact/filtered_solver.h"
+#include "exact/mp_interval.h"
 
 namespace vobb::exact {
 
 enum class OmvPath {
-  kAuto,  // OBV by clipping in each box's frame; OMV = sum OBV without overlaps, else Nef
-  kClip,  // path (b) for every layer
-  kNef,   // path (a) for every layer
-  kBoth,  // both, and a check that they are equal; Nef's OMV is reported (DESIGN §3: where
-          // two exact paths disagree, Nef is the arbiter), clipping's is kept beside it
+  kAuto,  // filtered (exact/filtered_solver.h): enclosures, rationals only where a sign or a
+          // rounding needs them; no Nef polyhedron
+  kClip,  // the clipping path (b) in rationals for every layer
+  kNef,   // the Nef path (a) in rationals for every layer
+  kBoth,  // filtered, and both exact paths: Nef's OMV equal to clipping's and inside the
+          // filtered enclosure, or the certificate fails (DESIGN §3: Nef is the arbiter)
 };
 
+// How a value was obtained: "filter" (its enclosure decided it) or "exact" (rationals).
 struct LayerCertificate {
   int level = 0;
   size_t boxes = 0;
   size_t overlapping_boxes = 0;  // boxes that may meet another box of the layer (by bounds)
+  // Enclosures of the exact values: OMV, sum of OBV, and the overlap term sum OBV - OMV.
+  MpInterval omv_enclosure, sum_obv_enclosure, overlap_enclosure;
+  // The doubles nearest to the exact values (ties to even), and how each was obtained.
+  double omv_nearest = 0, sum_obv_nearest = 0, overlap_nearest = 0;
+  std::string rounded_by = "filter";  // "exact" where any of the three needed rationals
+  bool upper_bound = true;            // sum OBV >= OMV, decided
+  std::string bound_by = "filter";    // "exact": rationals, or no overlapping boxes (equality)
+  size_t exact_obv = 0;               // boxes whose OBV the filter sent to rationals
+  size_t exact_overlap = 0;           // boxes whose overlap term the filter sent to rationals
+  // The exact rationals, where computed (`rational`): with --rational, on a rational path, or
+  // where a rounding needed them.
+  bool rational = false;
   Rational omv;
   Rational sum_obv;
   Rational overlap() const { return sum_obv - omv; }
-  bool upper_bound_holds() const { return sum_obv >= omv; }
-  std::string omv_path;        // "clip", "nef", "none" (no overlaps: OMV = sum OBV), "both"
-  bool paths_agree = true;     // kBoth only: Nef's OMV == clipping's OMV
+  bool upper_bound_holds() const { return upper_bound; }
+  std::string omv_path;        // "filtered", "clip", "nef", "none" (no overlaps), "both"
+  bool paths_agree = true;     // kBoth only: Nef's OMV == clipping's, inside the enclosure
   Rational omv_clip;           // kBoth only: clipping's OMV (omv holds Nef's, the arbiter's)
   // This layer's own work: its sums, overlap bounds and union. Not the boxes' OBV (computed
-  // first, for all layers at once) nor the building of a thread's Nef(X).
+  // first, for all layers at once) nor the building of a Nef(X).
   double seconds = 0.0;
 };
 
 struct Certificate {
   std::vector<LayerCertificate> layers;
+  MpInterval weighted_error_enclosure;
+  double weighted_error_nearest = 0;
+  std::string weighted_error_rounded_by = "filter";
+  bool rational = false;  // weighted_error holds the exact e (every layer has its rationals)
   Rational weighted_error;
   ContainmentReport containment;
+  size_t exact_obv = 0;  // boxes whose OBV the filter sent to rationals, over the tree
   double seconds = 0.0;
   bool ok() const;  // containment, every upper bound, and (kBoth) path agreement
 };
@@ -51,41 +75,40 @@ struct Certificate {
 // What a certification has finished, for a checkpoint: the boxes' OBV once all are computed,
 // and each finished layer (in the order they finished).
 struct CertifyState {
-  std::vector<Rational> obv;              // per node id; empty until all are computed
+  std::vector<Enclosed> obv;              // per node id; empty until all are computed
   std::vector<LayerCertificate> layers;   // finished layers
 };
 
 struct CertifyOptions {
   OmvPath path = OmvPath::kAuto;
+  // Compute the exact rationals of every value (kAuto: OBV by clipping, OMV by Nef where
+  // boxes overlap), and check each lies in its enclosure.
+  bool rational = false;
   // Called with one line per finished stage (per layer, in the order they finish), so long
   // runs show they are alive.
   std::function<void(const std::string&)> progress;
-  // Called with everything finished so far after the boxes' OBV and after each layer, from any
-  // of the threads, one call at a time; may be empty.
+  // Called with everything finished so far after the boxes' OBV and after each layer, one call
+  // at a time; may be empty.
   std::function<void(const CertifyState&)> checkpoint;
   // A state saved by `checkpoint` of a certification of the same mesh and tree with the same
-  // path (CertifyCheckpoint::load checks it against the tree), and the same kCertifyVersion.
-  // Its OBV are taken as they are. A finished layer is taken when its boxes, their overlap
-  // count, its sum of OBV and its path are the ones this run gives, its OMV as saved (the
-  // costly part); another is certified again. Only the rest is computed, and the certificate
-  // is the uninterrupted one, rational for rational (a resumed layer keeps the seconds it
-  // took). The files' checksums guard against damage, not against a forged state: certify
-  // trusts its own checkpoints.
+  // path and options (CertifyCheckpoint::load checks it against the tree), and the same
+  // kCertifyVersion. Its OBV are taken as they are; a finished layer is taken when its boxes,
+  // overlap count, sum of OBV and path are the ones this run gives. Only the rest is computed,
+  // and the certificate is the uninterrupted one (a resumed layer keeps the seconds it took).
+  // The files' checksums guard against damage, not against a forged state.
   const CertifyState* resume = nullptr;
-  // The memory the layers' Nef polyhedra may take (layer_workers), in bytes; negative: what the
+  // The memory the Nef polyhedra may take (layer_workers), in bytes; negative: what the
   // system has available now (available_memory_bytes). Tests set it to see the limit work.
   double memory_bytes = -1;
 };
 
 // Precondition: the mesh is solid and the tree validated against it (validate_tree, same
 // triangle count). Creates no GL context.
-// Threads: the boxes' OBV are computed in parallel, then the layers, one per thread at a time,
-// the layers with most boxes first; each thread that needs a union builds its own Nef(X), so
-// memory grows with the threads (TBB's: limit them with tbb::global_control or a task_arena),
-// and the layers' threads are also limited to the Nef polyhedra that fit in the memory
-// available (layer_workers; said through `progress` when it limits them).
-// The result is the same rationals for any number of threads; only `seconds` and the order of
-// the progress lines vary. `progress` is called from any of the threads, one call at a time.
+// Threads: the boxes' OBV are computed in parallel, then the layers, the layers with most boxes
+// first, each layer's boxes in parallel (TBB's threads: limit them with tbb::global_control or
+// a task_arena). The filtered path holds one box's cells per thread. A rational path's union
+// takes one Nef(X) per layer at a time, so memory grows with the mesh, not with the threads.
+// The result is the same for any number of threads; only `seconds` varies.
 Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& options);
 
 // Bytes of a Nef polyhedron of a mesh, per face: measured 9.2-10.6 KB on dino and bunny
@@ -103,7 +126,7 @@ double available_memory_bytes();
 
 // What a checkpoint's fingerprint names as certify's own: bump it when certify's arithmetic or
 // choices change, so that checkpoints of the older code are refused.
-inline constexpr const char* kCertifyVersion = "certify 1";
+inline constexpr const char* kCertifyVersion = "certify 2";
 
 // A certification's checkpoint, in a folder of two JSON files: obv.json, the boxes' OBV, written
 // once; and layers.json, the finished layers, rewritten after each and naming obv.json's

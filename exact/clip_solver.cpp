@@ -111,51 +111,68 @@ std::vector<char> ClipSolver::may_overlap(const std::vector<Obb>& boxes) const {
   return out;
 }
 
-std::vector<ConvexCell> ClipSolver::overlap_cells(const std::vector<Obb>& boxes) const {
+std::vector<std::vector<int32_t>> ClipSolver::earlier_neighbours(const std::vector<Obb>& boxes) const {
   const size_t n = boxes.size();
-  std::vector<ConvexCell> whole(n);
   std::vector<Aabb> bounds(n);
-  for (size_t j = 0; j < n; ++j) {
-    whole[j] = ConvexCell::from_box(boxes[j]);
-    bounds[j] = whole[j].bounds();
-  }
+  for (size_t j = 0; j < n; ++j) bounds[j] = ConvexCell::from_box(boxes[j]).bounds();
   AabbTree tree(bounds);
-  std::vector<ConvexCell> shared;
+  std::vector<std::vector<int32_t>> out(n);
   for (size_t j = 0; j < n; ++j) {
-    if (whole[j].empty()) continue;
-    std::vector<int32_t> earlier;
+    if (bounds[j].empty()) continue;
     tree.for_each_overlap(bounds[j], [&](int32_t i) {
-      if (i < static_cast<int32_t>(j) && !whole[i].empty()) earlier.push_back(i);
+      if (i < static_cast<int32_t>(j) && !bounds[i].empty()) out[j].push_back(i);
     });
-    std::sort(earlier.begin(), earlier.end());
-    // Split box j against the earlier boxes it may meet: `pieces` is what no earlier box
-    // covers; each piece's part inside box i goes to `shared`.
-    std::vector<ConvexCell> pieces{whole[j]};
-    for (int32_t i : earlier) {
-      const std::array<HalfSpace, 6> hs = box_half_spaces(boxes[i]);
-      std::vector<ConvexCell> next;
-      for (ConvexCell& p : pieces) {
-        ConvexCell rest = std::move(p);
-        for (const HalfSpace& h : hs) {
-          const Side side = rest.classify(h);
-          if (side == Side::kInside) continue;  // nothing of `rest` lies beyond this face
-          if (side == Side::kOutside) {         // all of `rest` lies beyond: it stays whole
-            next.push_back(std::move(rest));
-            rest = ConvexCell();
-            break;
-          }
-          ConvexCell out = rest;
-          out.clip(h.complement());
-          if (!out.empty()) next.push_back(std::move(out));
-          rest.clip(h);
-          if (rest.empty()) break;
-        }
-        if (!rest.empty()) shared.push_back(std::move(rest));
-      }
-      pieces = std::move(next);
-      if (pieces.empty()) break;
-    }
+    std::sort(out[j].begin(), out[j].end());
   }
+  return out;
+}
+
+std::vector<ConvexCell> ClipSolver::shared_cells(const std::vector<Obb>& boxes, size_t j,
+                                                 const std::vector<int32_t>& earlier) const {
+  std::vector<ConvexCell> shared;
+  ConvexCell whole = ConvexCell::from_box(boxes[j]);
+  if (whole.empty()) return shared;
+  // Split box j against the earlier boxes it may meet: `pieces` is what no earlier box
+  // covers; each piece's part inside box i goes to `shared`.
+  std::vector<ConvexCell> pieces{std::move(whole)};
+  for (int32_t i : earlier) {
+    const std::array<HalfSpace, 6> hs = box_half_spaces(boxes[i]);
+    std::vector<ConvexCell> next;
+    for (ConvexCell& p : pieces) {
+      ConvexCell rest = std::move(p);
+      for (const HalfSpace& h : hs) {
+        const Side side = rest.classify(h);
+        if (side == Side::kInside) continue;  // nothing of `rest` lies beyond this face
+        if (side == Side::kOutside) {         // all of `rest` lies beyond: it stays whole
+          next.push_back(std::move(rest));
+          rest = ConvexCell();
+          break;
+        }
+        ConvexCell out = rest;
+        out.clip(h.complement());
+        if (!out.empty()) next.push_back(std::move(out));
+        rest.clip(h);
+        if (rest.empty()) break;
+      }
+      if (!rest.empty()) shared.push_back(std::move(rest));
+    }
+    pieces = std::move(next);
+    if (pieces.empty()) break;
+  }
+  return shared;
+}
+
+Rational ClipSolver::overlap_term(const std::vector<Obb>& boxes, size_t j, const std::vector<int32_t>& earlier) const {
+  std::vector<Rational> terms;
+  for (const ConvexCell& c : shared_cells(boxes, j, earlier)) terms.push_back(c.volume() - inside_volume(c));
+  return sum_pairwise(terms);
+}
+
+std::vector<ConvexCell> ClipSolver::overlap_cells(const std::vector<Obb>& boxes) const {
+  const std::vector<std::vector<int32_t>> earlier = earlier_neighbours(boxes);
+  std::vector<ConvexCell> shared;
+  for (size_t j = 0; j < boxes.size(); ++j)
+    for (ConvexCell& c : shared_cells(boxes, j, earlier[j])) shared.push_back(std::move(c));
   return shared;
 }
 

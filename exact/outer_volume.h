@@ -47,6 +47,14 @@ class ClipSolver {
   // sum_j vol(B_j) - vol(U_j B_j), the overlap term, not to the volume of the points covered
   // twice. Empty when no two boxes overlap.
   std::vector<ConvexCell> overlap_cells(const std::vector<Obb>& boxes) const;
+  // Per box j, the boxes i < j (ascending) whose conservative bounds meet box j's; flat boxes
+  // meet nothing.
+  std::vector<std::vector<int32_t>> earlier_neighbours(const std::vector<Obb>& boxes) const;
+  // The cells of S_j alone, splitting box j against `earlier` (its earlier_neighbours entry).
+  std::vector<ConvexCell> shared_cells(const std::vector<Obb>& boxes, size_t j,
+                                       const std::vector<int32_t>& earlier) const;
+  // vol(S_j \ X): box j's share of the overlap term, over those cells.
+  Rational overlap_term(const std::vector<Obb>& boxes, size_t j, const std::vector<int32_t>& earlier) const;
 
  private:
   struct Prism;

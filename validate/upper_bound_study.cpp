@@ -57,6 +57,7 @@ UpperBoundResult run_upper_bound_study(const UpperBoundConfig& config, const Sta
       tc.build_seconds = seconds_since(tb);
       exact::CertifyOptions co;
       co.path = exact::OmvPath::kAuto;
+      co.rational = true;  // the study decides estimates against the exact OMV, as rationals
       const exact::Certificate cert = exact::certify(mesh, tree, co);
       tc.certify_seconds = cert.seconds;
       tc.containment_ok = cert.containment.ok();

@@ -109,6 +109,6 @@ int main(int argc, char** argv) {
             report.trees[0].fcl.answer_disagreements == 0 && report.trees[0].fcl.face_disagreements == 0,
         "collision: FCL agrees on the loaded tree");
 
-  std::printf("e %s\n", cert.weighted_error.get_str().c_str());
+  std::printf("e %.17g\n", cert.weighted_error_nearest);
   return failures ? 1 : 0;
 }

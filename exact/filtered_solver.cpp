@@ -1,0 +1,441 @@
+#include "exact/filtered_solver.h"
+
+#include <CGAL/Interval_nt.h>
+
+#include <array>
+#include <unordered_map>
+
+#include "common/box_frame_clip.h"
+#include "common/status.h"
+
+namespace vobb {
+
+template <>
+struct box_clip::ClipTraits<exact::MpInterval> {
+  static int sign(const exact::MpInterval& x) { return x.sign(); }  // throws Undecided
+};
+
+namespace exact {
+namespace {
+
+using Mp = MpInterval;
+using Fast = CGAL::Interval_nt<false>;  // the prefilter's, under upward rounding (a Protector)
+
+struct MpPlane {  // n . x <= d
+  Mp n[3];
+  Mp d;
+};
+
+// A half-space n . x <= d: always its double-interval enclosure (for the cheap decisions), and
+// its MpInterval one, made at the first need.
+class Plane {
+ public:
+  Fast n[3], d;
+
+  static Plane from_mp(const MpPlane& h) {
+    Plane p;
+    for (int i = 0; i < 3; ++i) p.n[i] = Fast(h.n[i].inf(), h.n[i].sup());
+    p.d = Fast(h.d.inf(), h.d.sup());
+    p.mp_ = h;
+    p.has_mp_ = true;
+    return p;
+  }
+  // Side k of a face's prism: k < 3 the vertical plane through edge k, 3 below the face's
+  // plane; `sign` is the sign of the face normal's z. Under upward rounding (a Protector).
+  static Plane prism(const Vec3* corner[3], int k, int sign) {
+    Plane p;
+    p.corner_ = corner;
+    p.k_ = k;
+    p.sign_ = sign;
+    p.coefficients<Fast>(p.n, &p.d);
+    return p;
+  }
+  const MpPlane& mp() const {
+    if (!has_mp_) {
+      coefficients<Mp>(mp_.n, &mp_.d);
+      has_mp_ = true;
+    }
+    return mp_;
+  }
+  Plane complement() const {  // n . x >= d, as (-n) . x <= -d
+    Plane c;
+    for (int i = 0; i < 3; ++i) c.n[i] = -n[i];
+    c.d = -d;
+    const MpPlane& h = mp();
+    for (int i = 0; i < 3; ++i) c.mp_.n[i] = -h.n[i];
+    c.mp_.d = -h.d;
+    c.has_mp_ = true;
+    return c;
+  }
+
+ private:
+  // ClipSolver's prism planes, in NT.
+  template <class NT>
+  void coefficients(NT* nn, NT* dd) const {
+    const Vec3 &a = *corner_[0], &b = *corner_[1], &c = *corner_[2];
+    if (k_ < 3) {
+      const Vec3& p = *corner_[k_];
+      const Vec3& q = *corner_[(k_ + 1) % 3];
+      nn[0] = NT(q[1]) - NT(p[1]);
+      nn[1] = NT(p[0]) - NT(q[0]);
+      nn[2] = NT(0);
+      if (sign_ < 0) nn[0] = -nn[0], nn[1] = -nn[1];
+      *dd = nn[0] * NT(p[0]) + nn[1] * NT(p[1]);
+    } else {
+      NT e1[3], e2[3];
+      for (int i = 0; i < 3; ++i) e1[i] = NT(b[i]) - NT(a[i]), e2[i] = NT(c[i]) - NT(a[i]);
+      const NT nrm[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+      for (int i = 0; i < 3; ++i) nn[i] = sign_ > 0 ? nrm[i] : NT(-nrm[i]);
+      *dd = nn[0] * NT(a[0]) + nn[1] * NT(a[1]) + nn[2] * NT(a[2]);
+    }
+  }
+  const Vec3* const* corner_ = nullptr;
+  int k_ = 0, sign_ = 0;
+  mutable MpPlane mp_;
+  mutable bool has_mp_ = false;
+};
+
+// Where a cell's vertices lie relative to a plane: side -1, 0, +1 each, exactly; the
+// MpInterval values of n . v - d where they were needed (has_value).
+struct Sides {
+  std::vector<int> side;
+  std::vector<Mp> value;
+  std::vector<char> has_value;
+  bool any_pos = false, any_neg = false;
+};
+
+// A bounded convex polyhedron with enclosed vertices: ConvexCell's clipping (exact/convex_cell.h)
+// with every sign taken from the enclosures (double intervals first, then MpInterval; Undecided
+// where both hold 0), so that its faces are the exact cell's and its vertices enclose the exact
+// cell's.
+class MpCell {
+ public:
+  static MpCell from_box(const box_clip::Frame<Mp>& f, int orientation) {
+    MpCell cell;
+    cell.v_.resize(8);
+    cell.fv_.resize(8);
+    for (int c = 0; c < 8; ++c) {
+      for (int i = 0; i < 3; ++i) {
+        Mp x = f.c[i];
+        for (int k = 0; k < 3; ++k) x = ((c >> k) & 1) ? x + f.u[k][i] : x - f.u[k][i];
+        cell.v_[c][i] = x;
+      }
+      cell.refresh(c);
+    }
+    for (const auto& q : kBoxQuads) {
+      if (orientation > 0) cell.faces_.push_back({q[0], q[1], q[2], q[3]});
+      else cell.faces_.push_back({q[3], q[2], q[1], q[0]});
+    }
+    return cell;
+  }
+  bool empty() const { return faces_.empty(); }
+  const std::vector<std::array<Fast, 3>>& fast_vertices() const { return fv_; }
+
+  void sides(const Plane& h, Sides* s) const {
+    const size_t n = v_.size();
+    s->side.assign(n, 2);  // 2: not decided yet
+    s->value.resize(n);
+    s->has_value.assign(n, 0);
+    {
+      Fast::Protector upward;
+      for (size_t i = 0; i < n; ++i) {
+        const Fast x = h.n[0] * fv_[i][0] + h.n[1] * fv_[i][1] + h.n[2] * fv_[i][2] - h.d;
+        if (x.inf() > 0) s->side[i] = 1;
+        else if (x.sup() < 0) s->side[i] = -1;
+      }
+    }
+    s->any_pos = s->any_neg = false;
+    for (size_t i = 0; i < n; ++i) {
+      if (s->side[i] == 2) s->side[i] = value_at(h, s, static_cast<int>(i)).sign();  // may throw
+      s->any_pos |= s->side[i] > 0;
+      s->any_neg |= s->side[i] < 0;
+    }
+  }
+
+  // Keeps the part in h (ConvexCell::clip, step for step).
+  void clip(const Plane& h) {
+    if (faces_.empty()) return;
+    Sides s;
+    sides(h, &s);
+    clip_with(h, &s);
+  }
+
+  void clip_with(const Plane& h, Sides* s) {
+    if (!s->any_pos) return;
+    if (!s->any_neg) {
+      v_.clear();
+      fv_.clear();
+      faces_.clear();
+      return;
+    }
+    const std::vector<int>& side = s->side;
+    const int n = static_cast<int>(v_.size());
+    std::unordered_map<long long, int> cut;
+    auto cut_point = [&](int a, int b) {
+      const long long key = static_cast<long long>(std::min(a, b)) * (1LL << 31) + std::max(a, b);
+      auto it = cut.find(key);
+      if (it != cut.end()) return it->second;
+      const int lo = std::min(a, b), hi = std::max(a, b);
+      const Mp vl = value_at(h, s, lo), vh = value_at(h, s, hi);
+      const Mp t = vl / (vl - vh);
+      std::array<Mp, 3> p;
+      for (int i = 0; i < 3; ++i) p[i] = v_[lo][i] + t * (v_[hi][i] - v_[lo][i]);
+      v_.push_back(p);
+      fv_.emplace_back();
+      const int id = static_cast<int>(v_.size()) - 1;
+      refresh(id);
+      cut.emplace(key, id);
+      return id;
+    };
+    auto on_plane = [&](int id) { return id >= n || side[id] == 0; };
+    std::vector<std::vector<int>> kept;
+    std::unordered_map<int, int> cap_next;
+    for (const std::vector<int>& f : faces_) {
+      std::vector<int> poly;
+      const size_t m = f.size();
+      for (size_t k = 0; k < m; ++k) {
+        const int a = f[k], b = f[(k + 1) % m];
+        if (side[a] <= 0) poly.push_back(a);
+        if (side[a] * side[b] < 0) poly.push_back(cut_point(a, b));
+      }
+      if (poly.size() < 3) continue;
+      for (size_t k = 0; k < poly.size(); ++k) {
+        const int a = poly[k], b = poly[(k + 1) % poly.size()];
+        if (on_plane(a) && on_plane(b)) cap_next[b] = a;
+      }
+      kept.push_back(std::move(poly));
+    }
+    if (cap_next.size() >= 3) {
+      std::vector<int> cap;
+      const int start = cap_next.begin()->first;
+      int at = start;
+      do {
+        cap.push_back(at);
+        auto it = cap_next.find(at);
+        VOBB_ASSERT(it != cap_next.end(), "open cap cycle in MpCell::clip");
+        at = it->second;
+        VOBB_ASSERT(cap.size() <= cap_next.size(), "cap cycle longer than its edges");
+      } while (at != start);
+      VOBB_ASSERT(cap.size() == cap_next.size(), "cap edges form more than one cycle");
+      kept.push_back(std::move(cap));
+    }
+    std::vector<int> remap(v_.size(), -1);
+    std::vector<std::array<Mp, 3>> nv;
+    std::vector<std::array<Fast, 3>> nfv;
+    for (std::vector<int>& f : kept)
+      for (int& id : f) {
+        if (remap[id] < 0) {
+          remap[id] = static_cast<int>(nv.size());
+          nv.push_back(v_[id]);
+          nfv.push_back(fv_[id]);
+        }
+        id = remap[id];
+      }
+    v_ = std::move(nv);
+    fv_ = std::move(nfv);
+    faces_ = std::move(kept);
+    if (faces_.size() < 4) {
+      v_.clear();
+      fv_.clear();
+      faces_.clear();
+    }
+  }
+
+  Mp volume() const {
+    if (faces_.empty()) return Mp(0);
+    const std::array<Mp, 3>& p = v_[faces_[0][0]];
+    Mp sum(0);
+    for (const std::vector<int>& f : faces_) {
+      Mp a[3];
+      for (int i = 0; i < 3; ++i) a[i] = v_[f[0]][i] - p[i];
+      for (size_t k = 1; k + 1 < f.size(); ++k) {
+        Mp b[3], c[3];
+        for (int i = 0; i < 3; ++i) {
+          b[i] = v_[f[k]][i] - p[i];
+          c[i] = v_[f[k + 1]][i] - p[i];
+        }
+        sum += a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
+               a[2] * (b[0] * c[1] - b[1] * c[0]);
+      }
+    }
+    return sum / Mp(6);
+  }
+
+  Aabb bounds() const {
+    Aabb b;
+    for (const auto& p : fv_)
+      for (int i = 0; i < 3; ++i) {
+        b.lo[i] = std::min(b.lo[i], p[i].inf());
+        b.hi[i] = std::max(b.hi[i], p[i].sup());
+      }
+    return b;
+  }
+
+ private:
+  void refresh(int i) {
+    for (int k = 0; k < 3; ++k) fv_[i][k] = Fast(v_[i][k].inf(), v_[i][k].sup());
+  }
+  const Mp& value_at(const Plane& h, Sides* s, int i) const {
+    if (!s->has_value[i]) {
+      const MpPlane& m = h.mp();
+      s->value[i] = m.n[0] * v_[i][0] + m.n[1] * v_[i][1] + m.n[2] * v_[i][2] - m.d;
+      s->has_value[i] = 1;
+    }
+    return s->value[i];
+  }
+
+  std::vector<std::array<Mp, 3>> v_;
+  std::vector<std::array<Fast, 3>> fv_;  // double enclosures of v_
+  std::vector<std::vector<int>> faces_;
+};
+
+// The six half-spaces of a box's certified solid (box_half_spaces, in Mp).
+std::array<Plane, 6> box_planes(const box_clip::Frame<Mp>& f, int sigma) {
+  const Mp abs_det = abs(f.det);
+  std::array<Plane, 6> out;
+  for (int k = 0; k < 3; ++k) {
+    Mp wc = f.w[k][0] * f.c[0] + f.w[k][1] * f.c[1] + f.w[k][2] * f.c[2];
+    if (sigma < 0) wc = -wc;
+    MpPlane plus, minus;
+    for (int i = 0; i < 3; ++i) {
+      plus.n[i] = sigma > 0 ? f.w[k][i] : -f.w[k][i];
+      minus.n[i] = -plus.n[i];
+    }
+    plus.d = abs_det + wc;
+    minus.d = abs_det - wc;
+    out[2 * k] = Plane::from_mp(plus);
+    out[2 * k + 1] = Plane::from_mp(minus);
+  }
+  return out;
+}
+
+}  // namespace
+
+FilteredSolver::FilteredSolver(const Mesh& mesh) : mesh_(mesh), faces_(AabbTree::over_faces(mesh)), clip_(mesh) {}
+
+Enclosed FilteredSolver::obv(const Obb& box) const {
+  Enclosed out;
+  const box_clip::ColumnFilter filter(box);
+  if (filter.flat()) {
+    out.exact = true;  // no volume: 0, exactly
+    return out;
+  }
+  try {
+    const box_clip::Frame<Mp> frame = box_clip::make_frame<Mp>(box);
+    const Mp R = abs(frame.det);
+    if (R.sign() == 0) {
+      out.exact = true;
+      return out;
+    }
+    Mp sum(0);
+    faces_.visit_accepted(filter, [&](int32_t f) {
+      const Face& face = mesh_.faces[f];
+      const box_clip::Point<Mp> tri[3] = {box_clip::to_frame(frame, mesh_.vertices[face[0]]),
+                                          box_clip::to_frame(frame, mesh_.vertices[face[1]]),
+                                          box_clip::to_frame(frame, mesh_.vertices[face[2]])};
+      Mp term;
+      if (box_clip::face_term6(tri, R, &term)) sum += term;
+    });
+    out.value = box_clip::obv_from_sum6(sum, R);
+    if (narrow_) out.value = out.value.narrowed_for_tests();
+    return out;
+  } catch (const Undecided&) {
+    out.exact = true;
+    out.q = clip_.obv(box);
+    out.value = Mp(out.q);
+    return out;
+  }
+}
+
+Enclosed FilteredSolver::overlap_term(const std::vector<Obb>& boxes, size_t j,
+                                      const std::vector<int32_t>& earlier) const {
+  Enclosed out;
+  if (earlier.empty()) return out;  // [0, 0]: nothing earlier can meet box j
+  try {
+    const box_clip::Frame<Mp> fj = box_clip::make_frame<Mp>(boxes[j]);
+    const int orientation = fj.det.sign();
+    if (orientation == 0) return out;  // a flat box: nothing inside it
+    // Split box j against each earlier box: `pieces` is what none covers so far; each piece's
+    // part inside box i is a cell of S_j (ClipSolver::shared_cells, step for step).
+    std::vector<MpCell> shared, pieces{MpCell::from_box(fj, orientation)};
+    Sides sides;
+    for (int32_t i : earlier) {
+      const box_clip::Frame<Mp> fi = box_clip::make_frame<Mp>(boxes[i]);
+      const int sigma = fi.det.sign();
+      if (sigma == 0) continue;
+      const std::array<Plane, 6> hs = box_planes(fi, sigma);
+      std::vector<MpCell> next;
+      for (MpCell& p : pieces) {
+        MpCell rest = std::move(p);
+        for (const Plane& h : hs) {
+          rest.sides(h, &sides);
+          if (!sides.any_pos) continue;  // nothing of `rest` lies beyond this face
+          if (!sides.any_neg) {          // all of it beyond or on the plane: it stays whole
+            next.push_back(std::move(rest));
+            rest = MpCell();
+            break;
+          }
+          MpCell beyond = rest;
+          beyond.clip(h.complement());
+          if (!beyond.empty()) next.push_back(std::move(beyond));
+          rest.clip_with(h, &sides);
+          if (rest.empty()) break;
+        }
+        if (!rest.empty()) shared.push_back(std::move(rest));
+      }
+      pieces = std::move(next);
+      if (pieces.empty()) break;
+    }
+    Mp total(0);
+    for (const MpCell& cell : shared) {
+      const Mp vol = cell.volume();
+      // vol(cell ∩ X) = sum over faces of sign * vol(cell ∩ prism), ClipSolver::inside_volume.
+      Aabb column = cell.bounds();
+      column.hi[2] = INFINITY;
+      Mp inside(0);
+      long whole = 0;
+      faces_.for_each_overlap(column, [&](int32_t f) {
+        const Vec3 &a = mesh_.corner(f, 0), &b = mesh_.corner(f, 1), &c = mesh_.corner(f, 2);
+        const int sign = orient2d(a, b, c, 0, 1);  // the sign of the face normal's z, exactly
+        if (sign == 0) return;                     // a vertical face bounds no column
+        const Vec3* corner[3] = {&a, &b, &c};
+        // The prism's 4 half-spaces (3 vertical sides, then below the face): which miss the
+        // cell, which hold it, which cut it; the double intervals decide most of it.
+        Plane h[4];
+        {
+          Fast::Protector upward;
+          for (int k = 0; k < 4; ++k) h[k] = Plane::prism(corner, k, sign);
+        }
+        const Plane* cutting[4];
+        int n_cutting = 0;
+        for (int k = 0; k < 4; ++k) {
+          cell.sides(h[k], &sides);
+          if (!sides.any_neg) return;  // beyond or on the plane: the prism adds no volume
+          if (sides.any_pos) cutting[n_cutting++] = &h[k];
+        }
+        if (n_cutting == 0) {
+          whole += sign;
+          return;
+        }
+        MpCell piece = cell;
+        for (int k = 0; k < n_cutting; ++k) {
+          piece.clip(*cutting[k]);
+          if (piece.empty()) return;
+        }
+        inside += sign > 0 ? piece.volume() : -piece.volume();
+      });
+      if (whole != 0) inside += Mp(static_cast<double>(whole)) * vol;
+      total += vol - inside;
+    }
+    out.value = narrow_ ? total.narrowed_for_tests() : total;
+    return out;
+  } catch (const Undecided&) {
+    out.exact = true;
+    out.q = clip_.overlap_term(boxes, j, earlier);
+    out.value = Mp(out.q);
+    return out;
+  }
+}
+
+}  // namespace exact
+}  // namespace vobb

@@ -1,0 +1,69 @@
+// vobb::exact::MpInterval — a closed interval of 128-bit binary floating-point numbers (MPFR),
+// every operation rounded outward. Whatever values lie in the operands, the exact result of the
+// same operation on them lies in the result: a chain of operations encloses the exact value of
+// the same expression in rationals. Holds its significands inline: no allocation.
+//
+// It is certify's filter (exact/filtered_solver.h): wide enough that boxes whose faces touch
+// mesh vertices (1e-17 apart in relative terms) are told apart, narrow enough (about 1e-35
+// relative) that a sum's enclosure lies in one double's rounding cell except at rounding ties.
+// A sign it cannot decide throws Undecided; the caller then computes in rationals.
+#pragma once
+
+#include <gmp.h>
+#include <string>
+#include <mpfr.h>
+
+#include "common/exact_predicates.h"
+
+namespace vobb::exact {
+
+// A decision the enclosure cannot take (it holds 0 and other values).
+struct Undecided {};
+
+class MpInterval {
+ public:
+  static constexpr mpfr_prec_t kPrec = 128;
+
+  MpInterval() { init(); }  // [0, 0]
+  MpInterval(double x);  // NOLINT: exact (a double fits in 128 bits)
+  MpInterval(int x) : MpInterval(static_cast<double>(x)) {}  // NOLINT
+  explicit MpInterval(const Rational& q);  // the two 128-bit numbers around q
+  MpInterval(const MpInterval& o);
+  MpInterval& operator=(const MpInterval& o);
+
+  friend MpInterval operator+(const MpInterval& a, const MpInterval& b);
+  friend MpInterval operator-(const MpInterval& a, const MpInterval& b);
+  friend MpInterval operator*(const MpInterval& a, const MpInterval& b);
+  // Throws Undecided where b's enclosure holds 0.
+  friend MpInterval operator/(const MpInterval& a, const MpInterval& b);
+  friend MpInterval operator-(const MpInterval& a);
+  MpInterval& operator+=(const MpInterval& b) { return *this = *this + b; }
+  MpInterval& operator-=(const MpInterval& b) { return *this = *this - b; }
+  friend MpInterval abs(const MpInterval& a);
+
+  // -1, 0 or +1 where the enclosure decides it (0 only for [0, 0]); otherwise throws Undecided.
+  int sign() const;
+  // Outward doubles: inf() <= every value inside <= sup().
+  double inf() const;
+  double sup() const;
+  // The double nearest to every value inside, where one double is (both ends round to it).
+  bool nearest(double* d) const;
+  // The ends, exactly.
+  Rational lo_rational() const;
+  Rational hi_rational() const;
+  bool contains(const Rational& q) const;
+  // The ends as MPFR's exact hexadecimal text ("%Ra"), and back; false for text that is not
+  // two such numbers with lo <= hi.
+  void to_text(std::string* lo, std::string* hi) const;
+  static bool from_text(const std::string& lo, const std::string& hi, MpInterval* out);
+  // For the tests: [lo, hi] narrowed by one unit in the last place (128 bits) at the upper end.
+  MpInterval narrowed_for_tests() const;
+
+ private:
+  static constexpr int kLimbs = (kPrec + GMP_NUMB_BITS - 1) / GMP_NUMB_BITS;
+  void init();
+  mpfr_t lo_, hi_;
+  mp_limb_t lo_limbs_[kLimbs], hi_limbs_[kLimbs];
+};
+
+}  // namespace vobb::exact
