@@ -1,5 +1,6 @@
 #include "common/box_frame_clip.h"
 
+#include <algorithm>
 #include <cmath>
 #include <unordered_map>
 
@@ -34,6 +35,30 @@ ColumnFilter::ColumnFilter(const Obb& box) {
   for (int k = 0; k < 3; ++k) nu[k] = l1(f.u[k]);
   for (int k = 0; k < 3; ++k) w_err_[k] = 16 * kEps * nu[(k + 1) % 3] * nu[(k + 2) % 3];
   R_err_ = 32 * kEps * nu[0] * nu[1] * nu[2];
+}
+
+Obb shortest_column(const Obb& box, const Aabb& bounds) {
+  static constexpr int kOrders[6][3] = {{0, 1, 2}, {1, 0, 2}, {1, 2, 0}, {2, 1, 0}, {2, 0, 1}, {0, 2, 1}};
+  int best = 0;
+  double best_reach = INFINITY;
+  for (int o = 0; o < 6; ++o) {
+    const int i = kOrders[o][0], j = kOrders[o][1], k = kOrders[o][2];
+    const Vec3 d = box.axes[i].cross(box.axes[j]);
+    double reach = -INFINITY;  // how far the mesh's bounds reach beyond the box along d
+    for (int corner = 0; corner < 8; ++corner) {
+      const Vec3 p((corner & 1) ? bounds.hi[0] : bounds.lo[0], (corner & 2) ? bounds.hi[1] : bounds.lo[1],
+                   (corner & 4) ? bounds.hi[2] : bounds.lo[2]);
+      reach = std::max(reach, (p - box.center).dot(d));
+    }
+    reach -= box.half[k] * std::abs(box.axes[k].dot(d));
+    if (reach < best_reach) best_reach = reach, best = o;
+  }
+  Obb out = box;
+  for (int n = 0; n < 3; ++n) {
+    out.axes[n] = box.axes[kOrders[best][n]];
+    out.half[n] = box.half[kOrders[best][n]];
+  }
+  return out;
 }
 
 Rational box_obv_rational(const Mesh& mesh, const AabbTree& faces, const Obb& box) {

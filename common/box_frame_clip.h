@@ -284,6 +284,11 @@ class ColumnFilter {
   bool flat_ = false;
 };
 
+// The same certified solid with its edge vectors relabelled ({c + sum t_k u_k} is the same set
+// in any order) so that its column (T_2 >= -R, along u_0 x u_1) leaves `bounds` (the mesh's)
+// soonest: fewer faces lie above the box. A heuristic; any order gives the same exact OBV.
+Obb shortest_column(const Obb& box, const Aabb& bounds);
+
 // The exact OBV of one box by this formula, visiting the faces that `filter` accepts through
 // `faces` (AabbTree::over_faces(mesh)). 0 for a flat box.
 Rational box_obv_rational(const Mesh& mesh, const AabbTree& faces, const Obb& box);

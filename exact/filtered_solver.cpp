@@ -104,6 +104,31 @@ struct Sides {
   bool any_pos = false, any_neg = false;
 };
 
+// The prism decomposition runs along +z; a cell may take it along any of the six axis
+// directions instead, by an orientation-preserving map that sends that direction to +z
+// (coordinates permuted, one negated where needed: exact in any number type). Volumes and the
+// solid's orientation are kept, so vol(cell ∩ X) is the same whichever is taken.
+// Direction d: 0 +z, 1 -z, 2 +x, 3 -x, 4 +y, 5 -y.
+template <class T>
+std::array<T, 3> to_direction(int d, const T& x, const T& y, const T& z) {
+  switch (d) {
+    case 0: return {x, y, z};
+    case 1: return {y, x, T(-z)};
+    case 2: return {y, z, x};
+    case 3: return {z, y, T(-x)};
+    case 4: return {z, x, y};
+    default: return {x, z, T(-y)};
+  }
+}
+
+// The column above a cell's bounds along direction d.
+Aabb column_of(Aabb b, int d) {
+  static constexpr int kAxis[6] = {2, 2, 0, 0, 1, 1};
+  if (d % 2 == 0) b.hi[kAxis[d]] = INFINITY;
+  else b.lo[kAxis[d]] = -INFINITY;
+  return b;
+}
+
 // A bounded convex polyhedron with enclosed vertices: ConvexCell's clipping (exact/convex_cell.h)
 // with every sign taken from the enclosures (double intervals first, then MpInterval; Undecided
 // where both hold 0), so that its faces are the exact cell's and its vertices enclose the exact
@@ -129,7 +154,19 @@ class MpCell {
     return cell;
   }
   bool empty() const { return faces_.empty(); }
-  const std::vector<std::array<Fast, 3>>& fast_vertices() const { return fv_; }
+
+  // The cell under to_direction(d).
+  MpCell mapped(int d) const {
+    MpCell out;
+    out.faces_ = faces_;
+    out.v_.reserve(v_.size());
+    out.fv_.resize(v_.size());
+    for (size_t i = 0; i < v_.size(); ++i) {
+      out.v_.push_back(to_direction(d, v_[i][0], v_[i][1], v_[i][2]));
+      out.refresh(static_cast<int>(i));
+    }
+    return out;
+  }
 
   void sides(const Plane& h, Sides* s) const {
     const size_t n = v_.size();
@@ -315,13 +352,15 @@ FilteredSolver::FilteredSolver(const Mesh& mesh) : mesh_(mesh), faces_(AabbTree:
 
 Enclosed FilteredSolver::obv(const Obb& box) const {
   Enclosed out;
-  const box_clip::ColumnFilter filter(box);
+  // Relabelled so that its column leaves the mesh soonest: the same solid, fewer faces.
+  const Obb labelled = box_clip::shortest_column(box, faces_.bounds());
+  const box_clip::ColumnFilter filter(labelled);
   if (filter.flat()) {
     out.exact = true;  // no volume: 0, exactly
     return out;
   }
   try {
-    const box_clip::Frame<Mp> frame = box_clip::make_frame<Mp>(box);
+    const box_clip::Frame<Mp> frame = box_clip::make_frame<Mp>(labelled);
     const Mp R = abs(frame.det);
     if (R.sign() == 0) {
       out.exact = true;
@@ -387,15 +426,29 @@ Enclosed FilteredSolver::overlap_term(const std::vector<Obb>& boxes, size_t j,
       if (pieces.empty()) break;
     }
     Mp total(0);
-    for (const MpCell& cell : shared) {
-      const Mp vol = cell.volume();
-      // vol(cell ∩ X) = sum over faces of sign * vol(cell ∩ prism), ClipSolver::inside_volume.
-      Aabb column = cell.bounds();
-      column.hi[2] = INFINITY;
+    for (const MpCell& cell_xyz : shared) {
+      const Mp vol = cell_xyz.volume();
+      // vol(cell ∩ X) = sum over faces of sign * vol(cell ∩ prism), ClipSolver::inside_volume,
+      // along the direction whose column holds the fewest faces.
+      const Aabb bounds = cell_xyz.bounds();
+      int dir = 0;
+      size_t fewest = SIZE_MAX;
+      for (int d = 0; d < 6; ++d) {
+        size_t n = 0;
+        faces_.for_each_overlap(column_of(bounds, d), [&](int32_t) { ++n; });
+        if (n < fewest) fewest = n, dir = d;
+      }
+      const MpCell cell = cell_xyz.mapped(dir);
       Mp inside(0);
       long whole = 0;
-      faces_.for_each_overlap(column, [&](int32_t f) {
-        const Vec3 &a = mesh_.corner(f, 0), &b = mesh_.corner(f, 1), &c = mesh_.corner(f, 2);
+      faces_.for_each_overlap(column_of(bounds, dir), [&](int32_t f) {
+        Vec3 mapped[3];
+        for (int k = 0; k < 3; ++k) {
+          const Vec3& p = mesh_.corner(f, k);
+          const std::array<double, 3> q = to_direction(dir, p[0], p[1], p[2]);
+          mapped[k] = Vec3(q[0], q[1], q[2]);
+        }
+        const Vec3 &a = mapped[0], &b = mapped[1], &c = mapped[2];
         const int sign = orient2d(a, b, c, 0, 1);  // the sign of the face normal's z, exactly
         if (sign == 0) return;                     // a vertical face bounds no column
         const Vec3* corner[3] = {&a, &b, &c};

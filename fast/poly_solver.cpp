@@ -92,34 +92,6 @@ struct ExactVertexSigns {
   }
 };
 
-// The same certified solid with its edge vectors relabelled, {c + sum t_k u_k} being the same
-// set in any order, so that its column (T_2 >= -R, which runs along u_0 x u_1) leaves the
-// mesh's bounds soonest: fewer faces lie above the box. A heuristic; any order gives the same
-// exact OBV.
-Obb shortest_column(const Obb& box, const Aabb& bounds) {
-  static constexpr int kOrders[6][3] = {{0, 1, 2}, {1, 0, 2}, {1, 2, 0}, {2, 1, 0}, {2, 0, 1}, {0, 2, 1}};
-  int best = 0;
-  double best_reach = INFINITY;
-  for (int o = 0; o < 6; ++o) {
-    const int i = kOrders[o][0], j = kOrders[o][1], k = kOrders[o][2];
-    const Vec3 d = box.axes[i].cross(box.axes[j]);
-    double reach = -INFINITY;  // how far the mesh's bounds reach beyond the box along d
-    for (int corner = 0; corner < 8; ++corner) {
-      const Vec3 p((corner & 1) ? bounds.hi[0] : bounds.lo[0], (corner & 2) ? bounds.hi[1] : bounds.lo[1],
-                   (corner & 4) ? bounds.hi[2] : bounds.lo[2]);
-      reach = std::max(reach, (p - box.center).dot(d));
-    }
-    reach -= box.half[k] * std::abs(box.axes[k].dot(d));
-    if (reach < best_reach) best_reach = reach, best = o;
-  }
-  Obb out = box;
-  for (int n = 0; n < 3; ++n) {
-    out.axes[n] = box.axes[kOrders[best][n]];
-    out.half[n] = box.half[kOrders[best][n]];
-  }
-  return out;
-}
-
 PolyObv exact_result(const Rational& q, int32_t faces, std::string why) {
   PolyObv r;
   enclose(q, &r.lo, &r.hi);
@@ -141,9 +113,9 @@ void enclose(const Rational& q, double* lo, double* hi) {
 
 PolyObvSolver::PolyObvSolver(const Mesh& mesh) : mesh_(mesh), faces_(AabbTree::over_faces(mesh)) {}
 
-PolyObv PolyObvSolver::evaluate(const Obb& box) const { return evaluate_as(shortest_column(box, faces_.bounds())); }
+PolyObv PolyObvSolver::evaluate(const Obb& box) const { return evaluate_as(box_clip::shortest_column(box, faces_.bounds())); }
 
-double PolyObvSolver::estimate(const Obb& box) const { return estimate_as(shortest_column(box, faces_.bounds())); }
+double PolyObvSolver::estimate(const Obb& box) const { return estimate_as(box_clip::shortest_column(box, faces_.bounds())); }
 
 Rational PolyObvSolver::exact(const Obb& box) const { return box_clip::box_obv_rational(mesh_, faces_, box); }
 
