@@ -376,7 +376,7 @@ Enclosed FilteredSolver::obv(const Obb& box) const {
       if (box_clip::face_term6(tri, R, &term)) sum += term;
     });
     out.value = box_clip::obv_from_sum6(sum, R);
-    if (narrow_) out.value = out.value.narrowed_for_tests();
+    if (collapse_) out.value = out.value.collapsed_for_tests();
     return out;
   } catch (const Undecided&) {
     out.exact = true;
@@ -480,7 +480,7 @@ Enclosed FilteredSolver::overlap_term(const std::vector<Obb>& boxes, size_t j,
       if (whole != 0) inside += Mp(static_cast<double>(whole)) * vol;
       total += vol - inside;
     }
-    out.value = narrow_ ? total.narrowed_for_tests() : total;
+    out.value = collapse_ ? total.collapsed_for_tests() : total;
     return out;
   } catch (const Undecided&) {
     out.exact = true;

@@ -42,15 +42,15 @@ class FilteredSolver {
   Enclosed overlap_term(const std::vector<Obb>& boxes, size_t j, const std::vector<int32_t>& earlier) const;
   const ClipSolver& rational() const { return clip_; }
 
-  // For the tests: the enclosures of the interval path are narrowed by one unit in the last
-  // place before they are returned (a deliberately broken filter must be caught).
-  void set_narrow_for_tests(bool on) { narrow_ = on; }
+  // For the tests: the filter's enclosures are collapsed onto their lower ends before they are
+  // returned (a deliberately broken filter must be caught).
+  void set_collapse_for_tests(bool on) { collapse_ = on; }
 
  private:
   const Mesh& mesh_;
   AabbTree faces_;
   ClipSolver clip_;
-  bool narrow_ = false;
+  bool collapse_ = false;
 };
 
 }  // namespace vobb::exact

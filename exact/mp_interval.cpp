@@ -178,9 +178,9 @@ bool MpInterval::from_text(const std::string& lo, const std::string& hi, MpInter
   return true;
 }
 
-MpInterval MpInterval::narrowed_for_tests() const {
+MpInterval MpInterval::collapsed_for_tests() const {
   MpInterval r = *this;
-  if (mpfr_greater_p(r.hi_, r.lo_)) mpfr_nextbelow(r.hi_);
+  mpfr_set(r.hi_, r.lo_, MPFR_RNDU);
   return r;
 }
 

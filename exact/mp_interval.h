@@ -56,8 +56,8 @@ class MpInterval {
   // two such numbers with lo <= hi.
   void to_text(std::string* lo, std::string* hi) const;
   static bool from_text(const std::string& lo, const std::string& hi, MpInterval* out);
-  // For the tests: [lo, hi] narrowed by one unit in the last place (128 bits) at the upper end.
-  MpInterval narrowed_for_tests() const;
+  // For the tests: [lo, lo].
+  MpInterval collapsed_for_tests() const;
 
  private:
   static constexpr int kLimbs = (kPrec + GMP_NUMB_BITS - 1) / GMP_NUMB_BITS;

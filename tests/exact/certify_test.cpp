@@ -26,6 +26,7 @@
 #include "data/analytic_meshes.h"
 #include "fast/cpu_estimator.h"
 #include "fast/obbtree_builder.h"
+#include "fast/poly_solver.h"
 #include "fast/variational_builder.h"
 #include "test_common.h"
 
@@ -85,16 +86,32 @@ TEST(Certify, HandMadeTreeHasClosedFormValues) {
   t.nodes[2] = {2, 0, 1, box, {}, std::vector<int32_t>(all.begin() + half, all.end())};
   ASSERT_TRUE(validate_tree(t, "hand"));
   for (OmvPath path : {OmvPath::kAuto, OmvPath::kClip, OmvPath::kNef, OmvPath::kBoth}) {
-    CertifyOptions co;
-    co.path = path;
-    const Certificate c = certify(m, t, co);
-    ASSERT_EQ(c.layers.size(), 2u);
-    EXPECT_TRUE(c.ok());
-    EXPECT_EQ(c.layers[0].sum_obv, 7);
-    EXPECT_EQ(c.layers[0].omv, 7);
-    EXPECT_EQ(c.layers[1].sum_obv, 14);
-    EXPECT_EQ(c.layers[1].omv, 7);
-    EXPECT_EQ(c.weighted_error, 21);
+    for (bool rational : {false, true}) {
+      CertifyOptions co;
+      co.path = path;
+      co.rational = rational;
+      const Certificate c = certify(m, t, co);
+      ASSERT_EQ(c.layers.size(), 2u);
+      EXPECT_TRUE(c.ok());
+      // The doubles and enclosures always; the rationals where computed (all but the
+      // filtered path without --rational).
+      EXPECT_EQ(c.layers[0].sum_obv_nearest, 7.0);
+      EXPECT_EQ(c.layers[0].omv_nearest, 7.0);
+      EXPECT_EQ(c.layers[1].sum_obv_nearest, 14.0);
+      EXPECT_EQ(c.layers[1].omv_nearest, 7.0);
+      EXPECT_EQ(c.layers[1].overlap_nearest, 7.0);
+      EXPECT_TRUE(c.layers[1].omv_enclosure.contains(Rational(7)));
+      EXPECT_EQ(c.weighted_error_nearest, 21.0);
+      EXPECT_TRUE(c.weighted_error_enclosure.contains(Rational(21)));
+      const bool has_rationals = rational || path != OmvPath::kAuto;
+      EXPECT_EQ(c.rational, has_rationals);
+      if (!has_rationals) continue;
+      EXPECT_EQ(c.layers[0].sum_obv, 7);
+      EXPECT_EQ(c.layers[0].omv, 7);
+      EXPECT_EQ(c.layers[1].sum_obv, 14);
+      EXPECT_EQ(c.layers[1].omv, 7);
+      EXPECT_EQ(c.weighted_error, 21);
+    }
   }
 }
 
@@ -374,15 +391,33 @@ TEST_F(CertifyTorus, DamagedOrForeignCheckpointsAreRefused) {
       {"unknown field", false, [](nlohmann::json& j) { j["extra"] = 1; }},
       {"unknown field", true, [](nlohmann::json& j) { j["extra"] = 1; }},
       {"boxes for a tree", true, [](nlohmann::json& j) { j["obv"].erase(j["obv"].size() - 1); }},
-      {"not a rational", true, [](nlohmann::json& j) { j["obv"][0] = "1/0"; }},
-      {"not a rational", true, [](nlohmann::json& j) { j["obv"][0] = "0x10"; }},
+      {"older vobb (format 1", true, [](nlohmann::json& j) { j["version"] = 1; }},
+      {"older vobb (format 1", false, [](nlohmann::json& j) { j["version"] = 1; }},
+      {"not an enclosure", true, [](nlohmann::json& j) { j["obv"][0] = "1/0"; }},
+      {"not an enclosure", true, [](nlohmann::json& j) { j["obv"][0]["enclosure"] = {"0x1p1", "0x1p0"}; }},
+      {"not an enclosure", true, [](nlohmann::json& j) { j["obv"][0]["enclosure"] = {"0x1p0", "two"}; }},
+      {"outside its enclosure", true, [](nlohmann::json& j) { j["obv"][0]["rational"] = "12345/7"; }},
+      {"outside its enclosure", true, [](nlohmann::json& j) { j["obv"][0]["rational"] = "1/0"; }},
+      {"exact, without its rational", true, [](nlohmann::json& j) {
+         j["obv"][0]["exact"] = true;
+         j["obv"][0].erase("rational");
+       }},
       // A valid obv.json of other values: layers.json names the one it was saved with.
-      {"another obv.json", true, [](nlohmann::json& j) { j["obv"][0] = "12345/7"; }},
+      {"another obv.json", true, [](nlohmann::json& j) { j["obv"][0]["enclosure"] = {"0x1p0", "0x1p1"}; }},
       {"not an integer in 0..4", false, [](nlohmann::json& j) { j["layers"][0]["level"] = 5; }},
       {"given twice", false, [](nlohmann::json& j) { j["layers"][1] = j["layers"][0]; }},
       {"box count", false, [](nlohmann::json& j) { j["layers"][0]["boxes"] = j["layers"][0]["boxes"].get<int>() + 1; }},
-      {"sum of OBV is not the sum", false, [](nlohmann::json& j) {
+      {"sum of OBV is not the sum", false, [](nlohmann::json& j) { j["layers"][0]["sum_obv_enclosure"] = {"0x1p0", "0x1p1"}; }},
+      {"sum of OBV lies outside its enclosure", false, [](nlohmann::json& j) {
          j["layers"][0]["sum_obv"] = Rational(Rational(j["layers"][0]["sum_obv"].get<std::string>()) + 1).get_str();
+       }},
+      {"an enclosure is not one", false, [](nlohmann::json& j) { j["layers"][0]["omv_enclosure"] = "7"; }},
+      {"neither filter nor exact", false, [](nlohmann::json& j) { j["layers"][0]["rounded_by"] = "guess"; }},
+      {"rationals in a layer that says it has none", false, [](nlohmann::json& j) {
+         j["layers"][0]["rational"] = false;
+         j["layers"][0]["omv_path"] = "filtered";
+         j["layers"][0].erase("omv_clip");
+         j["layers"][0].erase("paths_agree");
        }},
       {"contradicts", false, [](nlohmann::json& j) { j["layers"][0]["paths_agree"] = false; }},
       {"unknown path", false, [](nlohmann::json& j) {
@@ -395,7 +430,7 @@ TEST_F(CertifyTorus, DamagedOrForeignCheckpointsAreRefused) {
       {"not an object", false, [](nlohmann::json& j) { j["layers"][0] = 5; }},
       {"not an integer", false, [](nlohmann::json& j) { j["layers"][0]["level"] = "1"; }},
       {"type must be boolean", false, [](nlohmann::json& j) { j["layers"][0]["paths_agree"] = "yes"; }},
-      {"unknown field 'omv_clip'", false, [](nlohmann::json& j) { j["layers"][0]["omv_path"] = "nef"; }},
+      {"a second path's OMV", false, [](nlohmann::json& j) { j["layers"][0]["omv_path"] = "nef"; }},
       {"'paths_agree' not found", false, [](nlohmann::json& j) { j["layers"][0].erase("paths_agree"); }},
       // Nested past the limit (8; a file is 3 deep): refused as it is parsed, so that 10^5
       // levels cannot overflow the stack in the checksum (JsonParse tests the depth itself).
@@ -407,7 +442,7 @@ TEST_F(CertifyTorus, DamagedOrForeignCheckpointsAreRefused) {
   // Damage check_files can find without the tree (it runs before compare's long work): the
   // file-level edits above and a layers.json of another obv.json.
   const std::set<std::string> file_level = {"not a vobb certify checkpoint", "no fingerprint", "unknown field",
-                                            "another obv.json", "nested deeper"};
+                                            "another obv.json", "nested deeper", "older vobb (format 1"};
   for (const Edit& e : edits) {
     nlohmann::json j = e.in_obv ? obv : layers;
     e.edit(j);
@@ -450,14 +485,15 @@ TEST_F(CertifyTorus, ResumedLayersThatDoNotMatchThisRunAreCertifiedAgain) {
   ASSERT_EQ(all.layers.size(), 5u);
   size_t forged = all.layers.size();
   for (size_t i = 0; i < all.layers.size(); ++i)
-    if (all.layers[i].omv_path == "nef") forged = i;
+    if (all.layers[i].omv_path == "filtered") forged = i;
   ASSERT_LT(forged, all.layers.size()) << "no layer with overlaps";
   CertifyState state = all;
   LayerCertificate& f = state.layers[forged];
   f.omv_path = "none";
   f.overlapping_boxes = 0;
-  f.omv = f.sum_obv;
-  ASSERT_NE(f.omv, all.layers[forged].omv) << "the forged OMV must differ for the test to mean anything";
+  f.omv_enclosure = f.sum_obv_enclosure;
+  f.omv_nearest = f.sum_obv_nearest;
+  ASSERT_NE(f.omv_nearest, all.layers[forged].omv_nearest) << "the forged OMV must differ for the test to mean anything";
   auto resumed = [&](CertifyOptions o, const CertifyState& st, int* layer_lines, std::string* note) {
     o.resume = &st;
     o.progress = [&](const std::string& line) {
@@ -473,22 +509,24 @@ TEST_F(CertifyTorus, ResumedLayersThatDoNotMatchThisRunAreCertifiedAgain) {
   EXPECT_NE(note.find("4 of 5 layers: from the checkpoint; 1 saved layers do not match this run"), std::string::npos) << note;
   ASSERT_EQ(c.layers.size(), full.layers.size());
   for (size_t i = 0; i < c.layers.size(); ++i) {
-    EXPECT_EQ(c.layers[i].omv, full.layers[i].omv) << "layer " << i;
+    EXPECT_EQ(c.layers[i].omv_nearest, full.layers[i].omv_nearest) << "layer " << i;
+    EXPECT_EQ(c.layers[i].omv_enclosure.lo_rational(), full.layers[i].omv_enclosure.lo_rational()) << "layer " << i;
+    EXPECT_EQ(c.layers[i].omv_enclosure.hi_rational(), full.layers[i].omv_enclosure.hi_rational()) << "layer " << i;
     EXPECT_EQ(c.layers[i].omv_path, full.layers[i].omv_path) << "layer " << i;
     EXPECT_EQ(c.layers[i].overlapping_boxes, full.layers[i].overlapping_boxes) << "layer " << i;
   }
-  EXPECT_EQ(c.weighted_error, full.weighted_error);
-  // The clipping path resumes auto's state: layers with overlaps (auto took Nef) again.
+  EXPECT_EQ(c.weighted_error_nearest, full.weighted_error_nearest);
+  // The clipping path resumes auto's state: auto's layers hold no rationals, so every layer
+  // is certified again, and each rational lies in auto's enclosure.
   CertifyOptions clip;
   clip.path = OmvPath::kClip;
   lines = 0;
   const Certificate k = resumed(clip, all, &lines, &note);
-  size_t with_overlaps = 0;
-  for (const LayerCertificate& l : full.layers) with_overlaps += l.omv_path == "nef" ? 1 : 0;
-  EXPECT_EQ(lines, static_cast<int>(with_overlaps));
+  EXPECT_EQ(lines, static_cast<int>(full.layers.size()));
   for (size_t i = 0; i < k.layers.size(); ++i) {
-    EXPECT_EQ(k.layers[i].omv, full.layers[i].omv) << "layer " << i;  // the two paths agree exactly
-    EXPECT_EQ(k.layers[i].omv_path, full.layers[i].omv_path == "nef" ? "clip" : "none") << "layer " << i;
+    EXPECT_TRUE(full.layers[i].omv_enclosure.contains(k.layers[i].omv)) << "layer " << i;
+    EXPECT_EQ(k.layers[i].omv_nearest, full.layers[i].omv_nearest) << "layer " << i;
+    EXPECT_EQ(k.layers[i].omv_path, full.layers[i].omv_path == "filtered" ? "clip" : "none") << "layer " << i;
   }
 }
 
@@ -520,11 +558,17 @@ TEST(Certify, RootLayerOfTheCubeIsExact) {
   const Obb& b = t.nodes[0].box;
   for (const Vec3& a : b.axes) ASSERT_EQ(a.cwiseAbs().sum(), 1.0) << a.transpose();
   for (const Vec3& a : b.axes) ASSERT_EQ(a.cwiseAbs().maxCoeff(), 1.0) << a.transpose();
+  const Rational box_volume = Rational(2 * b.half[0]) * Rational(2 * b.half[1]) * Rational(2 * b.half[2]);
   const Certificate c = certify(m, t, CertifyOptions());
   ASSERT_EQ(c.layers.size(), 1u);
-  const Rational box_volume = Rational(2 * b.half[0]) * Rational(2 * b.half[1]) * Rational(2 * b.half[2]);
-  EXPECT_EQ(c.layers[0].omv, box_volume - 1);
-  EXPECT_GT(c.layers[0].omv, 0);  // the padding is there
+  EXPECT_TRUE(c.layers[0].omv_enclosure.contains(box_volume - 1));
+  EXPECT_EQ(c.layers[0].omv_nearest, to_double_nearest(box_volume - 1));
+  EXPECT_EQ(c.layers[0].bound_by, "exact");  // one box: OMV = sum OBV, exactly
+  CertifyOptions with_rationals;
+  with_rationals.rational = true;
+  const Certificate q = certify(m, t, with_rationals);
+  EXPECT_EQ(q.layers[0].omv, box_volume - 1);
+  EXPECT_GT(q.layers[0].omv, 0);  // the padding is there
 }
 
 TEST(Certify, ShrunkenBoxFailsContainment) {
@@ -538,17 +582,109 @@ TEST(Certify, ShrunkenBoxFailsContainment) {
   EXPECT_FALSE(c.ok());
 }
 
+// The filtered path's certificate (the default) against the rationals of the Nef path, on the
+// depth-8 trees of both builders: every rational lies in its enclosure, every reported double
+// is that rational rounded to nearest, and every decision (the bound on each layer, the
+// containment) is the one the rationals give.
+void expect_filtered_matches_nef(const Mesh& m, const Tree& t) {
+  const Certificate f = certify(m, t, CertifyOptions());
+  CertifyOptions nef_path;
+  nef_path.path = OmvPath::kNef;
+  const Certificate n = certify(m, t, nef_path);
+  ASSERT_EQ(f.layers.size(), n.layers.size());
+  size_t overlapping = 0;
+  for (size_t i = 0; i < f.layers.size(); ++i) {
+    const LayerCertificate &a = f.layers[i], &q = n.layers[i];
+    SCOPED_TRACE("layer " + std::to_string(i));
+    ASSERT_TRUE(q.rational);
+    EXPECT_TRUE(a.omv_enclosure.contains(q.omv));
+    EXPECT_TRUE(a.sum_obv_enclosure.contains(q.sum_obv));
+    EXPECT_TRUE(a.overlap_enclosure.contains(q.overlap()));
+    EXPECT_EQ(a.omv_nearest, to_double_nearest(q.omv));
+    EXPECT_EQ(a.sum_obv_nearest, to_double_nearest(q.sum_obv));
+    EXPECT_EQ(a.overlap_nearest, to_double_nearest(q.overlap()));
+    EXPECT_EQ(a.upper_bound_holds(), q.sum_obv >= q.omv);
+    EXPECT_EQ(a.overlapping_boxes, q.overlapping_boxes);
+    overlapping += a.overlapping_boxes;
+  }
+  EXPECT_GT(overlapping, 0u) << "no layer overlapped: the OMV was never more than a sum";
+  EXPECT_TRUE(f.weighted_error_enclosure.contains(n.weighted_error));
+  EXPECT_EQ(f.weighted_error_nearest, to_double_nearest(n.weighted_error));
+  EXPECT_EQ(f.containment.ok(), n.containment.ok());
+  EXPECT_EQ(f.ok(), n.ok());
+  EXPECT_TRUE(f.ok());
+}
+
 class CertifyReal : public ::testing::TestWithParam<const char*> {};
 
-// Sum OBV >= OMV on every layer of the depth-8 baseline trees, exactly.
-TEST_P(CertifyReal, UpperBoundOnEveryLayerOfTheBaseline) {
+TEST_P(CertifyReal, FilteredCertificateIsNefsRoundedOnBothBuildersTrees) {
   VOBB_REQUIRE_REAL_MESH(GetParam());
   LoadedMesh lm;
   ASSERT_TRUE(load_mesh(test::real_mesh(GetParam()), &lm));
-  expect_bound_on_every_layer(lm.mesh, 8, OmvPath::kAuto);
+  const Mesh& m = lm.mesh;
+  ObbTreeOptions bo;
+  bo.depth = 8;
+  {
+    SCOPED_TRACE("obbtree");
+    expect_filtered_matches_nef(m, build_obbtree(m, bo));
+  }
+  const PolyObvSolver poly(m);
+  VariationalOptions vo;
+  vo.depth = 8;
+  {
+    SCOPED_TRACE("variational");
+    expect_filtered_matches_nef(m, build_variational(m, vo, [&](const std::vector<Obb>& b) { return poly.estimate(b); }));
+  }
 }
 
-INSTANTIATE_TEST_SUITE_P(Meshes, CertifyReal, ::testing::Values("dino", "knot1"));
+INSTANTIATE_TEST_SUITE_P(Meshes, CertifyReal, ::testing::Values("dino", "knot1", "elephant"));
+
+// A hand-made tree in special position: the root box's +T_0 face passes exactly through a mesh
+// vertex (the vertex is the box's edge vector u_0, with c = 0), and both children are the root
+// box again, so the overlap cell's vertices lie exactly on the other box's planes. 128-bit
+// enclosures round these exact zeros into intervals holding 0, so the filter falls back to
+// rationals for the OBV and for the overlap term; the certificate must say so and be the one
+// --rational gives.
+TEST(Certify, SpecialPositionsFallBackToRationalsAndAgreeWithThem) {
+  Obb box;
+  box.axes = {Vec3(0.6, 0.8, 0), Vec3(-0.8, 0.6, 0), Vec3(0, 0, 1)};
+  box.half = Vec3(1, 0.7, 0.3);
+  Mesh m;
+  m.vertices = {box.axes[0], Vec3(-0.3, 0.1, 0.2), Vec3(-0.2, -0.3, -0.2), Vec3(0.1, -0.4, 0.1)};
+  m.faces = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  if (exact_signed_volume(m) < 0)
+    for (Face& face : m.faces) std::swap(face[1], face[2]);
+  Tree t;
+  t.method = "hand";
+  t.depth = 1;
+  t.mesh_triangles = m.faces.size();
+  t.nodes.resize(3);
+  t.nodes[0] = {0, -1, 0, box, {1, 2}, {0, 1, 2, 3}};
+  t.nodes[1] = {1, 0, 1, box, {}, {0, 1}};
+  t.nodes[2] = {2, 0, 1, box, {}, {2, 3}};
+  ASSERT_TRUE(validate_tree(t, "hand"));
+  const Certificate f = certify(m, t, CertifyOptions());
+  CertifyOptions with_rationals;
+  with_rationals.rational = true;
+  const Certificate q = certify(m, t, with_rationals);
+  ASSERT_EQ(f.layers.size(), 2u);
+  EXPECT_EQ(f.exact_obv, 3u) << "every box touches the vertex: each OBV needed rationals";
+  EXPECT_EQ(f.layers[1].exact_overlap, 1u) << "the second child's overlap term needed rationals";
+  EXPECT_TRUE(f.ok());
+  EXPECT_TRUE(q.ok());
+  for (size_t i = 0; i < 2; ++i) {
+    SCOPED_TRACE("layer " + std::to_string(i));
+    EXPECT_TRUE(f.layers[i].omv_enclosure.contains(q.layers[i].omv));
+    EXPECT_EQ(f.layers[i].omv_nearest, q.layers[i].omv_nearest);
+    EXPECT_EQ(f.layers[i].sum_obv_nearest, q.layers[i].sum_obv_nearest);
+    EXPECT_EQ(f.layers[i].overlap_nearest, q.layers[i].overlap_nearest);
+    EXPECT_EQ(f.layers[i].upper_bound_holds(), q.layers[i].upper_bound_holds());
+  }
+  // Layer 1 is two copies of the root: OMV is the root's OBV, exactly.
+  EXPECT_EQ(q.layers[1].omv, q.layers[0].omv);
+  EXPECT_EQ(q.layers[1].sum_obv, 2 * q.layers[0].omv);
+  EXPECT_EQ(f.weighted_error_nearest, q.weighted_error_nearest);
+}
 
 }  // namespace
 }  // namespace vobb::exact

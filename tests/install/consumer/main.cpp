@@ -69,8 +69,11 @@ int main(int argc, char** argv) {
   tree.mesh_sha256 = vobb::mesh_sha256(mesh);
   check(vobb::write_tree(tree, dir + "/tree.json").is_ok(), "write_tree");
 
-  // Exact certificate: conservative, sum OBV >= OMV on every layer.
-  const vobb::exact::Certificate cert = vobb::exact::certify(mesh, tree, {});
+  // Exact certificate: conservative, sum OBV >= OMV on every layer; with the rationals, for the
+  // comparison with the installed command's.
+  vobb::exact::CertifyOptions certify_options;
+  certify_options.rational = true;
+  const vobb::exact::Certificate cert = vobb::exact::certify(mesh, tree, certify_options);
   check(cert.ok(), "certify: ok");
   check(cert.layers.size() == 4, "certify: one layer per level 0..3");
 
@@ -109,6 +112,6 @@ int main(int argc, char** argv) {
             report.trees[0].fcl.answer_disagreements == 0 && report.trees[0].fcl.face_disagreements == 0,
         "collision: FCL agrees on the loaded tree");
 
-  std::printf("e %.17g\n", cert.weighted_error_nearest);
+  std::printf("e %s\n", cert.weighted_error.get_str().c_str());
   return failures ? 1 : 0;
 }
