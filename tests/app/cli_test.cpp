@@ -2,6 +2,8 @@
 // output, and the bad-input corpus in tests/data/bad.
 #include <fcntl.h>
 #include <gtest/gtest.h>
+
+#include <algorithm>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -19,6 +21,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common/exact_predicates.h"
+#include "common/sha256.h"
 #include "common/tree_io.h"
 #include "data/analytic_meshes.h"
 #include "test_common.h"
@@ -917,6 +920,62 @@ TEST(Cli, KilledCertifyResumesToTheSameCertificate) {
   const CliRun other = vobb_cli("certify " + mesh + " " + tree + " --path clip --quiet --checkpoint " + dir);
   EXPECT_EQ(other.code, 2);
   EXPECT_NE(other.err.find("checkpoint of another certification"), std::string::npos) << other.err;
+  std::system(("rm -rf " + dir).c_str());
+  std::remove(tree.c_str());
+}
+
+// certify --json says, per layer, the enclosure of each value and how its double and its bound
+// were decided; the doubles lie in their enclosures, and with --rational each rational rounds
+// to the double printed and lies in its enclosure. A checkpoint folder of the format before
+// enclosures (version 1) is refused in one line, exit 2.
+TEST(Cli, CertifyJsonGivesEnclosuresAndHowEachValueWasDecided) {
+  const std::string mesh = test::real_mesh("dino");
+  VOBB_REQUIRE_REAL_MESH("dino");
+  const std::string tree = test::temp_path("encl_tree.json"), dir = test::temp_path("encl_ckpt");
+  std::system(("rm -rf " + dir).c_str());
+  ASSERT_EQ(vobb_cli("build " + mesh + " -o " + tree + " --method obbtree --depth 5 --quiet").code, 0);
+  const CliRun r = vobb_cli("certify " + mesh + " " + tree + " --json --rational");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("in rationals: 0 OBV, 0 overlap terms"), std::string::npos) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  ASSERT_EQ(j.at("levels").size(), 6u);
+  for (const nlohmann::json& l : j["levels"]) {
+    for (const char* v : {"omv", "sum_obv", "overlap"}) {
+      const double d = l.at(v).get<double>();
+      const nlohmann::json& e = l.at(std::string(v) + "_enclosure");
+      EXPECT_LE(e.at(0).get<double>(), d) << v;
+      EXPECT_LE(d, e.at(1).get<double>()) << v;
+      const Rational q(l.at(std::string(v) + "_rational").get<std::string>());
+      EXPECT_EQ(to_double_nearest(q), d) << v;
+      EXPECT_LE(Rational(e.at(0).get<double>()), q) << v;
+      EXPECT_LE(q, Rational(e.at(1).get<double>())) << v;
+    }
+    EXPECT_TRUE(l.at("rounded_by") == "filter" || l.at("rounded_by") == "exact");
+    EXPECT_TRUE(l.at("bound_by") == "filter" || l.at("bound_by") == "exact");
+    EXPECT_EQ(l.at("exact_obv").get<int>(), 0);
+  }
+  const Rational e(j.at("weighted_error_rational").get<std::string>());
+  EXPECT_EQ(to_double_nearest(e), j.at("weighted_error").get<double>());
+  EXPECT_LE(Rational(j.at("weighted_error_enclosure").at(0).get<double>()), e);
+  EXPECT_LE(e, Rational(j.at("weighted_error_enclosure").at(1).get<double>()));
+  // The default run prints the same doubles without computing the rationals.
+  const CliRun plain = vobb_cli("certify " + mesh + " " + tree + " --json --quiet");
+  ASSERT_EQ(plain.code, 0) << plain.err;
+  const nlohmann::json p = nlohmann::json::parse(plain.out);
+  EXPECT_EQ(p.at("weighted_error"), j.at("weighted_error"));
+  for (size_t i = 0; i < 6; ++i) EXPECT_EQ(p["levels"][i].at("omv"), j["levels"][i].at("omv")) << i;
+  // A format-1 folder: refused before any work.
+  ASSERT_EQ(vobb_cli("certify " + mesh + " " + tree + " --quiet --checkpoint " + dir).code, 0);
+  nlohmann::json obv = nlohmann::json::parse(slurp(dir + "/obv.json"));
+  obv["version"] = 1;
+  obv.erase("sha256");
+  const std::string body = obv.dump();
+  obv["sha256"] = sha256_hex(body.data(), body.size());
+  std::ofstream(dir + "/obv.json", std::ios::binary) << obv.dump();
+  const CliRun old = vobb_cli("certify " + mesh + " " + tree + " --quiet --checkpoint " + dir);
+  EXPECT_EQ(old.code, 2);
+  EXPECT_NE(old.err.find("older vobb (format 1"), std::string::npos) << old.err;
+  EXPECT_EQ(std::count(old.err.begin(), old.err.end(), '\n'), 1) << old.err;
   std::system(("rm -rf " + dir).c_str());
   std::remove(tree.c_str());
 }
