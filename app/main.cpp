@@ -452,7 +452,9 @@ int run_certify(const std::string& mesh_path, const std::string& tree_path, bool
       jl["omv_enclosure"] = enclosure(l.omv_enclosure);
       jl["sum_obv_enclosure"] = enclosure(l.sum_obv_enclosure);
       jl["overlap_enclosure"] = enclosure(l.overlap_enclosure);
-      jl["rounded_by"] = l.rounded_by;
+      jl["omv_rounded_by"] = l.omv_rounded_by;
+      jl["sum_obv_rounded_by"] = l.sum_obv_rounded_by;
+      jl["overlap_rounded_by"] = l.overlap_rounded_by;
       jl["upper_bound_holds"] = l.upper_bound_holds();
       jl["bound_by"] = l.bound_by;
       jl["exact_obv"] = l.exact_obv;

@@ -11,6 +11,7 @@
 #include <limits>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <cstdio>
 #include <memory>
 #include <mutex>
@@ -246,9 +247,9 @@ Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& op
         lc.omv = need_nef().omv(boxes);
         lc.paths_agree = lc.omv == lc.omv_clip && lc.omv_enclosure.contains(lc.omv);
       }
-      if (lc.rational)
-        VOBB_ASSERT(lc.omv_enclosure.contains(lc.omv) || !lc.paths_agree,
-                    "a layer's exact OMV lies outside its enclosure");
+      // Nef's rational (auto with --rational) against the filter's enclosure: two independent
+      // computations, so a miss fails the certificate as a disagreement of paths would.
+      if (lc.rational && filter_overlap && !lc.omv_enclosure.contains(lc.omv)) lc.paths_agree = false;
       // Sum OBV >= OMV: the overlap term's sign. No overlapping boxes: 0, exactly.
       if (lc.omv_path == "none") {
         lc.upper_bound = true;
@@ -262,27 +263,38 @@ Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& op
         lc.upper_bound = lc.sum_obv >= lc.omv;
         lc.bound_by = "exact";
       }
-      // The nearest doubles: the filter's where its enclosure lies in one rounding cell.
-      const bool filtered_rounding = lc.omv_enclosure.nearest(&lc.omv_nearest) &&
-                                     lc.sum_obv_enclosure.nearest(&lc.sum_obv_nearest) &&
-                                     lc.overlap_enclosure.nearest(&lc.overlap_nearest);
-      if (!filtered_rounding || lc.rational) {
+      // The nearest doubles: the path's rationals rounded on a rational path (and on both,
+      // where Nef's OMV is the one reported); otherwise the filter's where its enclosure lies in
+      // one rounding cell, and the rationals' where it does not.
+      const bool rational_path = all_rational || lc.omv_path == "both";
+      auto round = [&](const MpInterval& enclosure, const std::function<Rational()>& exact, double* out,
+                       std::string* by) {
+        if (!rational_path && enclosure.nearest(out)) {
+          *by = "filter";
+          return;
+        }
         make_rational();
-        lc.omv_nearest = to_double_nearest(lc.omv);
-        lc.sum_obv_nearest = to_double_nearest(lc.sum_obv);
-        lc.overlap_nearest = to_double_nearest(lc.overlap());
-        if (!filtered_rounding) lc.rounded_by = "exact";
-      }
+        *out = to_double_nearest(exact());
+        *by = "exact";
+      };
+      round(lc.omv_enclosure, [&] { return lc.omv; }, &lc.omv_nearest, &lc.omv_rounded_by);
+      round(lc.sum_obv_enclosure, [&] { return lc.sum_obv; }, &lc.sum_obv_nearest, &lc.sum_obv_rounded_by);
+      round(lc.overlap_enclosure, [&] { return lc.overlap(); }, &lc.overlap_nearest, &lc.overlap_rounded_by);
+      const bool rounded_exactly = !rational_path && (lc.omv_rounded_by == "exact" || lc.sum_obv_rounded_by == "exact" ||
+                                                      lc.overlap_rounded_by == "exact");
       lc.seconds = seconds_since(tl) - nef_build_seconds;
       const std::string disagree =
-          lc.paths_agree ? "" : ", PATHS DISAGREE (Nef's OMV above; clipping's " + format_nearest(lc.omv_clip) + ")";
+          lc.paths_agree ? ""
+          : lc.omv_path == "both"
+              ? ", PATHS DISAGREE (Nef's OMV above; clipping's " + format_nearest(lc.omv_clip) + ")"
+              : ", PATHS DISAGREE (Nef's OMV above lies outside the filter's enclosure)";
       char buf[400];
       std::snprintf(buf, sizeof buf,
                     "layer %d/%d: %zu boxes (%zu overlapping), OMV %.17g, sum OBV %.17g%s; in rationals: %zu OBV, "
                     "%zu overlap terms%s, %.2f s",
                     level, tree.depth, lc.boxes, lc.overlapping_boxes, lc.omv_nearest, lc.sum_obv_nearest,
                     disagree.c_str(), lc.exact_obv, lc.exact_overlap,
-                    lc.rounded_by == "exact" ? ", rounding" : "", lc.seconds);
+                    rounded_exactly ? ", rounding" : "", lc.seconds);
       say(buf);
       finished(&lc);
     };
@@ -324,7 +336,9 @@ Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& op
   cert.weighted_error_enclosure = sum_of(weighted);
   cert.rational = true;
   for (const LayerCertificate& lc : cert.layers) cert.rational &= lc.rational;
-  const bool filtered_rounding = cert.weighted_error_enclosure.nearest(&cert.weighted_error_nearest);
+  // On a rational path (and on both, whose OMV are Nef's) e is its rationals' rounded.
+  const bool rational_path = all_rational || options.path == OmvPath::kBoth;
+  const bool filtered_rounding = !rational_path && cert.weighted_error_enclosure.nearest(&cert.weighted_error_nearest);
   if (!filtered_rounding && !cert.rational) {
     // Rare (e within 1e-35 of a rounding tie): the layers' rationals, as a rational path has them.
     CertifyOptions exact = options;
@@ -334,6 +348,13 @@ Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& op
     exact.progress = nullptr;
     say("e: its enclosure does not decide the rounding; every layer in rationals");
     const Certificate c = certify(mesh, tree, exact);
+    for (size_t i = 0; i < cert.layers.size(); ++i) {
+      LayerCertificate& lc = cert.layers[i];
+      if (lc.rational) continue;
+      lc.omv = c.layers[i].omv;
+      lc.sum_obv = c.layers[i].sum_obv;
+      lc.rational = true;
+    }
     cert.weighted_error = c.weighted_error;
     cert.rational = true;
   } else if (cert.rational) {
@@ -425,7 +446,9 @@ nlohmann::json layer_to_json(const LayerCertificate& l) {
                        {"omv_nearest", l.omv_nearest},
                        {"sum_obv_nearest", l.sum_obv_nearest},
                        {"overlap_nearest", l.overlap_nearest},
-                       {"rounded_by", l.rounded_by},
+                       {"omv_rounded_by", l.omv_rounded_by},
+                       {"sum_obv_rounded_by", l.sum_obv_rounded_by},
+                       {"overlap_rounded_by", l.overlap_rounded_by},
                        {"upper_bound", l.upper_bound},
                        {"bound_by", l.bound_by},
                        {"exact_obv", l.exact_obv},
@@ -621,7 +644,7 @@ Status CertifyCheckpoint::load(const Tree& tree, CertifyState* state, bool* foun
         // Every field must be one the writer puts there.
         static const std::set<std::string> kLayerFields{
             "level", "boxes", "overlapping_boxes", "omv_path", "omv_enclosure", "sum_obv_enclosure",
-            "overlap_enclosure", "omv_nearest", "sum_obv_nearest", "overlap_nearest", "rounded_by", "upper_bound",
+            "overlap_enclosure", "omv_nearest", "sum_obv_nearest", "overlap_nearest", "omv_rounded_by", "sum_obv_rounded_by", "overlap_rounded_by", "upper_bound",
             "bound_by", "exact_obv", "exact_overlap", "rational", "seconds", "omv", "sum_obv", "paths_agree", "omv_clip"};
         for (const auto& item : jl.items())
           if (!kLayerFields.count(item.key())) return bad(at + "unknown field '" + item.key().substr(0, 40) + "'");
@@ -647,10 +670,12 @@ Status CertifyCheckpoint::load(const Tree& tree, CertifyState* state, bool* foun
         l.omv_nearest = jl["omv_nearest"].get<double>();
         l.sum_obv_nearest = jl["sum_obv_nearest"].get<double>();
         l.overlap_nearest = jl["overlap_nearest"].get<double>();
-        l.rounded_by = jl.at("rounded_by").get<std::string>();
+        l.omv_rounded_by = jl.at("omv_rounded_by").get<std::string>();
+        l.sum_obv_rounded_by = jl.at("sum_obv_rounded_by").get<std::string>();
+        l.overlap_rounded_by = jl.at("overlap_rounded_by").get<std::string>();
         l.bound_by = jl.at("bound_by").get<std::string>();
-        if ((l.rounded_by != "filter" && l.rounded_by != "exact") || (l.bound_by != "filter" && l.bound_by != "exact"))
-          return bad(at + "rounded_by or bound_by is neither filter nor exact");
+        for (const std::string* by : {&l.omv_rounded_by, &l.sum_obv_rounded_by, &l.overlap_rounded_by, &l.bound_by})
+          if (*by != "filter" && *by != "exact") return bad(at + "a value's rounded_by or bound_by is neither filter nor exact");
         l.upper_bound = jl.at("upper_bound").get<bool>();
         l.exact_obv = jl.at("exact_obv").get<uint64_t>();
         l.exact_overlap = jl.at("exact_overlap").get<uint64_t>();
@@ -674,6 +699,7 @@ Status CertifyCheckpoint::load(const Tree& tree, CertifyState* state, bool* foun
         } else if (l.omv_path != "nef" && l.omv_path != "clip" && l.omv_path != "filtered") {
           return bad(at + "unknown path '" + l.omv_path.substr(0, 20) + "'");
         }
+        if (l.omv_path == "filtered" && l.rational) l.paths_agree = l.omv_enclosure.contains(l.omv);  // Nef's
         if (l.omv_path != "both" && (jl.contains("paths_agree") || jl.contains("omv_clip")))
           return bad(at + "a second path's OMV on a layer of path " + l.omv_path);
         const nlohmann::json& seconds = jl.at("seconds");

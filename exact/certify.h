@@ -39,7 +39,7 @@ struct LayerCertificate {
   MpInterval omv_enclosure, sum_obv_enclosure, overlap_enclosure;
   // The doubles nearest to the exact values (ties to even), and how each was obtained.
   double omv_nearest = 0, sum_obv_nearest = 0, overlap_nearest = 0;
-  std::string rounded_by = "filter";  // "exact" where any of the three needed rationals
+  std::string omv_rounded_by = "filter", sum_obv_rounded_by = "filter", overlap_rounded_by = "filter";
   bool upper_bound = true;            // sum OBV >= OMV, decided
   std::string bound_by = "filter";    // "exact": rationals, or no overlapping boxes (equality)
   size_t exact_obv = 0;               // boxes whose OBV the filter sent to rationals
@@ -52,7 +52,9 @@ struct LayerCertificate {
   Rational overlap() const { return sum_obv - omv; }
   bool upper_bound_holds() const { return upper_bound; }
   std::string omv_path;        // "filtered", "clip", "nef", "none" (no overlaps), "both"
-  bool paths_agree = true;     // kBoth only: Nef's OMV == clipping's, inside the enclosure
+  // kBoth: Nef's OMV == clipping's, and inside the filter's enclosure; kAuto with `rational`:
+  // Nef's OMV inside the filter's enclosure. Otherwise true.
+  bool paths_agree = true;
   Rational omv_clip;           // kBoth only: clipping's OMV (omv holds Nef's, the arbiter's)
   // This layer's own work: its sums, overlap bounds and union. Not the boxes' OBV (computed
   // first, for all layers at once) nor the building of a Nef(X).

@@ -950,7 +950,8 @@ TEST(Cli, CertifyJsonGivesEnclosuresAndHowEachValueWasDecided) {
       EXPECT_LE(Rational(e.at(0).get<double>()), q) << v;
       EXPECT_LE(q, Rational(e.at(1).get<double>())) << v;
     }
-    EXPECT_TRUE(l.at("rounded_by") == "filter" || l.at("rounded_by") == "exact");
+    for (const char* by : {"omv_rounded_by", "sum_obv_rounded_by", "overlap_rounded_by"})
+      EXPECT_EQ(l.at(by), "exact") << by << ": with --rational every value is the rationals' rounded";
     EXPECT_TRUE(l.at("bound_by") == "filter" || l.at("bound_by") == "exact");
     EXPECT_EQ(l.at("exact_obv").get<int>(), 0);
   }
@@ -963,7 +964,12 @@ TEST(Cli, CertifyJsonGivesEnclosuresAndHowEachValueWasDecided) {
   ASSERT_EQ(plain.code, 0) << plain.err;
   const nlohmann::json p = nlohmann::json::parse(plain.out);
   EXPECT_EQ(p.at("weighted_error"), j.at("weighted_error"));
-  for (size_t i = 0; i < 6; ++i) EXPECT_EQ(p["levels"][i].at("omv"), j["levels"][i].at("omv")) << i;
+  for (size_t i = 0; i < 6; ++i) {
+    EXPECT_EQ(p["levels"][i].at("omv"), j["levels"][i].at("omv")) << i;
+    EXPECT_EQ(p["levels"][i].at("omv_rounded_by"), "filter") << i;  // no rounding tie on this tree
+  }
+  EXPECT_EQ(p.at("weighted_error_rounded_by"), "filter");
+  EXPECT_EQ(j.at("weighted_error_rounded_by"), "exact");
   // A format-1 folder: refused before any work.
   ASSERT_EQ(vobb_cli("certify " + mesh + " " + tree + " --quiet --checkpoint " + dir).code, 0);
   nlohmann::json obv = nlohmann::json::parse(slurp(dir + "/obv.json"));

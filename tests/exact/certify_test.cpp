@@ -412,7 +412,7 @@ TEST_F(CertifyTorus, DamagedOrForeignCheckpointsAreRefused) {
          j["layers"][0]["sum_obv"] = Rational(Rational(j["layers"][0]["sum_obv"].get<std::string>()) + 1).get_str();
        }},
       {"an enclosure is not one", false, [](nlohmann::json& j) { j["layers"][0]["omv_enclosure"] = "7"; }},
-      {"neither filter nor exact", false, [](nlohmann::json& j) { j["layers"][0]["rounded_by"] = "guess"; }},
+      {"neither filter nor exact", false, [](nlohmann::json& j) { j["layers"][0]["omv_rounded_by"] = "guess"; }},
       {"rationals in a layer that says it has none", false, [](nlohmann::json& j) {
          j["layers"][0]["rational"] = false;
          j["layers"][0]["omv_path"] = "filtered";
