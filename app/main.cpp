@@ -459,6 +459,8 @@ int run_certify(const std::string& mesh_path, const std::string& tree_path, bool
       jl["bound_by"] = l.bound_by;
       jl["exact_obv"] = l.exact_obv;
       jl["exact_overlap"] = l.exact_overlap;
+      jl["refined_obv"] = l.refined_obv;
+      jl["refined_overlap"] = l.refined_overlap;
       jl["overlapping_boxes"] = l.overlapping_boxes;
       jl["omv_path"] = l.omv_path;
       if (l.omv_path == "both") {

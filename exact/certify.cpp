@@ -199,7 +199,10 @@ Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& op
       lc.overlapping_boxes = overlap_count(earlier);
       lc.omv_path = layer_path(options.path, lc.overlapping_boxes);
       lc.sum_obv_enclosure = layer_sum_obv(level);
-      for (int32_t id : ids[level]) lc.exact_obv += obv[id].exact ? 1 : 0;
+      for (int32_t id : ids[level]) {
+        lc.exact_obv += obv[id].exact ? 1 : 0;
+        lc.refined_obv += !obv[id].exact && obv[id].bits > MpInterval::kPrec ? 1 : 0;
+      }
       // The filter's overlap term, box by box, the boxes split across the threads.
       std::vector<Enclosed> terms(boxes.size());
       const bool filter_overlap = lc.omv_path == "filtered" || lc.omv_path == "both";
@@ -226,12 +229,39 @@ Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& op
         }
         lc.rational = true;
       };
-      if (filter_overlap) {
+      auto sum_terms = [&] {
         std::vector<MpInterval> xs;
         for (const Enclosed& t : terms) xs.push_back(t.value);
         lc.overlap_enclosure = sum_of(xs);
         lc.omv_enclosure = lc.sum_obv_enclosure - lc.overlap_enclosure;
-      } else if (lc.omv_path == "none") {
+      };
+      if (filter_overlap) {
+        sum_terms();
+        // Where the sums cannot decide a rounding, the widest terms again in 256 bits (slivers
+        // between nearly coplanar box faces widen a term far past 128 bits' round-off), a batch
+        // at a time, widest first, until they do or none is left (then rationals, below).
+        auto decides = [&] {
+          double d;
+          return lc.omv_enclosure.nearest(&d) && lc.overlap_enclosure.nearest(&d);
+        };
+        std::vector<size_t> widest;
+        for (size_t j = 0; j < terms.size(); ++j)
+          if (!terms[j].exact && terms[j].bits < MpInterval::kMaxPrec) widest.push_back(j);
+        std::stable_sort(widest.begin(), widest.end(), [&](size_t a, size_t b) {
+          return terms[a].value.sup() - terms[a].value.inf() > terms[b].value.sup() - terms[b].value.inf();
+        });
+        for (size_t done = 0; !all_rational && done < widest.size() && !decides();) {
+          const size_t end = std::min(widest.size(), done + std::max<size_t>(16, widest.size() / 8));
+          tbb::parallel_for(done, end, [&](size_t k) {
+            const size_t j = widest[k];
+            terms[j] = filtered.overlap_term(boxes, j, earlier[j], MpInterval::kMaxPrec);
+          });
+          done = end;
+          sum_terms();
+        }
+      }
+      for (const Enclosed& t : terms) lc.refined_overlap += !t.exact && t.bits > MpInterval::kPrec ? 1 : 0;
+      if (lc.omv_path == "none") {
         lc.overlap_enclosure = MpInterval(0);
         lc.omv_enclosure = lc.sum_obv_enclosure;
       }
@@ -290,10 +320,10 @@ Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& op
               : ", PATHS DISAGREE (Nef's OMV above lies outside the filter's enclosure)";
       char buf[400];
       std::snprintf(buf, sizeof buf,
-                    "layer %d/%d: %zu boxes (%zu overlapping), OMV %.17g, sum OBV %.17g%s; in rationals: %zu OBV, "
-                    "%zu overlap terms%s, %.2f s",
+                    "layer %d/%d: %zu boxes (%zu overlapping), OMV %.17g, sum OBV %.17g%s; in 256 bits: %zu OBV, "
+                    "%zu overlap terms; in rationals: %zu OBV, %zu overlap terms%s, %.2f s",
                     level, tree.depth, lc.boxes, lc.overlapping_boxes, lc.omv_nearest, lc.sum_obv_nearest,
-                    disagree.c_str(), lc.exact_obv, lc.exact_overlap,
+                    disagree.c_str(), lc.refined_obv, lc.refined_overlap, lc.exact_obv, lc.exact_overlap,
                     rounded_exactly ? ", rounding" : "", lc.seconds);
       say(buf);
       finished(&lc);
@@ -430,7 +460,7 @@ bool parse_interval(const nlohmann::json& v, MpInterval* out) {
 }
 
 nlohmann::json enclosed_to_json(const Enclosed& e) {
-  nlohmann::json j = {{"enclosure", interval_to_json(e.value)}, {"exact", e.exact}};
+  nlohmann::json j = {{"enclosure", interval_to_json(e.value)}, {"exact", e.exact}, {"bits", e.bits}};
   if (e.exact || sgn(e.q) != 0) j["rational"] = e.q.get_str();
   return j;
 }
@@ -453,6 +483,8 @@ nlohmann::json layer_to_json(const LayerCertificate& l) {
                        {"bound_by", l.bound_by},
                        {"exact_obv", l.exact_obv},
                        {"exact_overlap", l.exact_overlap},
+                       {"refined_obv", l.refined_obv},
+                       {"refined_overlap", l.refined_overlap},
                        {"rational", l.rational},
                        {"seconds", l.seconds}};
   if (l.rational) {
@@ -617,8 +649,12 @@ Status CertifyCheckpoint::load(const Tree& tree, CertifyState* state, bool* foun
       if (!jo_i.is_object() || !parse_interval(jo_i.at("enclosure"), &e.value) || !jo_i.at("exact").is_boolean())
         return bad(at + " is not an enclosure");
       e.exact = jo_i["exact"].get<bool>();
+      const nlohmann::json& bits = jo_i.at("bits");
+      if (!bits.is_number_integer() || (bits.get<int64_t>() != MpInterval::kPrec && bits.get<int64_t>() != MpInterval::kMaxPrec))
+        return bad(at + ": bits is neither 128 nor 256");
+      e.bits = static_cast<int>(bits.get<int64_t>());
       for (const auto& item : jo_i.items())
-        if (item.key() != "enclosure" && item.key() != "exact" && item.key() != "rational")
+        if (item.key() != "enclosure" && item.key() != "exact" && item.key() != "rational" && item.key() != "bits")
           return bad(at + ": unknown field '" + item.key().substr(0, 40) + "'");
       if (jo_i.contains("rational") && (!parse_rational(jo_i["rational"], &e.q) || !e.value.contains(e.q)))
         return bad(at + ": its rational is not one, or lies outside its enclosure");
@@ -645,7 +681,7 @@ Status CertifyCheckpoint::load(const Tree& tree, CertifyState* state, bool* foun
         static const std::set<std::string> kLayerFields{
             "level", "boxes", "overlapping_boxes", "omv_path", "omv_enclosure", "sum_obv_enclosure",
             "overlap_enclosure", "omv_nearest", "sum_obv_nearest", "overlap_nearest", "omv_rounded_by", "sum_obv_rounded_by", "overlap_rounded_by", "upper_bound",
-            "bound_by", "exact_obv", "exact_overlap", "rational", "seconds", "omv", "sum_obv", "paths_agree", "omv_clip"};
+            "bound_by", "exact_obv", "exact_overlap", "refined_obv", "refined_overlap", "rational", "seconds", "omv", "sum_obv", "paths_agree", "omv_clip"};
         for (const auto& item : jl.items())
           if (!kLayerFields.count(item.key())) return bad(at + "unknown field '" + item.key().substr(0, 40) + "'");
         const std::vector<int32_t> ids = layer(tree, l.level);
@@ -679,6 +715,8 @@ Status CertifyCheckpoint::load(const Tree& tree, CertifyState* state, bool* foun
         l.upper_bound = jl.at("upper_bound").get<bool>();
         l.exact_obv = jl.at("exact_obv").get<uint64_t>();
         l.exact_overlap = jl.at("exact_overlap").get<uint64_t>();
+        l.refined_obv = jl.at("refined_obv").get<uint64_t>();
+        l.refined_overlap = jl.at("refined_overlap").get<uint64_t>();
         l.rational = jl.at("rational").get<bool>();
         if (l.rational) {
           if (!parse_rational(jl.at("omv"), &l.omv) || !parse_rational(jl.at("sum_obv"), &l.sum_obv))

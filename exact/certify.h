@@ -44,6 +44,8 @@ struct LayerCertificate {
   std::string bound_by = "filter";    // "exact": rationals, or no overlapping boxes (equality)
   size_t exact_obv = 0;               // boxes whose OBV the filter sent to rationals
   size_t exact_overlap = 0;           // boxes whose overlap term the filter sent to rationals
+  size_t refined_obv = 0;             // boxes whose OBV needed 256 bits (a sign undecided in 128)
+  size_t refined_overlap = 0;         // boxes whose overlap term needed 256 bits (a rounding or sign)
   // The exact rationals, where computed (`rational`): with --rational, on a rational path, or
   // where a rounding needed them.
   bool rational = false;

@@ -132,62 +132,15 @@ void ConvexCell::clip(const HalfSpace& h) {
     faces_.clear();
     return;
   }
-  std::unordered_map<long long, int> cut;  // edge (a, b) -> new vertex on the plane
-  auto cut_point = [&](int a, int b) {
-    const long long key = static_cast<long long>(std::min(a, b)) * (1LL << 31) + std::max(a, b);
-    auto it = cut.find(key);
-    if (it != cut.end()) return it->second;
+  std::vector<std::vector<int>> kept = clipped_faces(faces_, side, n, [&](int a, int b) {
     const Rational t = value[a] / (value[a] - value[b]);
     QPoint p;
     for (int i = 0; i < 3; ++i) p.x[i] = v_[a].x[i] + t * (v_[b].x[i] - v_[a].x[i]);
     v_.push_back(std::move(p));
-    const int id = static_cast<int>(v_.size()) - 1;
-    cut.emplace(key, id);
-    return id;
-  };
-  auto on_plane = [&](int id) { return id >= n || side[id] == 0; };
-  std::vector<std::vector<int>> kept;
-  std::unordered_map<int, int> cap_next;  // cap edge b -> a for each kept edge a -> b on the plane
-  for (const std::vector<int>& f : faces_) {
-    std::vector<int> poly;
-    const size_t m = f.size();
-    for (size_t k = 0; k < m; ++k) {
-      const int a = f[k], b = f[(k + 1) % m];
-      if (side[a] <= 0) poly.push_back(a);
-      if (side[a] * side[b] < 0) poly.push_back(cut_point(a, b));
-    }
-    if (poly.size() < 3) continue;
-    for (size_t k = 0; k < poly.size(); ++k) {
-      const int a = poly[k], b = poly[(k + 1) % poly.size()];
-      if (on_plane(a) && on_plane(b)) cap_next[b] = a;
-    }
-    kept.push_back(std::move(poly));
-  }
-  if (cap_next.size() >= 3) {
-    std::vector<int> cap;
-    const int start = cap_next.begin()->first;
-    int at = start;
-    do {
-      cap.push_back(at);
-      auto it = cap_next.find(at);
-      VOBB_ASSERT(it != cap_next.end(), "open cap cycle in ConvexCell::clip");
-      at = it->second;
-      VOBB_ASSERT(cap.size() <= cap_next.size(), "cap cycle longer than its edges");
-    } while (at != start);
-    VOBB_ASSERT(cap.size() == cap_next.size(), "cap edges form more than one cycle");
-    kept.push_back(std::move(cap));
-  }
-  // Compact: keep only vertices still referenced.
-  std::vector<int> remap(v_.size(), -1);
+    return static_cast<int>(v_.size()) - 1;
+  });
   std::vector<QPoint> nv;
-  for (std::vector<int>& f : kept)
-    for (int& id : f) {
-      if (remap[id] < 0) {
-        remap[id] = static_cast<int>(nv.size());
-        nv.push_back(std::move(v_[id]));
-      }
-      id = remap[id];
-    }
+  for (int old : compact_faces(&kept, v_.size())) nv.push_back(std::move(v_[old]));
   v_ = std::move(nv);
   faces_ = std::move(kept);
   if (faces_.size() < 4) {  // cannot enclose volume
@@ -195,6 +148,34 @@ void ConvexCell::clip(const HalfSpace& h) {
     faces_.clear();
   }
   refresh_shadow();
+}
+
+std::vector<int> cap_cycle(const std::unordered_map<int, int>& cap_next) {
+  std::vector<int> cap;
+  const int start = cap_next.begin()->first;
+  int at = start;
+  do {
+    cap.push_back(at);
+    auto it = cap_next.find(at);
+    VOBB_ASSERT(it != cap_next.end(), "open cap cycle in a cell's clip");
+    at = it->second;
+    VOBB_ASSERT(cap.size() <= cap_next.size(), "cap cycle longer than its edges");
+  } while (at != start);
+  VOBB_ASSERT(cap.size() == cap_next.size(), "cap edges form more than one cycle");
+  return cap;
+}
+
+std::vector<int> compact_faces(std::vector<std::vector<int>>* faces, size_t n_ids) {
+  std::vector<int> remap(n_ids, -1), old_of;
+  for (std::vector<int>& f : *faces)
+    for (int& id : f) {
+      if (remap[id] < 0) {
+        remap[id] = static_cast<int>(old_of.size());
+        old_of.push_back(id);
+      }
+      id = remap[id];
+    }
+  return old_of;
 }
 
 Rational ConvexCell::volume() const {

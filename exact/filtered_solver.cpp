@@ -7,6 +7,7 @@
 
 #include "common/box_frame_clip.h"
 #include "common/status.h"
+#include "exact/convex_cell.h"
 
 namespace vobb {
 
@@ -205,69 +206,23 @@ class MpCell {
       faces_.clear();
       return;
     }
-    const std::vector<int>& side = s->side;
     const int n = static_cast<int>(v_.size());
-    std::unordered_map<long long, int> cut;
-    auto cut_point = [&](int a, int b) {
-      const long long key = static_cast<long long>(std::min(a, b)) * (1LL << 31) + std::max(a, b);
-      auto it = cut.find(key);
-      if (it != cut.end()) return it->second;
-      const int lo = std::min(a, b), hi = std::max(a, b);
+    std::vector<std::vector<int>> kept = clipped_faces(faces_, s->side, n, [&](int lo, int hi) {
       const Mp vl = value_at(h, s, lo), vh = value_at(h, s, hi);
       const Mp t = vl / (vl - vh);
       std::array<Mp, 3> p;
       for (int i = 0; i < 3; ++i) p[i] = v_[lo][i] + t * (v_[hi][i] - v_[lo][i]);
       v_.push_back(p);
       fv_.emplace_back();
-      const int id = static_cast<int>(v_.size()) - 1;
-      refresh(id);
-      cut.emplace(key, id);
-      return id;
-    };
-    auto on_plane = [&](int id) { return id >= n || side[id] == 0; };
-    std::vector<std::vector<int>> kept;
-    std::unordered_map<int, int> cap_next;
-    for (const std::vector<int>& f : faces_) {
-      std::vector<int> poly;
-      const size_t m = f.size();
-      for (size_t k = 0; k < m; ++k) {
-        const int a = f[k], b = f[(k + 1) % m];
-        if (side[a] <= 0) poly.push_back(a);
-        if (side[a] * side[b] < 0) poly.push_back(cut_point(a, b));
-      }
-      if (poly.size() < 3) continue;
-      for (size_t k = 0; k < poly.size(); ++k) {
-        const int a = poly[k], b = poly[(k + 1) % poly.size()];
-        if (on_plane(a) && on_plane(b)) cap_next[b] = a;
-      }
-      kept.push_back(std::move(poly));
-    }
-    if (cap_next.size() >= 3) {
-      std::vector<int> cap;
-      const int start = cap_next.begin()->first;
-      int at = start;
-      do {
-        cap.push_back(at);
-        auto it = cap_next.find(at);
-        VOBB_ASSERT(it != cap_next.end(), "open cap cycle in MpCell::clip");
-        at = it->second;
-        VOBB_ASSERT(cap.size() <= cap_next.size(), "cap cycle longer than its edges");
-      } while (at != start);
-      VOBB_ASSERT(cap.size() == cap_next.size(), "cap edges form more than one cycle");
-      kept.push_back(std::move(cap));
-    }
-    std::vector<int> remap(v_.size(), -1);
+      refresh(static_cast<int>(v_.size()) - 1);
+      return static_cast<int>(v_.size()) - 1;
+    });
     std::vector<std::array<Mp, 3>> nv;
     std::vector<std::array<Fast, 3>> nfv;
-    for (std::vector<int>& f : kept)
-      for (int& id : f) {
-        if (remap[id] < 0) {
-          remap[id] = static_cast<int>(nv.size());
-          nv.push_back(v_[id]);
-          nfv.push_back(fv_[id]);
-        }
-        id = remap[id];
-      }
+    for (int old : compact_faces(&kept, v_.size())) {
+      nv.push_back(v_[old]);
+      nfv.push_back(fv_[old]);
+    }
     v_ = std::move(nv);
     fv_ = std::move(nfv);
     faces_ = std::move(kept);
@@ -346,26 +301,45 @@ std::array<Plane, 6> box_planes(const box_clip::Frame<Mp>& f, int sigma) {
   return out;
 }
 
+// The value `at` computes, in `bits` (MpInterval::kPrec or kMaxPrec); where a sign is
+// undecided, in kMaxPrec (a sign within 1e-35 of 0 is decided there, an exact 0 is not); else
+// `exact`'s rational.
+template <class At, class Exact>
+Enclosed in_tiers(mpfr_prec_t bits, bool collapse, At&& at, Exact&& exact) {
+  Enclosed out;
+  for (; bits <= MpInterval::kMaxPrec; bits *= 2) {
+    try {
+      const MpInterval::Precision precision(bits);
+      const Mp v = at();
+      out.value = collapse ? v.collapsed_for_tests() : v;
+      out.bits = static_cast<int>(bits);
+      return out;
+    } catch (const Undecided&) {
+    }
+  }
+  out.exact = true;
+  out.q = exact();
+  out.value = Mp(out.q);
+  return out;
+}
+
 }  // namespace
 
 FilteredSolver::FilteredSolver(const Mesh& mesh) : mesh_(mesh), faces_(AabbTree::over_faces(mesh)), clip_(mesh) {}
 
-Enclosed FilteredSolver::obv(const Obb& box) const {
-  Enclosed out;
+Enclosed FilteredSolver::obv(const Obb& box, mpfr_prec_t bits) const {
   // Relabelled so that its column leaves the mesh soonest: the same solid, fewer faces.
   const Obb labelled = box_clip::shortest_column(box, faces_.bounds());
   const box_clip::ColumnFilter filter(labelled);
   if (filter.flat()) {
+    Enclosed out;
     out.exact = true;  // no volume: 0, exactly
     return out;
   }
-  try {
+  return in_tiers(bits, collapse_, [&] {
     const box_clip::Frame<Mp> frame = box_clip::make_frame<Mp>(labelled);
     const Mp R = abs(frame.det);
-    if (R.sign() == 0) {
-      out.exact = true;
-      return out;
-    }
+    if (R.sign() == 0) return Mp(0);  // no volume
     Mp sum(0);
     faces_.visit_accepted(filter, [&](int32_t f) {
       const Face& face = mesh_.faces[f];
@@ -375,25 +349,17 @@ Enclosed FilteredSolver::obv(const Obb& box) const {
       Mp term;
       if (box_clip::face_term6(tri, R, &term)) sum += term;
     });
-    out.value = box_clip::obv_from_sum6(sum, R);
-    if (collapse_) out.value = out.value.collapsed_for_tests();
-    return out;
-  } catch (const Undecided&) {
-    out.exact = true;
-    out.q = clip_.obv(box);
-    out.value = Mp(out.q);
-    return out;
-  }
+    return box_clip::obv_from_sum6(sum, R);
+  }, [&] { return clip_.obv(box); });
 }
 
-Enclosed FilteredSolver::overlap_term(const std::vector<Obb>& boxes, size_t j,
-                                      const std::vector<int32_t>& earlier) const {
-  Enclosed out;
-  if (earlier.empty()) return out;  // [0, 0]: nothing earlier can meet box j
-  try {
+Enclosed FilteredSolver::overlap_term(const std::vector<Obb>& boxes, size_t j, const std::vector<int32_t>& earlier,
+                                      mpfr_prec_t bits) const {
+  if (earlier.empty()) return Enclosed();  // [0, 0]: nothing earlier can meet box j
+  return in_tiers(bits, collapse_, [&] {
     const box_clip::Frame<Mp> fj = box_clip::make_frame<Mp>(boxes[j]);
     const int orientation = fj.det.sign();
-    if (orientation == 0) return out;  // a flat box: nothing inside it
+    if (orientation == 0) return Mp(0);  // a flat box: nothing inside it
     // Split box j against each earlier box: `pieces` is what none covers so far; each piece's
     // part inside box i is a cell of S_j (ClipSolver::shared_cells, step for step).
     std::vector<MpCell> shared, pieces{MpCell::from_box(fj, orientation)};
@@ -480,14 +446,8 @@ Enclosed FilteredSolver::overlap_term(const std::vector<Obb>& boxes, size_t j,
       if (whole != 0) inside += Mp(static_cast<double>(whole)) * vol;
       total += vol - inside;
     }
-    out.value = collapse_ ? total.collapsed_for_tests() : total;
-    return out;
-  } catch (const Undecided&) {
-    out.exact = true;
-    out.q = clip_.overlap_term(boxes, j, earlier);
-    out.value = Mp(out.q);
-    return out;
-  }
+    return total;
+  }, [&] { return clip_.overlap_term(boxes, j, earlier); });
 }
 
 }  // namespace exact

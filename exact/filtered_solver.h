@@ -1,6 +1,6 @@
 // Certify's filtered path (DESIGN §3): each box's OBV and each box's share of a layer's overlap
-// term, enclosed in MpInterval arithmetic; rationals only where the enclosure cannot decide a
-// sign (a vertex on a plane, exactly or within 1e-35 of the magnitudes).
+// term, enclosed in MpInterval arithmetic of 128 bits (or 256, asked for where a sum needs
+// it); rationals only where the enclosure cannot decide a sign (a vertex exactly on a plane).
 //
 //   OBV(B)      by the box-frame clip formula (common/box_frame_clip.h) on MpInterval;
 //   overlap_j = vol(S_j \ X), S_j = B_j ∩ (B_0 ∪ ... ∪ B_{j-1}), split into convex cells
@@ -31,15 +31,19 @@ struct Enclosed {
   MpInterval value;
   bool exact = false;
   Rational q;
+  int bits = 128;  // the precision that enclosed it (unless exact)
 };
 
 class FilteredSolver {
  public:
   explicit FilteredSolver(const Mesh& mesh);  // keeps a reference
-  Enclosed obv(const Obb& box) const;
+  // Each in `bits` (MpInterval::kPrec or kMaxPrec), or in kMaxPrec where a sign is undecided
+  // in fewer, or in rationals where it is undecided there too.
+  Enclosed obv(const Obb& box, mpfr_prec_t bits = MpInterval::kPrec) const;
   // Box j's share of the overlap term of `boxes`, with `earlier` its earlier_neighbours entry;
   // [0, 0] exactly when that is empty.
-  Enclosed overlap_term(const std::vector<Obb>& boxes, size_t j, const std::vector<int32_t>& earlier) const;
+  Enclosed overlap_term(const std::vector<Obb>& boxes, size_t j, const std::vector<int32_t>& earlier,
+                        mpfr_prec_t bits = MpInterval::kPrec) const;
   const ClipSolver& rational() const { return clip_; }
 
   // For the tests: the filter's enclosures are collapsed onto their lower ends before they are

@@ -3,14 +3,29 @@
 #include <cstdlib>
 #include <cstring>
 
+#include "common/status.h"
+
 namespace vobb::exact {
 
-void MpInterval::init() {  // [+0, +0]
-  mpfr_custom_init(lo_limbs_, kPrec);
-  mpfr_custom_init(hi_limbs_, kPrec);
-  mpfr_custom_init_set(lo_, MPFR_ZERO_KIND, 0, kPrec, lo_limbs_);
-  mpfr_custom_init_set(hi_, MPFR_ZERO_KIND, 0, kPrec, hi_limbs_);
+namespace {
+thread_local mpfr_prec_t current_bits = MpInterval::kPrec;
+}  // namespace
+
+MpInterval::Precision::Precision(mpfr_prec_t bits) : saved_(current_bits) {
+  VOBB_ASSERT(bits >= MPFR_PREC_MIN && bits <= kMaxPrec, "MpInterval precision within its storage");
+  current_bits = bits;
 }
+
+MpInterval::Precision::~Precision() { current_bits = saved_; }
+
+void MpInterval::init(mpfr_prec_t bits) {  // [+0, +0]
+  mpfr_custom_init(lo_limbs_, bits);
+  mpfr_custom_init(hi_limbs_, bits);
+  mpfr_custom_init_set(lo_, MPFR_ZERO_KIND, 0, bits, lo_limbs_);
+  mpfr_custom_init_set(hi_, MPFR_ZERO_KIND, 0, bits, hi_limbs_);
+}
+
+void MpInterval::init() { init(current_bits); }
 
 MpInterval::MpInterval(double x) {
   init();
@@ -25,17 +40,19 @@ MpInterval::MpInterval(const Rational& q) {
 }
 
 MpInterval::MpInterval(const MpInterval& o) {
-  mpfr_custom_init(lo_limbs_, kPrec);
-  mpfr_custom_init(hi_limbs_, kPrec);
-  // Same precision: the significands copy as they are.
-  std::memcpy(lo_limbs_, o.lo_limbs_, sizeof lo_limbs_);
-  std::memcpy(hi_limbs_, o.hi_limbs_, sizeof hi_limbs_);
-  mpfr_custom_init_set(lo_, mpfr_custom_get_kind(o.lo_), mpfr_custom_get_exp(o.lo_), kPrec, lo_limbs_);
-  mpfr_custom_init_set(hi_, mpfr_custom_get_kind(o.hi_), mpfr_custom_get_exp(o.hi_), kPrec, hi_limbs_);
+  // A copy keeps o's precision: the significands copy as they are.
+  const mpfr_prec_t bits = o.bits();
+  const size_t bytes = mpfr_custom_get_size(bits);
+  std::memcpy(lo_limbs_, o.lo_limbs_, bytes);
+  std::memcpy(hi_limbs_, o.hi_limbs_, bytes);
+  mpfr_custom_init_set(lo_, mpfr_custom_get_kind(o.lo_), mpfr_custom_get_exp(o.lo_), bits, lo_limbs_);
+  mpfr_custom_init_set(hi_, mpfr_custom_get_kind(o.hi_), mpfr_custom_get_exp(o.hi_), bits, hi_limbs_);
 }
 
 MpInterval& MpInterval::operator=(const MpInterval& o) {
   if (this != &o) {
+    // Takes o's precision where it is more than this one's; rounded outward otherwise.
+    if (o.bits() > bits()) init(o.bits());
     mpfr_set(lo_, o.lo_, MPFR_RNDD);
     mpfr_set(hi_, o.hi_, MPFR_RNDU);
   }
@@ -168,6 +185,7 @@ void MpInterval::to_text(std::string* lo, std::string* hi) const {
 
 bool MpInterval::from_text(const std::string& lo, const std::string& hi, MpInterval* out) {
   MpInterval r;
+  r.init(kMaxPrec);  // any number this class wrote reads exactly
   char* end = nullptr;
   // Base 16 with the 0x prefix, as %Ra writes; a number of up to 128 bits reads exactly (an
   // inexact read is a number this class did not write: refused).

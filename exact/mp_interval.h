@@ -1,12 +1,13 @@
-// vobb::exact::MpInterval — a closed interval of 128-bit binary floating-point numbers (MPFR),
-// every operation rounded outward. Whatever values lie in the operands, the exact result of the
+// vobb::exact::MpInterval — a closed interval of binary floating-point numbers (MPFR) of 128
+// bits, or 256 within a Precision scope, every operation rounded outward. Whatever values lie in the operands, the exact result of the
 // same operation on them lies in the result: a chain of operations encloses the exact value of
 // the same expression in rationals. Holds its significands inline: no allocation.
 //
-// It is certify's filter (exact/filtered_solver.h): wide enough that boxes whose faces touch
-// mesh vertices (1e-17 apart in relative terms) are told apart, narrow enough (about 1e-35
-// relative) that a sum's enclosure lies in one double's rounding cell except at rounding ties.
-// A sign it cannot decide throws Undecided; the caller then computes in rationals.
+// It is certify's filter (exact/filtered_solver.h): 128 bits tell apart boxes whose faces
+// touch mesh vertices (1e-17 apart in relative terms) and leave a sum's enclosure within one
+// double's rounding cell except at rounding ties; 256 bits serve where near-degenerate cuts
+// (slivers between nearly coplanar planes) widen an enclosure past that. A sign it cannot
+// decide throws Undecided; the caller then computes in rationals.
 #pragma once
 
 #include <gmp.h>
@@ -22,7 +23,22 @@ struct Undecided {};
 
 class MpInterval {
  public:
-  static constexpr mpfr_prec_t kPrec = 128;
+  static constexpr mpfr_prec_t kPrec = 128;     // the precision of results by default
+  static constexpr mpfr_prec_t kMaxPrec = 256;  // within a Precision scope
+
+  // Results (and conversions) made on this thread while it lives have `bits` of precision
+  // (kPrec or kMaxPrec); operands of any precision mix.
+  class Precision {
+   public:
+    explicit Precision(mpfr_prec_t bits);
+    ~Precision();
+    Precision(const Precision&) = delete;
+    Precision& operator=(const Precision&) = delete;
+
+   private:
+    mpfr_prec_t saved_;
+  };
+  mpfr_prec_t bits() const { return mpfr_get_prec(lo_); }
 
   MpInterval() { init(); }  // [0, 0]
   MpInterval(double x);  // NOLINT: exact (a double fits in 128 bits)
@@ -60,8 +76,9 @@ class MpInterval {
   MpInterval collapsed_for_tests() const;
 
  private:
-  static constexpr int kLimbs = (kPrec + GMP_NUMB_BITS - 1) / GMP_NUMB_BITS;
-  void init();
+  static constexpr int kLimbs = (kMaxPrec + GMP_NUMB_BITS - 1) / GMP_NUMB_BITS;
+  void init(mpfr_prec_t bits);
+  void init();  // at this thread's precision
   mpfr_t lo_, hi_;
   mp_limb_t lo_limbs_[kLimbs], hi_limbs_[kLimbs];
 };

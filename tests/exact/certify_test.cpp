@@ -28,6 +28,7 @@
 #include "fast/obbtree_builder.h"
 #include "fast/poly_solver.h"
 #include "fast/variational_builder.h"
+#include "special_position.h"
 #include "test_common.h"
 
 namespace vobb::exact {
@@ -640,20 +641,13 @@ TEST_P(CertifyReal, FilteredCertificateIsNefsRoundedOnBothBuildersTrees) {
 INSTANTIATE_TEST_SUITE_P(Meshes, CertifyReal, ::testing::Values("dino", "knot1", "elephant"));
 
 // A hand-made tree in special position: the root box's +T_0 face passes exactly through a mesh
-// vertex (the vertex is the box's edge vector u_0, with c = 0), and both children are the root
-// box again, so the overlap cell's vertices lie exactly on the other box's planes. 128-bit
-// enclosures round these exact zeros into intervals holding 0, so the filter falls back to
-// rationals for the OBV and for the overlap term; the certificate must say so and be the one
-// --rational gives.
+// vertex (special_position.h), and both children are the root box again, so the overlap cell's
+// vertices lie exactly on the other box's planes. 128-bit enclosures round these exact zeros
+// into intervals holding 0, so the filter falls back to rationals for the OBV and for the
+// overlap term; the certificate must say so and be the one --rational gives.
 TEST(Certify, SpecialPositionsFallBackToRationalsAndAgreeWithThem) {
-  Obb box;
-  box.axes = {Vec3(0.6, 0.8, 0), Vec3(-0.8, 0.6, 0), Vec3(0, 0, 1)};
-  box.half = Vec3(1, 0.7, 0.3);
-  Mesh m;
-  m.vertices = {box.axes[0], Vec3(-0.3, 0.1, 0.2), Vec3(-0.2, -0.3, -0.2), Vec3(0.1, -0.4, 0.1)};
-  m.faces = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
-  if (exact_signed_volume(m) < 0)
-    for (Face& face : m.faces) std::swap(face[1], face[2]);
+  const Obb box = test::box_through_vertex();
+  const Mesh m = test::tetrahedron_touching(box);
   Tree t;
   t.method = "hand";
   t.depth = 1;
@@ -684,6 +678,49 @@ TEST(Certify, SpecialPositionsFallBackToRationalsAndAgreeWithThem) {
   EXPECT_EQ(q.layers[1].omv, q.layers[0].omv);
   EXPECT_EQ(q.layers[1].sum_obv, 2 * q.layers[0].omv);
   EXPECT_EQ(f.weighted_error_nearest, q.weighted_error_nearest);
+}
+
+// A layer whose overlap is a sliver (special_position.h): its 128-bit enclosure cannot round
+// the overlap term, so certify encloses that box's term again in 256 bits, says so, and gives
+// the doubles --rational gives. The mesh is two tetrahedra, one in each child box; the root box
+// holds both.
+TEST(Certify, SliverLayerIsRefinedIn256BitsAndRoundsAsTheRationals) {
+  const std::vector<Obb> pair = test::sliver_pair();
+  Mesh m;
+  const Mesh tet = analytic::tetrahedron(0.1).mesh;
+  for (int k = 0; k < 2; ++k) {
+    const int32_t base = static_cast<int32_t>(m.vertices.size());
+    for (const Vec3& v : tet.vertices) m.vertices.push_back(v + pair[k].center);
+    for (const Face& f : tet.faces) m.faces.push_back({f[0] + base, f[1] + base, f[2] + base});
+  }
+  Obb root;
+  root.center = 0.5 * (pair[0].center + pair[1].center);
+  root.half = Vec3(2, 2, 2);
+  Tree t;
+  t.method = "hand";
+  t.depth = 1;
+  t.mesh_triangles = m.faces.size();
+  t.nodes.resize(3);
+  t.nodes[0] = {0, -1, 0, root, {1, 2}, {0, 1, 2, 3, 4, 5, 6, 7}};
+  t.nodes[1] = {1, 0, 1, pair[0], {}, {0, 1, 2, 3}};
+  t.nodes[2] = {2, 0, 1, pair[1], {}, {4, 5, 6, 7}};
+  ASSERT_TRUE(validate_tree(t, "hand"));
+  const Certificate f = certify(m, t, CertifyOptions());
+  CertifyOptions with_rationals;
+  with_rationals.rational = true;
+  const Certificate q = certify(m, t, with_rationals);
+  ASSERT_TRUE(f.containment.ok());
+  ASSERT_EQ(f.layers.size(), 2u);
+  const LayerCertificate &a = f.layers[1], &b = q.layers[1];
+  EXPECT_EQ(a.refined_overlap, 1u);
+  EXPECT_EQ(a.exact_overlap, 0u);
+  EXPECT_EQ(a.overlap_rounded_by, "filter");
+  EXPECT_GT(b.overlap(), 0);
+  EXPECT_TRUE(a.overlap_enclosure.contains(b.overlap()));
+  EXPECT_EQ(a.overlap_nearest, to_double_nearest(b.overlap()));
+  EXPECT_EQ(a.omv_nearest, to_double_nearest(b.omv));
+  EXPECT_EQ(f.weighted_error_nearest, to_double_nearest(q.weighted_error));
+  EXPECT_TRUE(f.ok());
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 #include "common/io/mesh_io.h"
 #include "data/analytic_meshes.h"
 #include "exact/outer_volume.h"
+#include "special_position.h"
 #include "test_common.h"
 
 namespace vobb::exact {
@@ -117,31 +118,10 @@ TEST_P(FilteredReal, LayersOfRandomBoxesEncloseTheExactValues) {
 
 INSTANTIATE_TEST_SUITE_P(Meshes, FilteredReal, ::testing::Values("dino", "knot1", "elephant"));
 
-// A rotated box whose +T_0 face passes exactly through a mesh vertex, by construction: the
-// vertex is the box's edge vector u_0 itself (c = 0, h_0 = 1). Its side value T_0(v) - R is 0
-// exactly, but 128 bits round both T_0(v) and R (products of up to four doubles), so the
-// enclosure holds 0 and other values: the filter must fall back to rationals, and give the
-// rational.
-Obb box_through_vertex() {
-  Obb b;
-  b.center = Vec3(0, 0, 0);
-  b.axes = {Vec3(0.6, 0.8, 0), Vec3(-0.8, 0.6, 0), Vec3(0, 0, 1)};
-  b.half = Vec3(1, 0.7, 0.3);
-  return b;
-}
-
-Mesh tetrahedron_touching(const Obb& b) {
-  Mesh m;
-  m.vertices = {b.axes[0], Vec3(-0.3, 0.1, 0.2), Vec3(-0.2, -0.3, -0.2), Vec3(0.1, -0.4, 0.1)};
-  m.faces = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
-  if (exact_signed_volume(m) < 0)
-    for (Face& f : m.faces) std::swap(f[1], f[2]);
-  return m;
-}
-
+// The box of special_position.h: a vertex exactly on its face, behind 128-bit rounding.
 TEST(FilteredSolver, VertexExactlyOnABoxFaceFallsBackToTheRational) {
-  const Obb b = box_through_vertex();
-  const Mesh m = tetrahedron_touching(b);
+  const Obb b = test::box_through_vertex();
+  const Mesh m = test::tetrahedron_touching(b);
   ASSERT_EQ(ExactBoxContainment(b).contains(m.vertices[0]), true);
   const FilteredSolver fs(m);
   const Enclosed e = fs.obv(b);
@@ -160,6 +140,26 @@ TEST(FilteredSolver, VertexExactlyOnABoxFaceFallsBackToTheRational) {
     const Enclosed t = fs.overlap_term(boxes, j, earlier[j]);
     EXPECT_TRUE(t.value.contains(fs.rational().overlap_term(boxes, j, earlier[j]))) << j;
   }
+}
+
+// A sliver between nearly coplanar box faces (special_position.h): 128 bits enclose its overlap
+// term too widely to round it, 256 bits round it; both enclose the rational.
+TEST(FilteredSolver, SliverOverlapIsRoundedIn256Bits) {
+  const Mesh m = analytic::cube(0.5, Vec3(0.2, 0.1, 0.3)).mesh;
+  const FilteredSolver fs(m);
+  const std::vector<Obb> boxes = test::sliver_pair();
+  const Enclosed narrow = fs.overlap_term(boxes, 1, {0}, MpInterval::kPrec);
+  const Enclosed wide = fs.overlap_term(boxes, 1, {0}, MpInterval::kMaxPrec);
+  const Rational q = fs.rational().overlap_term(boxes, 1, {0});
+  ASSERT_GT(q, 0);
+  EXPECT_TRUE(narrow.value.contains(q));
+  EXPECT_TRUE(wide.value.contains(q));
+  EXPECT_EQ(narrow.bits, 128);
+  EXPECT_EQ(wide.bits, 256);
+  double d;
+  EXPECT_FALSE(narrow.value.nearest(&d)) << "128 bits rounded the sliver: the test no longer tests refinement";
+  ASSERT_TRUE(wide.value.nearest(&d));
+  EXPECT_EQ(d, to_double_nearest(q));
 }
 
 // A deliberately broken enclosure is caught by the checks above: the double enclosure a user is
