@@ -2,7 +2,6 @@
 
 #include <cmath>
 #include <limits>
-#include <unordered_map>
 
 #include "common/status.h"
 
@@ -150,18 +149,18 @@ void ConvexCell::clip(const HalfSpace& h) {
   refresh_shadow();
 }
 
-std::vector<int> cap_cycle(const std::unordered_map<int, int>& cap_next) {
+std::vector<int> cap_cycle(const std::vector<int>& next, size_t edges) {
   std::vector<int> cap;
-  const int start = cap_next.begin()->first;
+  int start = 0;
+  while (next[start] < 0) ++start;
   int at = start;
   do {
     cap.push_back(at);
-    auto it = cap_next.find(at);
-    VOBB_ASSERT(it != cap_next.end(), "open cap cycle in a cell's clip");
-    at = it->second;
-    VOBB_ASSERT(cap.size() <= cap_next.size(), "cap cycle longer than its edges");
+    VOBB_ASSERT(static_cast<size_t>(at) < next.size() && next[at] >= 0, "open cap cycle in a cell's clip");
+    at = next[at];
+    VOBB_ASSERT(cap.size() <= edges, "cap cycle longer than its edges");
   } while (at != start);
-  VOBB_ASSERT(cap.size() == cap_next.size(), "cap edges form more than one cycle");
+  VOBB_ASSERT(cap.size() == edges, "cap edges form more than one cycle");
   return cap;
 }
 

@@ -2,6 +2,7 @@
 
 #include <CGAL/Interval_nt.h>
 
+#include <algorithm>
 #include <array>
 #include <unordered_map>
 
@@ -190,54 +191,48 @@ class MpCell {
     }
   }
 
-  // Keeps the part in h (ConvexCell::clip, step for step).
-  void clip(const Plane& h) {
-    if (faces_.empty()) return;
+  // The part in h (ConvexCell::clip, step for step), made without copying the cell first.
+  MpCell clipped(const Plane& h) const {
+    if (faces_.empty()) return MpCell();
     Sides s;
     sides(h, &s);
-    clip_with(h, &s);
+    return clipped_with(h, &s);
   }
 
-  void clip_with(const Plane& h, Sides* s) {
-    if (!s->any_pos) return;
-    if (!s->any_neg) {
-      v_.clear();
-      fv_.clear();
-      faces_.clear();
-      return;
-    }
+  // The same, with the vertices' sides of h already known.
+  MpCell clipped_with(const Plane& h, Sides* s) const {
+    if (!s->any_pos) return *this;
+    MpCell out;
+    if (!s->any_neg) return out;  // nothing strictly inside: empty, or flat on the plane
     const int n = static_cast<int>(v_.size());
+    std::vector<std::array<Mp, 3>> made;  // the cut points, ids n and upward
     std::vector<std::vector<int>> kept = clipped_faces(faces_, s->side, n, [&](int lo, int hi) {
       const Mp vl = value_at(h, s, lo), vh = value_at(h, s, hi);
       const Mp t = vl / (vl - vh);
-      std::array<Mp, 3> p;
+      std::array<Mp, 3>& p = made.emplace_back();
       for (int i = 0; i < 3; ++i) p[i] = v_[lo][i] + t * (v_[hi][i] - v_[lo][i]);
-      v_.push_back(p);
-      fv_.emplace_back();
-      refresh(static_cast<int>(v_.size()) - 1);
-      return static_cast<int>(v_.size()) - 1;
+      return n + static_cast<int>(made.size()) - 1;
     });
-    std::vector<std::array<Mp, 3>> nv;
-    std::vector<std::array<Fast, 3>> nfv;
-    for (int old : compact_faces(&kept, v_.size())) {
-      nv.push_back(v_[old]);
-      nfv.push_back(fv_[old]);
+    if (kept.size() < 4) return out;  // cannot enclose volume
+    const std::vector<int> old = compact_faces(&kept, n + made.size());
+    out.v_.reserve(old.size());
+    out.fv_.resize(old.size());
+    for (size_t k = 0; k < old.size(); ++k) {
+      out.v_.push_back(old[k] < n ? v_[old[k]] : made[old[k] - n]);
+      out.refresh(static_cast<int>(k));
     }
-    v_ = std::move(nv);
-    fv_ = std::move(nfv);
-    faces_ = std::move(kept);
-    if (faces_.size() < 4) {
-      v_.clear();
-      fv_.clear();
-      faces_.clear();
-    }
+    out.faces_ = std::move(kept);
+    return out;
   }
 
   Mp volume() const {
     if (faces_.empty()) return Mp(0);
-    const std::array<Mp, 3>& p = v_[faces_[0][0]];
+    const int apex = faces_[0][0];
+    const std::array<Mp, 3>& p = v_[apex];
     Mp sum(0);
     for (const std::vector<int>& f : faces_) {
+      // A face through the apex adds a cone of height 0: exactly nothing.
+      if (std::find(f.begin(), f.end(), apex) != f.end()) continue;
       Mp a[3];
       for (int i = 0; i < 3; ++i) a[i] = v_[f[0]][i] - p[i];
       for (size_t k = 1; k + 1 < f.size(); ++k) {
@@ -341,11 +336,15 @@ Enclosed FilteredSolver::obv(const Obb& box, mpfr_prec_t bits) const {
     const Mp R = abs(frame.det);
     if (R.sign() == 0) return Mp(0);  // no volume
     Mp sum(0);
+    std::unordered_map<int32_t, box_clip::Point<Mp>> tmap;  // faces share vertices
+    auto to_t = [&](int32_t v) -> const box_clip::Point<Mp>& {
+      auto it = tmap.find(v);
+      if (it != tmap.end()) return it->second;
+      return tmap.emplace(v, box_clip::to_frame(frame, mesh_.vertices[v])).first->second;
+    };
     faces_.visit_accepted(filter, [&](int32_t f) {
       const Face& face = mesh_.faces[f];
-      const box_clip::Point<Mp> tri[3] = {box_clip::to_frame(frame, mesh_.vertices[face[0]]),
-                                          box_clip::to_frame(frame, mesh_.vertices[face[1]]),
-                                          box_clip::to_frame(frame, mesh_.vertices[face[2]])};
+      const box_clip::Point<Mp> tri[3] = {to_t(face[0]), to_t(face[1]), to_t(face[2])};
       Mp term;
       if (box_clip::face_term6(tri, R, &term)) sum += term;
     });
@@ -380,10 +379,9 @@ Enclosed FilteredSolver::overlap_term(const std::vector<Obb>& boxes, size_t j, c
             rest = MpCell();
             break;
           }
-          MpCell beyond = rest;
-          beyond.clip(h.complement());
+          MpCell beyond = rest.clipped(h.complement());
           if (!beyond.empty()) next.push_back(std::move(beyond));
-          rest.clip_with(h, &sides);
+          rest = rest.clipped_with(h, &sides);
           if (rest.empty()) break;
         }
         if (!rest.empty()) shared.push_back(std::move(rest));
@@ -401,13 +399,15 @@ Enclosed FilteredSolver::overlap_term(const std::vector<Obb>& boxes, size_t j, c
       size_t fewest = SIZE_MAX;
       for (int d = 0; d < 6; ++d) {
         size_t n = 0;
-        faces_.for_each_overlap(column_of(bounds, d), [&](int32_t) { ++n; });
+        const Aabb column = column_of(bounds, d);
+        faces_.visit_accepted([&](const Aabb& b) { return column.overlaps(b); }, [&](int32_t) { ++n; });
         if (n < fewest) fewest = n, dir = d;
       }
       const MpCell cell = cell_xyz.mapped(dir);
       Mp inside(0);
       long whole = 0;
-      faces_.for_each_overlap(column_of(bounds, dir), [&](int32_t f) {
+      const Aabb column = column_of(bounds, dir);
+      faces_.visit_accepted([&](const Aabb& b) { return column.overlaps(b); }, [&](int32_t f) {
         Vec3 mapped[3];
         for (int k = 0; k < 3; ++k) {
           const Vec3& p = mesh_.corner(f, k);
@@ -436,11 +436,9 @@ Enclosed FilteredSolver::overlap_term(const std::vector<Obb>& boxes, size_t j, c
           whole += sign;
           return;
         }
-        MpCell piece = cell;
-        for (int k = 0; k < n_cutting; ++k) {
-          piece.clip(*cutting[k]);
-          if (piece.empty()) return;
-        }
+        MpCell piece = cell.clipped(*cutting[0]);
+        for (int k = 1; k < n_cutting && !piece.empty(); ++k) piece = piece.clipped(*cutting[k]);
+        if (piece.empty()) return;
         inside += sign > 0 ? piece.volume() : -piece.volume();
       });
       if (whole != 0) inside += Mp(static_cast<double>(whole)) * vol;
