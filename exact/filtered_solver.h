@@ -5,8 +5,9 @@
 //   OBV(B)      by the box-frame clip formula (common/box_frame_clip.h) on MpInterval;
 //   overlap_j = vol(S_j \ X), S_j = B_j ∩ (B_0 ∪ ... ∪ B_{j-1}), split into convex cells
 //               against the earlier boxes that may meet B_j, each cell's vol(cell ∩ X) by the
-//               signed prism decomposition along z over the faces whose column meets it
-//               (the clipping path's arithmetic, ClipSolver, on MpInterval);
+//               signed prism decomposition over the faces whose column meets it, along the
+//               axis direction whose column holds the fewest faces (the clipping path's
+//               arithmetic, ClipSolver, on MpInterval; docs/derivations.md, "Certify's filter");
 //   OMV(layer) = sum OBV - sum_j overlap_j.
 // Only box j's earlier neighbours and the faces in its cells' columns are touched: no Nef
 // polyhedron, and memory is one box's cells. Every result's enclosure contains the exact value

@@ -142,6 +142,34 @@ TEST(FilteredSolver, VertexExactlyOnABoxFaceFallsBackToTheRational) {
   }
 }
 
+// Rotated boxes in special position against each other: b is a moved by a's edge vector
+// 2 u_0 (exactly: h_0 = 0.5 and c = 0), so that b's -T_0 face is a's +T_0 face, and c's corner
+// lies on a's +T_0 face. The overlap split meets those planes at points whose side values are
+// exactly 0 behind rounding in 128 and 256 bits: the filter falls back to rationals, and gives
+// the clipping path's rationals.
+TEST(FilteredSolver, BoxesSharingAFaceFallBackToTheRationals) {
+  const Mesh m = analytic::cube(0.3, Vec3(0.1, -0.2, 0.05)).mesh;
+  const FilteredSolver fs(m);
+  const Obb a = rotated_box(Vec3(0, 0, 0), Vec3(0.5, 0.4, 0.3), 0.7, Vec3(3, -1, 2));
+  Obb b = a;
+  b.center = a.axes[0];  // c + 2 u_0, exactly
+  Obb c = a;
+  c.center = 0.5 * a.axes[0] + 0.4 * a.axes[1];  // a corner region across a's +T_0 face
+  const std::vector<Obb> boxes = {a, b, c};
+  const std::vector<std::vector<int32_t>> earlier = fs.rational().earlier_neighbours(boxes);
+  size_t fallbacks = 0;
+  for (size_t j = 1; j < boxes.size(); ++j) {
+    const Enclosed t = fs.overlap_term(boxes, j, earlier[j]);
+    const Rational q = fs.rational().overlap_term(boxes, j, earlier[j]);
+    EXPECT_TRUE(t.value.contains(q)) << j;
+    if (t.exact) {
+      EXPECT_EQ(t.q, q) << j;
+      ++fallbacks;
+    }
+  }
+  EXPECT_GT(fallbacks, 0u) << "no exact zero reached the filter: the fallback was not tested";
+}
+
 // A sliver between nearly coplanar box faces (special_position.h): 128 bits enclose its overlap
 // term too widely to round it, 256 bits round it; both enclose the rational.
 TEST(FilteredSolver, SliverOverlapIsRoundedIn256Bits) {
