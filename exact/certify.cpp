@@ -209,7 +209,6 @@ Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& op
       if (filter_overlap)
         tbb::parallel_for(size_t{0}, boxes.size(),
                           [&](size_t j) { terms[j] = filtered.overlap_term(boxes, j, earlier[j]); });
-      for (const Enclosed& t : terms) lc.exact_overlap += t.exact ? 1 : 0;
       // The exact values: on a rational path, when asked, or where the filter cannot decide.
       auto make_rational = [&]() {
         if (lc.rational) return;
@@ -250,17 +249,22 @@ Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& op
         std::stable_sort(widest.begin(), widest.end(), [&](size_t a, size_t b) {
           return terms[a].value.sup() - terms[a].value.inf() > terms[b].value.sup() - terms[b].value.inf();
         });
-        for (size_t done = 0; !all_rational && done < widest.size() && !decides();) {
-          const size_t end = std::min(widest.size(), done + std::max<size_t>(16, widest.size() / 8));
-          tbb::parallel_for(done, end, [&](size_t k) {
+        // A rational path (and both, whose OMV is Nef's) rounds its rationals: nothing to refine.
+        const bool rounds_rationals = all_rational || lc.omv_path == "both";
+        for (size_t refined = 0; !rounds_rationals && refined < widest.size() && !decides();) {
+          const size_t end = std::min(widest.size(), refined + std::max<size_t>(16, widest.size() / 8));
+          tbb::parallel_for(refined, end, [&](size_t k) {
             const size_t j = widest[k];
             terms[j] = filtered.overlap_term(boxes, j, earlier[j], MpInterval::kMaxPrec);
           });
-          done = end;
+          refined = end;
           sum_terms();
         }
       }
-      for (const Enclosed& t : terms) lc.refined_overlap += !t.exact && t.bits > MpInterval::kPrec ? 1 : 0;
+      for (const Enclosed& t : terms) {
+        lc.exact_overlap += t.exact ? 1 : 0;
+        lc.refined_overlap += !t.exact && t.bits > MpInterval::kPrec ? 1 : 0;
+      }
       if (lc.omv_path == "none") {
         lc.overlap_enclosure = MpInterval(0);
         lc.omv_enclosure = lc.sum_obv_enclosure;
@@ -277,9 +281,6 @@ Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& op
         lc.omv = need_nef().omv(boxes);
         lc.paths_agree = lc.omv == lc.omv_clip && lc.omv_enclosure.contains(lc.omv);
       }
-      // Nef's rational (auto with --rational) against the filter's enclosure: two independent
-      // computations, so a miss fails the certificate as a disagreement of paths would.
-      if (lc.rational && filter_overlap && !lc.omv_enclosure.contains(lc.omv)) lc.paths_agree = false;
       // Sum OBV >= OMV: the overlap term's sign. No overlapping boxes: 0, exactly.
       if (lc.omv_path == "none") {
         lc.upper_bound = true;
@@ -312,12 +313,16 @@ Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& op
       round(lc.overlap_enclosure, [&] { return lc.overlap(); }, &lc.overlap_nearest, &lc.overlap_rounded_by);
       const bool rounded_exactly = !rational_path && (lc.omv_rounded_by == "exact" || lc.sum_obv_rounded_by == "exact" ||
                                                       lc.overlap_rounded_by == "exact");
+      // Wherever rationals were made on a filtered layer (Nef's with --rational, the clipping
+      // path's for a bound or a rounding), they are checked against the filter's enclosure: a
+      // miss fails the certificate as a disagreement of paths would.
+      if (lc.rational && lc.omv_path == "filtered" && !lc.omv_enclosure.contains(lc.omv)) lc.paths_agree = false;
       lc.seconds = seconds_since(tl) - nef_build_seconds;
       const std::string disagree =
           lc.paths_agree ? ""
           : lc.omv_path == "both"
               ? ", PATHS DISAGREE (Nef's OMV above; clipping's " + format_nearest(lc.omv_clip) + ")"
-              : ", PATHS DISAGREE (Nef's OMV above lies outside the filter's enclosure)";
+              : ", PATHS DISAGREE (the exact OMV above lies outside the filter's enclosure)";
       char buf[400];
       std::snprintf(buf, sizeof buf,
                     "layer %d/%d: %zu boxes (%zu overlapping), OMV %.17g, sum OBV %.17g%s; in 256 bits: %zu OBV, "
@@ -737,7 +742,31 @@ Status CertifyCheckpoint::load(const Tree& tree, CertifyState* state, bool* foun
         } else if (l.omv_path != "nef" && l.omv_path != "clip" && l.omv_path != "filtered") {
           return bad(at + "unknown path '" + l.omv_path.substr(0, 20) + "'");
         }
-        if (l.omv_path == "filtered" && l.rational) l.paths_agree = l.omv_enclosure.contains(l.omv);  // Nef's
+        if (l.omv_path == "filtered" && l.rational) l.paths_agree = l.omv_enclosure.contains(l.omv);
+        // What the layer says must follow from its own values, as certify makes them.
+        auto same = [](const MpInterval& a, const MpInterval& b) {
+          return a.lo_rational() == b.lo_rational() && a.hi_rational() == b.hi_rational();
+        };
+        if (l.omv_path == "none" && (!same(l.omv_enclosure, l.sum_obv_enclosure) || (l.rational && l.omv != l.sum_obv)))
+          return bad(at + "path none, but OMV is not the sum of OBV");
+        if ((l.omv_path == "filtered" || l.omv_path == "both") &&
+            !same(l.omv_enclosure, l.sum_obv_enclosure - l.overlap_enclosure))
+          return bad(at + "OMV's enclosure is not the sum of OBV's less the overlap's");
+        if ((l.omv_path == "nef" || l.omv_path == "clip") && (!l.rational || !l.omv_enclosure.contains(l.omv)))
+          return bad(at + "a rational path's OMV lies outside its enclosure");
+        const bool bound_ok = l.bound_by == "exact"
+                                  ? (l.rational ? l.upper_bound == (l.sum_obv >= l.omv) : l.omv_path == "none" && l.upper_bound)
+                                  : (l.upper_bound ? l.overlap_enclosure.lo_rational() >= 0 : l.overlap_enclosure.hi_rational() < 0);
+        if (!bound_ok) return bad(at + "its bound does not follow from its values");
+        auto rounding_ok = [&](const MpInterval& e, const std::function<Rational()>& q, double d, const std::string& by) {
+          double f;
+          if (by == "filter") return e.nearest(&f) && f == d;
+          return l.rational && to_double_nearest(q()) == d;
+        };
+        if (!rounding_ok(l.omv_enclosure, [&] { return l.omv; }, l.omv_nearest, l.omv_rounded_by) ||
+            !rounding_ok(l.sum_obv_enclosure, [&] { return l.sum_obv; }, l.sum_obv_nearest, l.sum_obv_rounded_by) ||
+            !rounding_ok(l.overlap_enclosure, [&] { return l.overlap(); }, l.overlap_nearest, l.overlap_rounded_by))
+          return bad(at + "a double is not its value rounded");
         if (l.omv_path != "both" && (jl.contains("paths_agree") || jl.contains("omv_clip")))
           return bad(at + "a second path's OMV on a layer of path " + l.omv_path);
         const nlohmann::json& seconds = jl.at("seconds");

@@ -155,7 +155,7 @@ double MpInterval::sup() const { return mpfr_get_d(hi_, MPFR_RNDU); }
 bool MpInterval::nearest(double* d) const {
   // Rounding to nearest is monotone: a value between lo and hi rounds between their roundings.
   const double lo = mpfr_get_d(lo_, MPFR_RNDN), hi = mpfr_get_d(hi_, MPFR_RNDN);
-  *d = lo;
+  *d = lo == 0 ? 0.0 : lo;  // an exact 0 is +0, as a rational's rounding is
   return lo == hi;
 }
 

@@ -413,6 +413,13 @@ TEST_F(CertifyTorus, DamagedOrForeignCheckpointsAreRefused) {
          j["layers"][0]["sum_obv"] = Rational(Rational(j["layers"][0]["sum_obv"].get<std::string>()) + 1).get_str();
        }},
       {"an enclosure is not one", false, [](nlohmann::json& j) { j["layers"][0]["omv_enclosure"] = "7"; }},
+      // Values that do not follow from the layer's own: its verdict, a double, an enclosure.
+      {"its bound does not follow from its values", false,
+       [](nlohmann::json& j) { j["layers"][0]["upper_bound"] = !j["layers"][0]["upper_bound"].get<bool>(); }},
+      {"a double is not its value rounded", false, [](nlohmann::json& j) { j["layers"][0]["omv_nearest"] = 12345.0; }},
+      {"a double is not its value rounded", false, [](nlohmann::json& j) { j["layers"][0]["overlap_nearest"] = -1.0; }},
+      {"OMV's enclosure is not the sum of OBV's less the overlap's", false,
+       [](nlohmann::json& j) { j["layers"][0]["overlap_enclosure"] = {"0x1p-60", "0x1p-59"}; }},
       {"neither filter nor exact", false, [](nlohmann::json& j) { j["layers"][0]["omv_rounded_by"] = "guess"; }},
       {"rationals in a layer that says it has none", false, [](nlohmann::json& j) {
          j["layers"][0]["rational"] = false;
