@@ -48,6 +48,11 @@ std::string layer_path(OmvPath path, size_t overlapping_boxes) {
   return path == OmvPath::kClip ? "clip" : path == OmvPath::kNef ? "nef" : "filtered";
 }
 
+// Two enclosures with the same ends, exactly.
+bool same_enclosure(const MpInterval& a, const MpInterval& b) {
+  return a.lo_rational() == b.lo_rational() && a.hi_rational() == b.hi_rational();
+}
+
 MpInterval sum_of(const std::vector<MpInterval>& xs) {
   MpInterval s(0);
   for (const MpInterval& x : xs) s += x;  // in order: the same enclosure on every run
@@ -91,6 +96,7 @@ Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& op
   std::vector<Enclosed> obv(tree.nodes.size());
   if (resume && !resume->obv.empty()) {
     obv = resume->obv;
+    for (const Enclosed& e : obv) cert.exact_obv += e.exact ? 1 : 0;
     say("OBV of " + std::to_string(tree.nodes.size()) + " boxes: from the checkpoint");
   } else {
     const auto tobv = std::chrono::steady_clock::now();
@@ -105,17 +111,15 @@ Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& op
       obv[id] = filtered.obv(box);
       if (options.rational && !obv[id].exact) obv[id].q = clip.obv(box);
     });
-    size_t fallbacks = 0;
-    for (const Enclosed& e : obv) fallbacks += e.exact ? 1 : 0;
+    for (const Enclosed& e : obv) cert.exact_obv += e.exact ? 1 : 0;
     char buf[160];
     std::snprintf(buf, sizeof buf, "OBV of %zu boxes in %.2f s (%zu in rationals)", tree.nodes.size(),
-                  seconds_since(tobv), fallbacks);
+                  seconds_since(tobv), cert.exact_obv);
     say(buf);
   }
   if (options.rational)  // every rational inside its enclosure, or the filter is broken
     for (size_t id = 0; id < obv.size(); ++id)
       VOBB_ASSERT(obv[id].value.contains(obv[id].q), "the OBV of a box lies outside its enclosure");
-  for (const Enclosed& e : obv) cert.exact_obv += e.exact ? 1 : 0;
   if (options.checkpoint) done.obv = obv;
 
   const int levels = tree.depth + 1;
@@ -142,9 +146,6 @@ Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& op
     for (char c : o) n += c ? 1 : 0;
     return n;
   };
-  auto same = [](const MpInterval& a, const MpInterval& b) {
-    return a.lo_rational() == b.lo_rational() && a.hi_rational() == b.hi_rational();
-  };
   std::vector<char> resumed(levels, 0);
   size_t taken = 0, again = 0;
   if (resume)
@@ -153,7 +154,7 @@ Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& op
                   "a resumed state fits the tree (CertifyCheckpoint::load checks it)");
       const size_t overlapping = overlap_count(clip.earlier_neighbours(layer_boxes(lc.level)));
       if (lc.boxes != ids[lc.level].size() || lc.overlapping_boxes != overlapping ||
-          lc.omv_path != layer_path(options.path, overlapping) || !same(lc.sum_obv_enclosure, layer_sum_obv(lc.level)) ||
+          lc.omv_path != layer_path(options.path, overlapping) || !same_enclosure(lc.sum_obv_enclosure, layer_sum_obv(lc.level)) ||
           (all_rational && !lc.rational)) {
         ++again;
         continue;
@@ -206,6 +207,8 @@ Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& op
       // The filter's overlap term, box by box, the boxes split across the threads.
       std::vector<Enclosed> terms(boxes.size());
       const bool filter_overlap = lc.omv_path == "filtered" || lc.omv_path == "both";
+      // A rational path (and both, whose OMV is Nef's) reports its rationals rounded.
+      const bool rational_path = all_rational || lc.omv_path == "both";
       if (filter_overlap)
         tbb::parallel_for(size_t{0}, boxes.size(),
                           [&](size_t j) { terms[j] = filtered.overlap_term(boxes, j, earlier[j]); });
@@ -249,9 +252,7 @@ Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& op
         std::stable_sort(widest.begin(), widest.end(), [&](size_t a, size_t b) {
           return terms[a].value.sup() - terms[a].value.inf() > terms[b].value.sup() - terms[b].value.inf();
         });
-        // A rational path (and both, whose OMV is Nef's) rounds its rationals: nothing to refine.
-        const bool rounds_rationals = all_rational || lc.omv_path == "both";
-        for (size_t refined = 0; !rounds_rationals && refined < widest.size() && !decides();) {
+        for (size_t refined = 0; !rational_path && refined < widest.size() && !decides();) {
           const size_t end = std::min(widest.size(), refined + std::max<size_t>(16, widest.size() / 8));
           tbb::parallel_for(refined, end, [&](size_t k) {
             const size_t j = widest[k];
@@ -294,10 +295,8 @@ Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& op
         lc.upper_bound = lc.sum_obv >= lc.omv;
         lc.bound_by = "exact";
       }
-      // The nearest doubles: the path's rationals rounded on a rational path (and on both,
-      // where Nef's OMV is the one reported); otherwise the filter's where its enclosure lies in
-      // one rounding cell, and the rationals' where it does not.
-      const bool rational_path = all_rational || lc.omv_path == "both";
+      // The nearest doubles: the path's rationals rounded on a rational path; otherwise the
+      // filter's where its enclosure lies in one rounding cell, and the rationals' where not.
       auto round = [&](const MpInterval& enclosure, const std::function<Rational()>& exact, double* out,
                        std::string* by) {
         if (!rational_path && enclosure.nearest(out)) {
@@ -744,13 +743,10 @@ Status CertifyCheckpoint::load(const Tree& tree, CertifyState* state, bool* foun
         }
         if (l.omv_path == "filtered" && l.rational) l.paths_agree = l.omv_enclosure.contains(l.omv);
         // What the layer says must follow from its own values, as certify makes them.
-        auto same = [](const MpInterval& a, const MpInterval& b) {
-          return a.lo_rational() == b.lo_rational() && a.hi_rational() == b.hi_rational();
-        };
-        if (l.omv_path == "none" && (!same(l.omv_enclosure, l.sum_obv_enclosure) || (l.rational && l.omv != l.sum_obv)))
+        if (l.omv_path == "none" && (!same_enclosure(l.omv_enclosure, l.sum_obv_enclosure) || (l.rational && l.omv != l.sum_obv)))
           return bad(at + "path none, but OMV is not the sum of OBV");
         if ((l.omv_path == "filtered" || l.omv_path == "both") &&
-            !same(l.omv_enclosure, l.sum_obv_enclosure - l.overlap_enclosure))
+            !same_enclosure(l.omv_enclosure, l.sum_obv_enclosure - l.overlap_enclosure))
           return bad(at + "OMV's enclosure is not the sum of OBV's less the overlap's");
         if ((l.omv_path == "nef" || l.omv_path == "clip") && (!l.rational || !l.omv_enclosure.contains(l.omv)))
           return bad(at + "a rational path's OMV lies outside its enclosure");
