@@ -140,4 +140,11 @@ std::string format_nearest(const Rational& q) {
   return buf;
 }
 
+void enclose(const Rational& q, double* lo, double* hi) {
+  const double d = to_double_nearest(q);
+  const int c = cmp(Rational(d), q);
+  *lo = c > 0 ? std::nextafter(d, -INFINITY) : d;
+  *hi = c < 0 ? std::nextafter(d, INFINITY) : d;
+}
+
 }  // namespace vobb

@@ -41,6 +41,9 @@ Rational sum_pairwise(std::vector<Rational>& terms);
 // The double nearest to q (ties to even), as MPFR rounds it. mpq_get_d truncates instead.
 double to_double_nearest(const Rational& q);
 
+// [lo, hi]: the largest double <= q and the smallest double >= q (equal when q is a double).
+void enclose(const Rational& q, double* lo, double* hi);
+
 // "%.17g" of the correctly rounded double: the way every exact value is printed.
 std::string format_nearest(const Rational& q);
 

@@ -149,34 +149,6 @@ void ConvexCell::clip(const HalfSpace& h) {
   refresh_shadow();
 }
 
-std::vector<int> cap_cycle(const std::vector<int>& next, size_t edges) {
-  std::vector<int> cap;
-  int start = 0;
-  while (next[start] < 0) ++start;
-  int at = start;
-  do {
-    cap.push_back(at);
-    VOBB_ASSERT(static_cast<size_t>(at) < next.size() && next[at] >= 0, "open cap cycle in a cell's clip");
-    at = next[at];
-    VOBB_ASSERT(cap.size() <= edges, "cap cycle longer than its edges");
-  } while (at != start);
-  VOBB_ASSERT(cap.size() == edges, "cap edges form more than one cycle");
-  return cap;
-}
-
-std::vector<int> compact_faces(std::vector<std::vector<int>>* faces, size_t n_ids) {
-  std::vector<int> remap(n_ids, -1), old_of;
-  for (std::vector<int>& f : *faces)
-    for (int& id : f) {
-      if (remap[id] < 0) {
-        remap[id] = static_cast<int>(old_of.size());
-        old_of.push_back(id);
-      }
-      id = remap[id];
-    }
-  return old_of;
-}
-
 Rational ConvexCell::volume() const {
   if (faces_.empty()) return Rational(0);
   const QPoint& p = v_[faces_[0][0]];

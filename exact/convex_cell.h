@@ -12,64 +12,15 @@
 #include <utility>
 #include <vector>
 
+#include "common/cell_clip.h"
 #include "common/exact_predicates.h"
 #include "common/mesh.h"
 #include "common/obb.h"
 
 namespace vobb::exact {
 
-// The cap's vertex cycle from its edges: next[b] = a for each kept edge a -> b on the plane (-1
-// where none), `edges` of them.
-std::vector<int> cap_cycle(const std::vector<int>& next, size_t edges);
-
-// The combinatorial step of clipping a cell, shared by every number type's cell (ConvexCell
-// here, the filter's in exact/filtered_solver.cpp). Given the faces (vertex cycles, counter-
-// clockwise from outside) of a cell with `n` vertices and each vertex's side of a plane (-1 in,
-// 0 on, +1 out; some -1 and some +1), returns the faces of the part on the closed inner side,
-// the cut closed by a cap face. `cut(a, b)` (a < b) is called once per edge that crosses the
-// plane and returns the id of the crossing point it made (n and upward). Vertex ids are those
-// of the cell, then the cut points; compact_faces() renumbers them.
-template <class Cut>
-std::vector<std::vector<int>> clipped_faces(const std::vector<std::vector<int>>& faces, const std::vector<int>& side,
-                                            int n, Cut&& cut) {
-  std::vector<std::pair<long long, int>> made;  // edge (a, b), a < b -> its crossing point: few
-  auto cut_point = [&](int a, int b) {
-    const long long key = static_cast<long long>(std::min(a, b)) * (1LL << 31) + std::max(a, b);
-    for (const auto& [k, id] : made)
-      if (k == key) return id;
-    const int id = cut(std::min(a, b), std::max(a, b));
-    made.emplace_back(key, id);
-    return id;
-  };
-  auto on_plane = [&](int id) { return id >= n || side[id] == 0; };
-  std::vector<std::vector<int>> kept;
-  std::vector<int> cap_next;  // cap edge b -> a for each kept edge a -> b on the plane
-  size_t cap_edges = 0;
-  for (const std::vector<int>& f : faces) {
-    std::vector<int> poly;
-    const size_t m = f.size();
-    for (size_t k = 0; k < m; ++k) {
-      const int a = f[k], b = f[(k + 1) % m];
-      if (side[a] <= 0) poly.push_back(a);
-      if (side[a] * side[b] < 0) poly.push_back(cut_point(a, b));
-    }
-    if (poly.size() < 3) continue;
-    for (size_t k = 0; k < poly.size(); ++k) {
-      const int a = poly[k], b = poly[(k + 1) % poly.size()];
-      if (!on_plane(a) || !on_plane(b)) continue;
-      if (static_cast<size_t>(b) >= cap_next.size()) cap_next.resize(b + 1, -1);
-      cap_edges += cap_next[b] < 0 ? 1 : 0;
-      cap_next[b] = a;
-    }
-    kept.push_back(std::move(poly));
-  }
-  if (cap_edges >= 3) kept.push_back(cap_cycle(cap_next, cap_edges));
-  return kept;
-}
-
-// Renumbers the faces' vertex ids 0, 1, ... in order of first use; returns each new id's old
-// id (the vertices to keep, in their new order).
-std::vector<int> compact_faces(std::vector<std::vector<int>>* faces, size_t n_ids);
+using cell_clip::clipped_faces;  // the combinatorial step, shared with every number type's cell
+using cell_clip::compact_faces;
 
 struct QPoint {
   Rational x[3];

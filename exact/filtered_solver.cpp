@@ -7,6 +7,7 @@
 #include <unordered_map>
 
 #include "common/box_frame_clip.h"
+#include "common/cell_clip.h"
 #include "common/status.h"
 #include "exact/convex_cell.h"
 
@@ -106,30 +107,10 @@ struct Sides {
   bool any_pos = false, any_neg = false;
 };
 
-// The prism decomposition runs along +z; a cell may take it along any of the six axis
-// directions instead, by an orientation-preserving map that sends that direction to +z
-// (coordinates permuted, one negated where needed: exact in any number type). Volumes and the
-// solid's orientation are kept, so vol(cell ∩ X) is the same whichever is taken.
-// Direction d: 0 +z, 1 -z, 2 +x, 3 -x, 4 +y, 5 -y.
-template <class T>
-std::array<T, 3> to_direction(int d, const T& x, const T& y, const T& z) {
-  switch (d) {
-    case 0: return {x, y, z};
-    case 1: return {y, x, T(-z)};
-    case 2: return {y, z, x};
-    case 3: return {z, y, T(-x)};
-    case 4: return {z, x, y};
-    default: return {x, z, T(-y)};
-  }
-}
-
-// The column above a cell's bounds along direction d.
-Aabb column_of(Aabb b, int d) {
-  static constexpr int kAxis[6] = {2, 2, 0, 0, 1, 1};
-  if (d % 2 == 0) b.hi[kAxis[d]] = INFINITY;
-  else b.lo[kAxis[d]] = -INFINITY;
-  return b;
-}
+// The prism decomposition runs along whichever axis direction has the fewest faces in the
+// cell's column (common/cell_clip.h: the same exact volume).
+using cell_clip::column_of;
+using cell_clip::to_direction;
 
 // A bounded convex polyhedron with enclosed vertices: ConvexCell's clipping (exact/convex_cell.h)
 // with every sign taken from the enclosures (double intervals first, then MpInterval; Undecided

@@ -7,26 +7,9 @@
 #include <optional>
 
 #include "common/box_frame_clip.h"
+#include "fast/interval.h"
 
 namespace vobb {
-
-using Interval = CGAL::Interval_nt<false>;  // operations assume upward rounding (a Protector)
-
-// The sign of x into *s where its enclosure decides it; false where it holds 0 and other values.
-inline bool decided_sign(const Interval& x, int* s) {
-  *s = x.inf() > 0 ? 1 : x.sup() < 0 ? -1 : 0;
-  return *s != 0 || (x.inf() == 0 && x.sup() == 0);
-}
-
-template <>
-struct box_clip::ClipTraits<Interval> {
-  // Throws CGAL::Uncertain_conversion_exception where the enclosure does not decide the sign.
-  static int sign(const Interval& x) {
-    int s;
-    if (!decided_sign(x, &s)) throw CGAL::Uncertain_conversion_exception("an undecided sign");
-    return s;
-  }
-};
 
 namespace {
 
@@ -103,13 +86,6 @@ PolyObv exact_result(const Rational& q, int32_t faces, std::string why) {
 }
 
 }  // namespace
-
-void enclose(const Rational& q, double* lo, double* hi) {
-  const double d = to_double_nearest(q);
-  const int c = cmp(Rational(d), q);
-  *lo = c > 0 ? std::nextafter(d, -INFINITY) : d;
-  *hi = c < 0 ? std::nextafter(d, INFINITY) : d;
-}
 
 PolyObvSolver::PolyObvSolver(const Mesh& mesh) : mesh_(mesh), faces_(AabbTree::over_faces(mesh)) {}
 

@@ -77,7 +77,4 @@ class PolyObvSolver {
   Damage damage_ = nullptr;
 };
 
-// [lo, hi]: the largest double <= q and the smallest double >= q (equal when q is a double).
-void enclose(const Rational& q, double* lo, double* hi);
-
 }  // namespace vobb

@@ -1,0 +1,363 @@
+// A convex cell's outer volume, vol(C \ X), for a cell C cut out of boxes by half-spaces,
+// written once over the number type (DESIGN §2, §4b; derivation in docs/derivations.md,
+// "The overlap of two boxes").
+//
+//   vol(C ∩ X) = sum over the mesh's faces f of sign(f) * vol(C ∩ prism(f)),
+// prism(f) the region below f (its shadow's three vertical sides and f's own plane), sign(f)
+// the sign of f's normal along the column direction: the signed prism decomposition that the
+// exact clipping path runs (exact/clip_solver.cpp), along whichever of ±x, ±y, ±z has the fewest
+// faces in the column above C (an orientation-preserving relabelling: the same exact volume).
+// Only the faces whose bounds meet that column are visited.
+//
+// NT is double (a point value, rounded), an interval type (an enclosure) or Rational (exact).
+// Every branch is a sign taken through box_clip::ClipTraits<NT>::sign; an interval type's
+// specialisation throws where its enclosure does not decide, and the caller then asks again
+// in rationals. With the same decisions the three follow the same arithmetic.
+// Degenerate contacts (a vertex or an edge on a plane) are handled; a cell clipped to nothing
+// or to a flat remainder is empty.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include "common/box_frame_clip.h"
+#include "common/bvh.h"
+#include "common/exact_predicates.h"
+#include "common/mesh.h"
+#include "common/obb.h"
+
+namespace vobb::cell_clip {
+
+// Thrown where a clip's sides are not those of any plane: the cap's edges do not close into one
+// cycle. Exact signs (rationals, or decided enclosures) never make it; rounded doubles can.
+struct InconsistentSides {};
+
+// The cap's vertex cycle from its edges: next[b] = a for each kept edge a -> b on the plane (-1
+// where none), `edges` of them. Throws InconsistentSides where they do not form one cycle.
+std::vector<int> cap_cycle(const std::vector<int>& next, size_t edges);
+
+// The combinatorial step of clipping a cell, shared by every number type's cell. Given the
+// faces (vertex cycles, counter-clockwise from outside) of a cell with `n` vertices and each
+// vertex's side of a plane (-1 in, 0 on, +1 out; some -1 and some +1), returns the faces of the
+// part on the closed inner side, the cut closed by a cap face. `cut(a, b)` (a < b) is called
+// once per edge that crosses the plane and returns the id of the crossing point it made (n and
+// upward). Vertex ids are those of the cell, then the cut points; compact_faces() renumbers.
+template <class Cut>
+std::vector<std::vector<int>> clipped_faces(const std::vector<std::vector<int>>& faces, const std::vector<int>& side,
+                                            int n, Cut&& cut) {
+  std::vector<std::pair<long long, int>> made;  // edge (a, b), a < b -> its crossing point: few
+  auto cut_point = [&](int a, int b) {
+    const long long key = static_cast<long long>(std::min(a, b)) * (1LL << 31) + std::max(a, b);
+    for (const auto& [k, id] : made)
+      if (k == key) return id;
+    const int id = cut(std::min(a, b), std::max(a, b));
+    made.emplace_back(key, id);
+    return id;
+  };
+  auto on_plane = [&](int id) { return id >= n || side[id] == 0; };
+  std::vector<std::vector<int>> kept;
+  std::vector<int> cap_next;  // cap edge b -> a for each kept edge a -> b on the plane
+  size_t cap_edges = 0;
+  for (const std::vector<int>& f : faces) {
+    std::vector<int> poly;
+    const size_t m = f.size();
+    for (size_t k = 0; k < m; ++k) {
+      const int a = f[k], b = f[(k + 1) % m];
+      if (side[a] <= 0) poly.push_back(a);
+      if (side[a] * side[b] < 0) poly.push_back(cut_point(a, b));
+    }
+    if (poly.size() < 3) continue;
+    for (size_t k = 0; k < poly.size(); ++k) {
+      const int a = poly[k], b = poly[(k + 1) % poly.size()];
+      if (!on_plane(a) || !on_plane(b)) continue;
+      if (static_cast<size_t>(b) >= cap_next.size()) cap_next.resize(b + 1, -1);
+      cap_edges += cap_next[b] < 0 ? 1 : 0;
+      cap_next[b] = a;
+    }
+    kept.push_back(std::move(poly));
+  }
+  if (cap_edges >= 3) kept.push_back(cap_cycle(cap_next, cap_edges));
+  return kept;
+}
+
+// Renumbers the faces' vertex ids 0, 1, ... in order of first use; returns each new id's old
+// id (the vertices to keep, in their new order).
+std::vector<int> compact_faces(std::vector<std::vector<int>>* faces, size_t n_ids);
+
+// A double interval [lo, hi] holding a value of NT (the value itself for double; see
+// NumberBounds' specialisations where NT is declared).
+template <class NT>
+struct NumberBounds;
+template <>
+struct NumberBounds<double> {
+  static std::pair<double, double> of(double x) { return {x, x}; }
+};
+template <>
+struct NumberBounds<Rational> {
+  static std::pair<double, double> of(const Rational& x);  // outward
+};
+
+// The closed half-space n . x <= d.
+template <class NT>
+struct Plane {
+  NT n[3];
+  NT d;
+  Plane complement() const {  // n . x >= d, as (-n) . x <= -d
+    return Plane{{-n[0], -n[1], -n[2]}, -d};
+  }
+};
+
+// The six half-spaces of a box's certified solid (DESIGN §1): |t_k| <= 1 with
+// t = [u0 u1 u2]^-1 (p - c), in Cramer form, for the frame's sign sigma = sign(det) != 0.
+template <class NT>
+std::array<Plane<NT>, 6> box_planes(const box_clip::Frame<NT>& f, int sigma) {
+  const NT abs_det = sigma > 0 ? f.det : NT(-f.det);
+  std::array<Plane<NT>, 6> out;
+  for (int k = 0; k < 3; ++k) {
+    NT wc = f.w[k][0] * f.c[0] + f.w[k][1] * f.c[1] + f.w[k][2] * f.c[2];
+    if (sigma < 0) wc = -wc;
+    Plane<NT>& plus = out[2 * k];
+    Plane<NT>& minus = out[2 * k + 1];
+    for (int i = 0; i < 3; ++i) {
+      plus.n[i] = sigma > 0 ? f.w[k][i] : NT(-f.w[k][i]);
+      minus.n[i] = -plus.n[i];
+    }
+    plus.d = abs_det + wc;
+    minus.d = abs_det - wc;
+  }
+  return out;
+}
+
+// Column direction d: 0 +z, 1 -z, 2 +x, 3 -x, 4 +y, 5 -y. The orientation-preserving map that
+// sends it to +z (coordinates permuted, one negated where needed: exact in any number type).
+template <class T>
+std::array<T, 3> to_direction(int d, const T& x, const T& y, const T& z) {
+  switch (d) {
+    case 0: return {x, y, z};
+    case 1: return {y, x, T(-z)};
+    case 2: return {y, z, x};
+    case 3: return {z, y, T(-x)};
+    case 4: return {z, x, y};
+    default: return {x, z, T(-y)};
+  }
+}
+
+// The column above `b` along direction d.
+inline Aabb column_of(Aabb b, int d) {
+  static constexpr int kAxis[6] = {2, 2, 0, 0, 1, 1};
+  if (d % 2 == 0) b.hi[kAxis[d]] = INFINITY;
+  else b.lo[kAxis[d]] = -INFINITY;
+  return b;
+}
+
+// A bounded convex polyhedron: vertices in NT, faces as vertex cycles counter-clockwise seen
+// from outside.
+template <class NT>
+class Cell {
+ public:
+  // The box's certified solid, its 8 corners c + sum_k (+-u_k); `orientation` = sign(det).
+  static Cell from_box(const box_clip::Frame<NT>& f, int orientation) {
+    Cell cell;
+    cell.v_.resize(8);
+    for (int c = 0; c < 8; ++c)
+      for (int i = 0; i < 3; ++i) {
+        NT x = f.c[i];
+        for (int k = 0; k < 3; ++k) x = ((c >> k) & 1) ? NT(x + f.u[k][i]) : NT(x - f.u[k][i]);
+        cell.v_[c][i] = x;
+      }
+    for (const auto& q : kBoxQuads) {
+      if (orientation > 0) cell.faces_.push_back({q[0], q[1], q[2], q[3]});
+      else cell.faces_.push_back({q[3], q[2], q[1], q[0]});
+    }
+    return cell;
+  }
+  bool empty() const { return faces_.empty(); }
+
+  // Each vertex's side of h: -1 in, 0 on, +1 out; their values n . v - d in *value.
+  void sides(const Plane<NT>& h, std::vector<int>* side, std::vector<NT>* value, bool* any_pos, bool* any_neg) const {
+    const size_t n = v_.size();
+    side->resize(n);
+    value->resize(n);
+    *any_pos = *any_neg = false;
+    for (size_t i = 0; i < n; ++i) {
+      (*value)[i] = h.n[0] * v_[i][0] + h.n[1] * v_[i][1] + h.n[2] * v_[i][2] - h.d;
+      (*side)[i] = box_clip::ClipTraits<NT>::sign((*value)[i]);
+      *any_pos |= (*side)[i] > 0;
+      *any_neg |= (*side)[i] < 0;
+    }
+  }
+
+  // The part in h.
+  Cell clipped(const Plane<NT>& h) const {
+    if (faces_.empty()) return Cell();
+    std::vector<int> side;
+    std::vector<NT> value;
+    bool any_pos, any_neg;
+    sides(h, &side, &value, &any_pos, &any_neg);
+    return clipped_with(side, value, any_pos, any_neg);
+  }
+
+  // The same, with the vertices' sides known (sides()).
+  Cell clipped_with(const std::vector<int>& side, const std::vector<NT>& value, bool any_pos, bool any_neg) const {
+    if (!any_pos) return *this;
+    Cell out;
+    if (!any_neg) return out;  // nothing strictly inside: empty, or flat on the plane
+    const int n = static_cast<int>(v_.size());
+    std::vector<std::array<NT, 3>> made;  // the cut points, ids n and upward
+    std::vector<std::vector<int>> kept = clipped_faces(faces_, side, n, [&](int lo, int hi) {
+      const NT t = value[lo] / (value[lo] - value[hi]);
+      std::array<NT, 3>& p = made.emplace_back();
+      for (int i = 0; i < 3; ++i) p[i] = v_[lo][i] + t * (v_[hi][i] - v_[lo][i]);
+      return n + static_cast<int>(made.size()) - 1;
+    });
+    if (kept.size() < 4) return out;  // cannot enclose volume
+    const std::vector<int> old = compact_faces(&kept, n + made.size());
+    out.v_.reserve(old.size());
+    for (int k : old) out.v_.push_back(k < n ? v_[k] : made[k - n]);
+    out.faces_ = std::move(kept);
+    return out;
+  }
+
+  // The cell under to_direction(d).
+  Cell mapped(int d) const {
+    Cell out;
+    out.faces_ = faces_;
+    out.v_.reserve(v_.size());
+    for (const auto& p : v_) out.v_.push_back(to_direction(d, p[0], p[1], p[2]));
+    return out;
+  }
+
+  // Cones from the first face's first vertex; a face through it adds nothing.
+  NT volume() const {
+    if (faces_.empty()) return NT(0);
+    const int apex = faces_[0][0];
+    const std::array<NT, 3>& p = v_[apex];
+    NT sum(0);
+    for (const std::vector<int>& f : faces_) {
+      if (std::find(f.begin(), f.end(), apex) != f.end()) continue;
+      NT a[3];
+      for (int i = 0; i < 3; ++i) a[i] = v_[f[0]][i] - p[i];
+      for (size_t k = 1; k + 1 < f.size(); ++k) {
+        NT b[3], c[3];
+        for (int i = 0; i < 3; ++i) {
+          b[i] = v_[f[k]][i] - p[i];
+          c[i] = v_[f[k + 1]][i] - p[i];
+        }
+        sum += a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
+               a[2] * (b[0] * c[1] - b[1] * c[0]);
+      }
+    }
+    return sum / NT(6);
+  }
+
+  // Axis-aligned bounds holding the cell's vertices as NumberBounds encloses them.
+  Aabb bounds() const {
+    Aabb b;
+    for (const auto& p : v_)
+      for (int i = 0; i < 3; ++i) {
+        const auto [lo, hi] = NumberBounds<NT>::of(p[i]);
+        b.lo[i] = std::min(b.lo[i], lo);
+        b.hi[i] = std::max(b.hi[i], hi);
+      }
+    return b;
+  }
+
+ private:
+  std::vector<std::array<NT, 3>> v_;
+  std::vector<std::vector<int>> faces_;
+};
+
+// The intersection of two boxes' certified solids as a cell (empty where either is flat or
+// they do not meet in volume).
+template <class NT>
+Cell<NT> box_pair_cell(const Obb& a, const Obb& b) {
+  const box_clip::Frame<NT> fa = box_clip::make_frame<NT>(a);
+  const box_clip::Frame<NT> fb = box_clip::make_frame<NT>(b);
+  const int sa = box_clip::ClipTraits<NT>::sign(fa.det), sb = box_clip::ClipTraits<NT>::sign(fb.det);
+  if (sa == 0 || sb == 0) return Cell<NT>();
+  Cell<NT> cell = Cell<NT>::from_box(fa, sa);
+  for (const Plane<NT>& h : box_planes(fb, sb)) {
+    cell = cell.clipped(h);
+    if (cell.empty()) break;
+  }
+  return cell;
+}
+
+// vol(cell \ X): the cell's volume less the signed prism decomposition of X within it, over
+// the faces of `faces` (AabbTree::over_faces(mesh)) that meet the column above `reach`, a
+// double box that holds the exact cell. The direction and the faces are chosen from `reach`
+// alone, so every number type takes the same ones: then, where an interval type decides every
+// sign, each double value lies in its enclosure, the result included.
+template <class NT>
+NT outside_volume(const Mesh& mesh, const AabbTree& faces, const Cell<NT>& cell_xyz, const Aabb& reach) {
+  if (cell_xyz.empty()) return NT(0);
+  const NT vol = cell_xyz.volume();
+  const Aabb& bounds = reach;
+  int dir = 0;
+  size_t fewest = SIZE_MAX;
+  for (int d = 0; d < 6; ++d) {
+    size_t n = 0;
+    const Aabb column = column_of(bounds, d);
+    faces.visit_accepted([&](const Aabb& b) { return column.overlaps(b); }, [&](int32_t) { ++n; });
+    if (n < fewest) fewest = n, dir = d;
+  }
+  const Cell<NT> cell = cell_xyz.mapped(dir);
+  NT inside(0);
+  long whole = 0;
+  std::vector<int> side;
+  std::vector<NT> value;
+  const Aabb column = column_of(bounds, dir);
+  faces.visit_accepted([&](const Aabb& b) { return column.overlaps(b); }, [&](int32_t f) {
+    Vec3 q[3];
+    for (int k = 0; k < 3; ++k) {
+      const Vec3& p = mesh.corner(f, k);
+      const std::array<double, 3> m = to_direction(dir, p[0], p[1], p[2]);
+      q[k] = Vec3(m[0], m[1], m[2]);
+    }
+    const int sign = orient2d(q[0], q[1], q[2], 0, 1);  // the sign of the face normal's z, exactly
+    if (sign == 0) return;                              // a vertical face bounds no column
+    // The prism's 4 half-spaces: the 3 vertical sides through its edges, then below its plane.
+    Plane<NT> h[4];
+    for (int k = 0; k < 3; ++k) {
+      const Vec3& a = q[k];
+      const Vec3& b = q[(k + 1) % 3];
+      h[k].n[0] = NT(b[1]) - NT(a[1]);
+      h[k].n[1] = NT(a[0]) - NT(b[0]);
+      h[k].n[2] = NT(0);
+      if (sign < 0) h[k].n[0] = -h[k].n[0], h[k].n[1] = -h[k].n[1];
+      h[k].d = h[k].n[0] * NT(a[0]) + h[k].n[1] * NT(a[1]);
+    }
+    {
+      NT e1[3], e2[3];
+      for (int i = 0; i < 3; ++i) e1[i] = NT(q[1][i]) - NT(q[0][i]), e2[i] = NT(q[2][i]) - NT(q[0][i]);
+      const NT nrm[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+      for (int i = 0; i < 3; ++i) h[3].n[i] = sign > 0 ? nrm[i] : NT(-nrm[i]);
+      h[3].d = h[3].n[0] * NT(q[0][0]) + h[3].n[1] * NT(q[0][1]) + h[3].n[2] * NT(q[0][2]);
+    }
+    const Plane<NT>* cutting[4];
+    int n_cutting = 0;
+    for (int k = 0; k < 4; ++k) {
+      bool any_pos, any_neg;
+      cell.sides(h[k], &side, &value, &any_pos, &any_neg);
+      if (!any_neg) return;  // beyond or on the plane: the prism adds no volume
+      if (any_pos) cutting[n_cutting++] = &h[k];
+    }
+    if (n_cutting == 0) {
+      whole += sign;
+      return;
+    }
+    Cell<NT> piece = cell.clipped(*cutting[0]);
+    for (int k = 1; k < n_cutting && !piece.empty(); ++k) piece = piece.clipped(*cutting[k]);
+    if (piece.empty()) return;
+    if (sign > 0) inside += piece.volume();
+    else inside -= piece.volume();
+  });
+  if (whole != 0) inside += NT(static_cast<double>(whole)) * vol;
+  return vol - inside;
+}
+
+}  // namespace vobb::cell_clip
