@@ -32,6 +32,7 @@
 #include "exact/outer_volume.h"
 #include "fast/cpu_estimator.h"
 #include "fast/gl_estimator.h"
+#include "fast/poly_overlap.h"
 #include "fast/poly_solver.h"
 #include "fast/obbtree_builder.h"
 #include "fast/tree_figure.h"
@@ -74,6 +75,7 @@ struct BuildFlags {
   int sweeps = 3;
   int threads = 0;             // CPU twin's threads; 0: all the cores this process may use
   double collider_margin = 0;  // world units; 0: the paper's objective
+  std::string objective = "obv";  // obv: sum of OBV; omv: less each pair's overlap term
   // Query files (validate/collision/query_objective.h): when given, the objective is the
   // recorded queries that hit each box, not its OBV, and no OBV estimator is made.
   std::vector<std::string> queries;
@@ -96,6 +98,10 @@ void say_renderer(const vobb::GlContext& gl) {
 // another machine of that kind, so the small gaps are rough). With fewer cores the twin slows
 // and GL hardly does.
 constexpr int kAutoGlFromM = 128;
+
+const char* const kObjectiveHelp =
+    "What the variational search minimises per set of boxes: obv (the sum of their OBV) or omv (that sum less "
+    "what each shares outside the solid with those before it, by the polyhedral solver: their OMV)";
 
 // The OBV estimator that the variational builder runs in its loop. auto: the GL estimator on an
 // EGL device (a GPU) from m = kAutoGlFromM; below that m, on llvmpipe, or without a context,
@@ -154,7 +160,8 @@ std::string build_fingerprint(const vobb::Mesh& mesh, const BuildFlags& f, const
          "; estimator " + (gl ? "gl " + gl->renderer() : f.backend == "poly" ? std::string("poly") : std::string("cpu")) +
          // Named only when set, so that states saved before the option existed still resume.
          (f.collider_margin > 0 ? "; collider margin " + vobb::format_double(f.collider_margin) : std::string()) +
-         (f.queries.empty() ? std::string() : "; recorded queries " + f.queries_digest);
+         (f.queries.empty() ? std::string() : "; recorded queries " + f.queries_digest) +
+         (f.objective == "omv" ? "; objective omv" : "");
 }
 
 vobb::Status build_tree(const vobb::Mesh& mesh, const BuildFlags& f, const vobb::ObvEstimate& estimate,
@@ -176,6 +183,15 @@ vobb::Status build_tree(const vobb::Mesh& mesh, const BuildFlags& f, const vobb:
   opt.max_sweeps = f.sweeps;
   opt.seed = f.seed;
   opt.margin = f.collider_margin;
+  // The overlap-aware objective's shares: the polyhedral solver's doubles, whatever the OBV
+  // estimator (the cubemap has no form for them).
+  std::unique_ptr<vobb::PolyOverlapSolver> pairs;
+  if (f.objective == "omv") {
+    opt.objective = vobb::Objective::kOmv;
+    pairs = std::make_unique<vobb::PolyOverlapSolver>(mesh);
+    const vobb::PolyOverlapSolver* p = pairs.get();
+    opt.share = [p](const std::vector<vobb::ShareQuery>& v) { return p->estimate(v); };
+  }
   opt.concurrent_estimates = true;  // both estimators may be called from several threads at once
   const auto t0 = std::chrono::steady_clock::now();
   if (f.time_budget > 0) opt.out_of_time = [&] { return seconds_since(t0) > f.time_budget; };
@@ -205,7 +221,8 @@ vobb::Status build_tree(const vobb::Mesh& mesh, const BuildFlags& f, const vobb:
           std::snprintf(eta, sizeof eta, "  ~%.0f s left to split", now * (1 - p.done) / (p.done - done0));
         std::fprintf(stderr, "%svobb: level %d/%d  nodes done %zu/%zu  iteration %d/%d  sum %s %.6g  %.1f s%s%s", start,
                      p.level, f.depth, p.node, p.nodes, p.iteration, f.lloyd,
-                     !f.queries.empty() ? "hits" : f.collider_margin > 0 ? "grown OBV" : "OBV", p.sum_obv, now, eta, end);
+                     !f.queries.empty() ? "hits" : f.collider_margin > 0 ? "grown OBV" : "OBV",
+                     p.sum_obv, now, eta, end);
       } else {
         if (p.sweep_done > 0.02)
           std::snprintf(eta, sizeof eta, "  ~%.0f s left in this sweep",
@@ -253,9 +270,11 @@ vobb::Status build_tree(const vobb::Mesh& mesh, const BuildFlags& f, const vobb:
   if (!f.quiet && last >= 0 && tty) std::fprintf(stderr, "\n");
   if (!f.quiet)
     std::fprintf(stderr,
-                 "vobb: %zu boxes estimated (%zu more measured again, from the search's record), %zu adjusted splits "
-                 "and %zu merges kept, %d sweeps (%zu regroupings unchanged since they found no move, not run again)%s\n",
-                 report.estimates, report.reused, report.adjustments, report.merges, report.sweeps, report.regroups_skipped,
+                 "vobb: %zu boxes estimated (%zu more measured again, from the search's record), %zu shares of "
+                 "overlap estimated, %zu adjusted splits and %zu merges kept, %d sweeps (%zu regroupings unchanged since they "
+                 "found no move, not run again)%s\n",
+                 report.estimates, report.reused, report.overlaps, report.adjustments, report.merges, report.sweeps,
+                 report.regroups_skipped,
                  report.budget_spent ? "; time budget spent: the rest got the baseline split" : "");
   return vobb::Status::ok();
 }
@@ -298,6 +317,8 @@ int run_build(const std::string& mesh_path, const std::string& out, BuildFlags f
     return refuse(vobb::Status::error("--queries applies to --method variational only"));
   if (!f.queries.empty() && f.collider_margin > 0)
     return refuse(vobb::Status::error("--queries and --collider-margin are two objectives; choose one"));
+  if (!f.queries.empty() && f.objective == "omv")
+    return refuse(vobb::Status::error("--queries and --objective omv are two objectives; choose one"));
   // The baseline takes well under a second and has no search to budget or resume.
   if (!f.checkpoint.empty() && f.method != "variational")
     return refuse(vobb::Status::error("--checkpoint applies to --method variational only"));
@@ -920,6 +941,8 @@ int main(int argc, char** argv) {
   build->add_flag("--no-axis-search", bf.no_axis_search, "Ablation: keep covariance axes (no orientation search)");
   build->add_flag("--adjust", bf.adjust, "Also run the adjustment step (Lloyd from other planar splits at levels 1-4; measured to raise e, so off)");
   build->add_flag("--no-merge", bf.no_merge, "Ablation: no bottom-up merging sweeps");
+  build->add_option("--objective", bf.objective, kObjectiveHelp)
+      ->capture_default_str()->check(CLI::IsMember({"obv", "omv"}));
   build->add_option("--sweeps", bf.sweeps, "Most bottom-up merging sweeps")->capture_default_str()->check(CLI::Range(0, 100));
   build->add_option("--collider-margin", bf.collider_margin,
                     "Variational: minimise the OBV of each box grown by this length on every side (world units), "
@@ -990,6 +1013,8 @@ int main(int argc, char** argv) {
   cmp->add_flag("--no-axis-search", cf.no_axis_search, "Ablation: keep covariance axes");
   cmp->add_flag("--adjust", cf.adjust, "Also run the adjustment step (see build --help)");
   cmp->add_flag("--no-merge", cf.no_merge, "Ablation: no bottom-up merging sweeps");
+  cmp->add_option("--objective", cf.objective, kObjectiveHelp)
+      ->capture_default_str()->check(CLI::IsMember({"obv", "omv"}));
   cmp->add_option("--sweeps", cf.sweeps, "Most bottom-up merging sweeps")->capture_default_str()->check(CLI::Range(0, 100));
   cmp->add_option("--checkpoint", cf.checkpoint, "Folder for the variational build's state after each level and sweep, "
                   "as for build (the same flags make the same build: either command resumes the other's), and "

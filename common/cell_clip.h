@@ -21,6 +21,8 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <optional>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -159,6 +161,13 @@ inline Aabb column_of(Aabb b, int d) {
 template <class NT>
 class Cell {
  public:
+  // NT = double only: a vertex whose value n . v - d is within `snap` of the magnitude
+  // |n_0 v_0| + |n_1 v_1| + |n_2 v_2| + |d| counts as on the plane. 0 takes the rounded signs as
+  // they are; a snap makes rounded signs that contradict each other (InconsistentSides) near a
+  // degenerate contact agree, at the price of a volume off by about that much. Kept by every
+  // cell made from this one.
+  double snap = 0;
+
   // The box's certified solid, its 8 corners c + sum_k (+-u_k); `orientation` = sign(det).
   static Cell from_box(const box_clip::Frame<NT>& f, int orientation) {
     Cell cell;
@@ -176,6 +185,8 @@ class Cell {
     return cell;
   }
   bool empty() const { return faces_.empty(); }
+  const std::vector<std::array<NT, 3>>& vertices() const { return v_; }
+  const std::vector<std::vector<int>>& faces() const { return faces_; }
 
   // Each vertex's side of h: -1 in, 0 on, +1 out; their values n . v - d in *value.
   void sides(const Plane<NT>& h, std::vector<int>* side, std::vector<NT>* value, bool* any_pos, bool* any_neg) const {
@@ -186,6 +197,13 @@ class Cell {
     for (size_t i = 0; i < n; ++i) {
       (*value)[i] = h.n[0] * v_[i][0] + h.n[1] * v_[i][1] + h.n[2] * v_[i][2] - h.d;
       (*side)[i] = box_clip::ClipTraits<NT>::sign((*value)[i]);
+      if constexpr (std::is_same_v<NT, double>) {
+        if (snap > 0 && (*side)[i] != 0) {
+          double mag = std::abs(h.d);
+          for (int k = 0; k < 3; ++k) mag += std::abs(h.n[k] * v_[i][k]);
+          if (std::abs((*value)[i]) <= snap * mag) (*side)[i] = 0;
+        }
+      }
       *any_pos |= (*side)[i] > 0;
       *any_neg |= (*side)[i] < 0;
     }
@@ -205,6 +223,7 @@ class Cell {
   Cell clipped_with(const std::vector<int>& side, const std::vector<NT>& value, bool any_pos, bool any_neg) const {
     if (!any_pos) return *this;
     Cell out;
+    out.snap = snap;
     if (!any_neg) return out;  // nothing strictly inside: empty, or flat on the plane
     const int n = static_cast<int>(v_.size());
     std::vector<std::array<NT, 3>> made;  // the cut points, ids n and upward
@@ -225,6 +244,7 @@ class Cell {
   // The cell under to_direction(d).
   Cell mapped(int d) const {
     Cell out;
+    out.snap = snap;
     out.faces_ = faces_;
     out.v_.reserve(v_.size());
     for (const auto& p : v_) out.v_.push_back(to_direction(d, p[0], p[1], p[2]));
@@ -274,18 +294,106 @@ class Cell {
 // The intersection of two boxes' certified solids as a cell (empty where either is flat or
 // they do not meet in volume).
 template <class NT>
-Cell<NT> box_pair_cell(const Obb& a, const Obb& b) {
+Cell<NT> box_pair_cell(const Obb& a, const Obb& b, double snap = 0) {
   const box_clip::Frame<NT> fa = box_clip::make_frame<NT>(a);
   const box_clip::Frame<NT> fb = box_clip::make_frame<NT>(b);
   const int sa = box_clip::ClipTraits<NT>::sign(fa.det), sb = box_clip::ClipTraits<NT>::sign(fb.det);
   if (sa == 0 || sb == 0) return Cell<NT>();
   Cell<NT> cell = Cell<NT>::from_box(fa, sa);
+  cell.snap = snap;
   for (const Plane<NT>& h : box_planes(fb, sb)) {
     cell = cell.clipped(h);
     if (cell.empty()) break;
   }
   return cell;
 }
+
+// The double path's shortcut for a face whose shadow lies in the shadow of one upper and one
+// lower facet of the cell: there the cell's chord, and the part of it below the face, are
+// linear over the shadow wherever the face lies wholly above the cell, below it, or between its
+// facets, and the integral of a linear function over a triangle is its area times its mean at
+// the corners. The face's signed prism volume then needs no clipping. The decisions are taken
+// in rounded doubles (an estimate; the interval and rational paths always clip).
+class ChordMap {
+ public:
+  explicit ChordMap(const Cell<double>& cell) {
+    const auto& v = cell.vertices();
+    for (const std::vector<int>& f : cell.faces()) {
+      // The facet's normal by Newell's sum; its z sign says upper (> 0) or lower (< 0).
+      double n[3] = {0, 0, 0};
+      for (size_t k = 0; k < f.size(); ++k) {
+        const auto& a = v[f[k]];
+        const auto& b = v[f[(k + 1) % f.size()]];
+        n[0] += (a[1] - b[1]) * (a[2] + b[2]);
+        n[1] += (a[2] - b[2]) * (a[0] + b[0]);
+        n[2] += (a[0] - b[0]) * (a[1] + b[1]);
+      }
+      const double len = std::abs(n[0]) + std::abs(n[1]) + std::abs(n[2]);
+      if (!(std::abs(n[2]) > 1e-9 * len)) continue;  // (nearly) vertical: bounds no chord
+      Facet facet;
+      const auto& p = v[f[0]];
+      // z over the facet's plane: z = z0 - (n0 (x - x0) + n1 (y - y0)) / n2.
+      facet.gx = -n[0] / n[2];
+      facet.gy = -n[1] / n[2];
+      facet.z0 = p[2] - facet.gx * p[0] - facet.gy * p[1];
+      const bool upper = n[2] > 0;
+      // Shadow edges, oriented so that the inside is to their left.
+      for (size_t k = 0; k < f.size(); ++k) {
+        const auto& a = v[f[k]];
+        const auto& b = v[f[(k + 1) % f.size()]];
+        if (upper) facet.edges.push_back({a[0], a[1], b[0], b[1]});
+        else facet.edges.push_back({b[0], b[1], a[0], a[1]});
+      }
+      (upper ? top_ : bottom_).push_back(std::move(facet));
+    }
+  }
+
+  // The face's signed vol(cell ∩ prism(face)) into *term, where the shortcut applies.
+  bool prism_volume(const Vec3 (&q)[3], double* term) const {
+    const Facet* t = holding(top_, q);
+    if (t == nullptr) return false;
+    const Facet* b = holding(bottom_, q);
+    if (b == nullptr) return false;
+    double above = 0, below = 0, mean = 0;
+    double zt[3], zb[3];
+    for (int k = 0; k < 3; ++k) {
+      zt[k] = t->z(q[k]);
+      zb[k] = b->z(q[k]);
+      above += q[k][2] >= zt[k];
+      below += q[k][2] <= zb[k];
+    }
+    if (below == 3) {  // the face under the cell: its prism holds none of it
+      *term = 0;
+      return true;
+    }
+    const bool over = above == 3;
+    for (int k = 0; k < 3; ++k) {
+      if (!over && (q[k][2] < zb[k] || q[k][2] > zt[k])) return false;  // crossing a facet: clip
+      mean += (over ? zt[k] : q[k][2]) - zb[k];
+    }
+    const double twice_area = (q[1][0] - q[0][0]) * (q[2][1] - q[0][1]) - (q[1][1] - q[0][1]) * (q[2][0] - q[0][0]);
+    *term = twice_area * mean / 6;  // signed by the shadow's orientation, as the face's sign
+    return true;
+  }
+
+ private:
+  struct Facet {
+    double gx = 0, gy = 0, z0 = 0;
+    std::vector<std::array<double, 4>> edges;  // ax, ay, bx, by
+    double z(const Vec3& p) const { return z0 + gx * p[0] + gy * p[1]; }
+    bool holds(const Vec3& p) const {
+      for (const auto& e : edges)
+        if ((e[2] - e[0]) * (p[1] - e[1]) - (e[3] - e[1]) * (p[0] - e[0]) < 0) return false;
+      return true;
+    }
+  };
+  static const Facet* holding(const std::vector<Facet>& facets, const Vec3 (&q)[3]) {
+    for (const Facet& f : facets)
+      if (f.holds(q[0]) && f.holds(q[1]) && f.holds(q[2])) return &f;
+    return nullptr;
+  }
+  std::vector<Facet> top_, bottom_;
+};
 
 // vol(cell \ X): the cell's volume less the signed prism decomposition of X within it, over
 // the faces of `faces` (AabbTree::over_faces(mesh)) that meet the column above `reach`, a
@@ -306,6 +414,8 @@ NT outside_volume(const Mesh& mesh, const AabbTree& faces, const Cell<NT>& cell_
     if (n < fewest) fewest = n, dir = d;
   }
   const Cell<NT> cell = cell_xyz.mapped(dir);
+  std::optional<ChordMap> chords;
+  if constexpr (std::is_same_v<NT, double>) chords.emplace(cell);
   NT inside(0);
   long whole = 0;
   std::vector<int> side;
@@ -320,6 +430,13 @@ NT outside_volume(const Mesh& mesh, const AabbTree& faces, const Cell<NT>& cell_
     }
     const int sign = orient2d(q[0], q[1], q[2], 0, 1);  // the sign of the face normal's z, exactly
     if (sign == 0) return;                              // a vertical face bounds no column
+    if constexpr (std::is_same_v<NT, double>) {
+      double term;
+      if (chords->prism_volume(q, &term)) {
+        inside += term;
+        return;
+      }
+    }
     // The prism's 4 half-spaces: the 3 vertical sides through its edges, then below its plane.
     Plane<NT> h[4];
     for (int k = 0; k < 3; ++k) {
@@ -358,6 +475,73 @@ NT outside_volume(const Mesh& mesh, const AabbTree& faces, const Cell<NT>& cell_
   });
   if (whole != 0) inside += NT(static_cast<double>(whole)) * vol;
   return vol - inside;
+}
+
+// The cells that make up S = B ∩ (E_0 ∪ ... ∪ E_{k-1}): B split against each E_i in turn, the
+// part of what no earlier E covers that lies in E_i being a cell of S (the clipping path's
+// split, exact/clip_solver.cpp). Disjoint; empty where B is flat or meets none of them.
+template <class NT>
+std::vector<Cell<NT>> shared_cells(const Obb& box, const std::vector<Obb>& earlier, double snap = 0) {
+  const box_clip::Frame<NT> fb = box_clip::make_frame<NT>(box);
+  const int orientation = box_clip::ClipTraits<NT>::sign(fb.det);
+  std::vector<Cell<NT>> shared;
+  if (orientation == 0) return shared;
+  std::vector<Cell<NT>> pieces{Cell<NT>::from_box(fb, orientation)};
+  pieces[0].snap = snap;
+  std::vector<int> side;
+  std::vector<NT> value;
+  for (const Obb& e : earlier) {
+    const box_clip::Frame<NT> fe = box_clip::make_frame<NT>(e);
+    const int sigma = box_clip::ClipTraits<NT>::sign(fe.det);
+    if (sigma == 0) continue;
+    const std::array<Plane<NT>, 6> hs = box_planes(fe, sigma);
+    std::vector<Cell<NT>> next;
+    for (Cell<NT>& p : pieces) {
+      Cell<NT> rest = std::move(p);
+      for (const Plane<NT>& h : hs) {
+        bool any_pos, any_neg;
+        rest.sides(h, &side, &value, &any_pos, &any_neg);
+        if (!any_pos) continue;  // nothing of `rest` beyond this face
+        if (!any_neg) {          // all of it beyond or on the plane: it stays whole
+          next.push_back(std::move(rest));
+          rest = Cell<NT>();
+          break;
+        }
+        Cell<NT> beyond = rest.clipped(h.complement());
+        if (!beyond.empty()) next.push_back(std::move(beyond));
+        rest = rest.clipped_with(side, value, any_pos, any_neg);
+        if (rest.empty()) break;
+      }
+      if (!rest.empty()) shared.push_back(std::move(rest));
+    }
+    pieces = std::move(next);
+    if (pieces.empty()) break;
+  }
+  return shared;
+}
+
+// A double box holding the exact cell whose vertices these are: NumberBounds' bounds, grown by
+// 1e-9 of their magnitude (for double, whose vertices are rounded; far beyond that rounding).
+template <class NT>
+Aabb reach_of(const Cell<NT>& cell) {
+  Aabb b = cell.bounds();
+  for (int i = 0; i < 3; ++i) {
+    const double pad = 1e-9 * (std::abs(b.lo[i]) + std::abs(b.hi[i])) + 1e-300;
+    b.lo[i] -= pad;
+    b.hi[i] += pad;
+  }
+  return b;
+}
+
+// vol(S \ X) for S = B ∩ (E_0 ∪ ... ∪ E_{k-1}): what B shares with the earlier boxes, outside
+// the solid. With one earlier box, vol((B ∩ E_0) \ X).
+template <class NT>
+NT shared_outside_volume(const Mesh& mesh, const AabbTree& faces, const Obb& box, const std::vector<Obb>& earlier,
+                         double snap = 0) {
+  NT total(0);
+  for (const Cell<NT>& cell : shared_cells<NT>(box, earlier, snap))
+    total += outside_volume(mesh, faces, cell, reach_of(cell));
+  return total;
 }
 
 }  // namespace vobb::cell_clip

@@ -35,6 +35,13 @@ double volume(const Obb& box);
 // the mesh coordinate range (2^241). Box files and the validation suite refuse such boxes.
 std::string box_defect(const Obb& box);
 
+// A box and the earlier boxes that what it shares with them is measured against
+// (fast/poly_overlap.h).
+struct ShareQuery {
+  Obb box;
+  std::vector<Obb> earlier;
+};
+
 // The 8 corners: corner i is c + sum_k s_k h_k a_k with s_k = +1 when bit k of i is set,
 // else -1.
 std::array<Vec3, 8> corners(const Obb& box);

@@ -9,12 +9,25 @@
 
 namespace vobb {
 
+namespace {
+
+// The earlier boxes that may meet `box` (the others share nothing with it).
+std::vector<Obb> meeting(const Obb& box, const std::vector<Obb>& earlier) {
+  std::vector<Obb> out;
+  for (const Obb& e : earlier)
+    if (!PolyOverlapSolver::apart(box, e)) out.push_back(e);
+  return out;
+}
+
+}  // namespace
+
 PolyOverlapSolver::PolyOverlapSolver(const Mesh& mesh) : mesh_(mesh), faces_(AabbTree::over_faces(mesh)) {}
 
 bool PolyOverlapSolver::apart(const Obb& a, const Obb& b) {
   const Vec3 d = b.center - a.center;
   // Every projection below is a few products and sums of numbers no larger than `scale`: their
-  // rounding is far below 1e-12 of it, so a gap wider than that is a true gap.
+  // rounding is far below 1e-12 of it, so a gap wider than that is a true gap. Any direction
+  // separates convex sets, so the axes need not be exactly unit or orthogonal.
   const double scale = d.cwiseAbs().sum() + a.half.sum() + b.half.sum();
   const double slack = 1e-12 * scale + 1e-300;
   auto split_by = [&](const Vec3& axis) {
@@ -36,40 +49,17 @@ bool PolyOverlapSolver::apart(const Obb& a, const Obb& b) {
   return false;
 }
 
-namespace {
-
-// A double box holding A ∩ B: the intersection of the boxes' bounds, each grown by 1e-12 of
-// its coordinates' magnitude, far beyond the rounding of c +- h_0 a_0 +- h_1 a_1 +- h_2 a_2.
-Aabb reach_of(const Obb& a, const Obb& b) {
-  Aabb out;
-  for (int i = 0; i < 3; ++i) {
-    double lo = -INFINITY, hi = INFINITY;
-    for (const Obb* box : {&a, &b}) {
-      double r = 0, mag = std::abs(box->center[i]);
-      for (int k = 0; k < 3; ++k) r += box->half[k] * std::abs(box->axes[k][i]);
-      mag += r;
-      const double pad = 1e-12 * mag + 1e-300;
-      lo = std::max(lo, box->center[i] - r - pad);
-      hi = std::min(hi, box->center[i] + r + pad);
-    }
-    out.lo[i] = lo;
-    out.hi[i] = hi;
-  }
-  return out;
+Rational PolyOverlapSolver::exact(const Obb& box, const std::vector<Obb>& earlier) const {
+  return cell_clip::shared_outside_volume<Rational>(mesh_, faces_, box, meeting(box, earlier));
 }
 
-}  // namespace
-
-Rational PolyOverlapSolver::exact(const Obb& a, const Obb& b) const {
-  return cell_clip::outside_volume(mesh_, faces_, cell_clip::box_pair_cell<Rational>(a, b), reach_of(a, b));
-}
-
-PolyOverlap PolyOverlapSolver::evaluate(const Obb& a, const Obb& b) const {
+PolyOverlap PolyOverlapSolver::evaluate(const Obb& box, const std::vector<Obb>& earlier) const {
   PolyOverlap r;
-  if (apart(a, b)) return r;  // [0, 0]: nothing shared
+  const std::vector<Obb> near = meeting(box, earlier);
+  if (near.empty()) return r;  // [0, 0]: nothing shared
   try {
     CGAL::Protect_FPU_rounding<true> upward;
-    const Interval v = cell_clip::outside_volume(mesh_, faces_, cell_clip::box_pair_cell<Interval>(a, b), reach_of(a, b));
+    const Interval v = cell_clip::shared_outside_volume<Interval>(mesh_, faces_, box, near);
     if (CGAL::is_finite(v)) {
       r.lo = std::max(v.inf(), 0.0);  // an outer volume is >= 0
       r.hi = v.sup();
@@ -78,27 +68,35 @@ PolyOverlap PolyOverlapSolver::evaluate(const Obb& a, const Obb& b) const {
     }
   } catch (const CGAL::Uncertain_conversion_exception&) {
   }
-  const Rational q = exact(a, b);
+  const Rational q = cell_clip::shared_outside_volume<Rational>(mesh_, faces_, box, near);
   enclose(q, &r.lo, &r.hi);
   r.estimate = to_double_nearest(q);
   r.exact = true;
   return r;
 }
 
-double PolyOverlapSolver::estimate(const Obb& a, const Obb& b) const {
-  if (apart(a, b)) return 0;
-  try {
-    CGAL::Protect_FPU_rounding<true> nearest(CGAL_FE_TONEAREST);
-    const double v = cell_clip::outside_volume(mesh_, faces_, cell_clip::box_pair_cell<double>(a, b), reach_of(a, b));
-    if (std::isfinite(v)) return std::max(v, 0.0);
-  } catch (const cell_clip::InconsistentSides&) {  // rounded signs contradicted each other
+double PolyOverlapSolver::estimate(const Obb& box, const std::vector<Obb>& earlier) const {
+  const std::vector<Obb> near = meeting(box, earlier);
+  if (near.empty()) return 0;
+  CGAL::Protect_FPU_rounding<true> nearest(CGAL_FE_TONEAREST);
+  // The rounded signs as they are; where they contradict each other (a degenerate contact,
+  // as where two tight boxes touch the same mesh vertex), again with values within 1e-10 of
+  // their magnitude taken as 0: far above their rounding, and far below what moves the volume
+  // by more than the cubemap's error.
+  for (double snap : {0.0, 1e-10}) {
+    try {
+      const double v = cell_clip::shared_outside_volume<double>(mesh_, faces_, box, near, snap);
+      if (std::isfinite(v)) return std::max(v, 0.0);
+      break;
+    } catch (const cell_clip::InconsistentSides&) {
+    }
   }
-  return evaluate(a, b).estimate;
+  return evaluate(box, earlier).estimate;
 }
 
-std::vector<double> PolyOverlapSolver::estimate(const std::vector<std::pair<Obb, Obb>>& pairs) const {
-  std::vector<double> out(pairs.size());
-  tbb::parallel_for(size_t{0}, pairs.size(), [&](size_t i) { out[i] = estimate(pairs[i].first, pairs[i].second); });
+std::vector<double> PolyOverlapSolver::estimate(const std::vector<ShareQuery>& queries) const {
+  std::vector<double> out(queries.size());
+  tbb::parallel_for(size_t{0}, queries.size(), [&](size_t i) { out[i] = estimate(queries[i].box, queries[i].earlier); });
   return out;
 }
 

@@ -107,6 +107,7 @@ constexpr int kAdjustLevels = 4;
 struct SearchShared {
   std::atomic<size_t> estimates{0};
   std::atomic<size_t> reused{0};  // boxes of a search measured again, answered from its record
+  std::atomic<size_t> overlaps{0};  // pairs whose overlap term was estimated
   std::atomic<size_t> adjustments{0};
   std::atomic<size_t> merges{0};
   std::atomic<size_t> regroups_skipped{0};
@@ -123,7 +124,13 @@ class NodeSplitter {
     std::vector<std::vector<int32_t>> groups;
     std::vector<std::array<Vec3, 3>> axes;
     std::vector<double> obv;
+    // kOmv: what the groups' boxes share, outside the solid, with the context boxes and with
+    // each other (each box's share with the context and the boxes before it); 0 under kObv.
+    double overlap = 0;
     double sum() const { return std::accumulate(obv.begin(), obv.end(), 0.0); }
+    // What the search minimises: the sum of OBV, less the overlap under kOmv: the boxes'
+    // estimated OMV with the context's, less the context's own (under kObv the sum, bit for bit).
+    double objective() const { return sum() - overlap; }
   };
 
   // Level of the boxes being fitted: the orientation search tries more starts near the root.
@@ -132,13 +139,22 @@ class NodeSplitter {
   // on every thread's splitter, between parallel steps.
   void forget_pace() { pace_ = 0; }
 
+  // Boxes that stay as they are while this splitter's groups change, whose overlap with each
+  // group counts in the objective under kOmv (a regrouping's other boxes of the layer); none
+  // by default.
+  void set_context(std::vector<Obb> boxes) { context_ = std::move(boxes); }
+
   // A new search (a node's split, the root's, a regrouping) begins: the boxes measured so far
   // are forgotten. Within one search a box is often measured again (a group that a Lloyd
   // iteration left as it was gets the same orientation starts; a regrouping's passes screen the
   // same groups), and its value is the one measured before: an estimate depends on the box
   // alone. Kept per search, the record stays small, and what it saves does not depend on
   // which thread ran which search.
-  void begin_search() { measured_.clear(); }
+  void begin_search() {
+    measured_.clear();
+    measured_shares_.clear();
+    context_.clear();
+  }
 
   // The root: one group, its axes optimised like any child's.
   std::array<Vec3, 3> optimise_single(const std::vector<int32_t>& faces) {
@@ -159,7 +175,7 @@ class NodeSplitter {
     const bool whole = update_boxes(&state);
     State best = state;
     if (!whole) return best;  // its sum is not reported: some boxes were not estimated
-    report(0, best.sum());
+    report(0, best.objective());
     if (state.groups.size() < 2) return best;
     iterate(faces, state, &best, report);
     if (options_.adjust && level_ <= kAdjustLevels && !stopped()) adjust(faces, &best, report);
@@ -186,7 +202,25 @@ class NodeSplitter {
       if (stopped()) return false;
       const auto& faces = s->groups[g];
       std::array<Vec3, 3> axes = s->axes[g];
-      double best = measure({tight_box(mesh_, faces, axes)})[0];
+      // Under kOmv a box's value is its OBV less its overlap with the other groups' boxes as
+      // they stand (those before g already searched) and with the context: the objective's
+      // change when this box alone moves. Under kObv it is its OBV.
+      std::vector<Obb> others;
+      if (omv())
+        for (size_t h = 0; h < s->groups.size(); ++h)
+          if (h != g) others.push_back(tight_box(mesh_, s->groups[h], s->axes[h]));
+      auto values = [&](const std::vector<Obb>& boxes, std::vector<double>* obv) {
+        *obv = measure(boxes);
+        std::vector<double> v = *obv;
+        if (omv() && !stopped()) {
+          const std::vector<double> shared = overlap_with(boxes, others);
+          for (size_t i = 0; i < v.size(); ++i) v[i] -= shared[i];
+        }
+        return v;
+      };
+      std::vector<double> obv_of;
+      double best = values({tight_box(mesh_, faces, axes)}, &obv_of)[0];
+      double best_obv = obv_of[0];
       bool cut = false;
       if (options_.optimise_axes && !(cut = stopped())) {
         // Other starts: the covariance axes of the (new) group, and seeded random orientations
@@ -207,9 +241,9 @@ class NodeSplitter {
         }
         std::vector<Obb> start_boxes;
         for (const auto& a : starts) start_boxes.push_back(tight_box(mesh_, faces, a));
-        const std::vector<double> sv = measure(start_boxes);
+        const std::vector<double> sv = values(start_boxes, &obv_of);
         for (size_t i = 0; i < starts.size(); ++i)
-          if (sv[i] < best) best = sv[i], axes = starts[i];
+          if (sv[i] < best) best = sv[i], best_obv = obv_of[i], axes = starts[i];
         for (double step = 0.2; step >= 0.0125;) {
           if ((cut = stopped())) break;
           std::vector<std::array<Vec3, 3>> trial;
@@ -219,10 +253,11 @@ class NodeSplitter {
               trial.push_back(rotate(axes, about, sign * step));
               boxes.push_back(tight_box(mesh_, faces, trial.back()));
             }
-          const std::vector<double> v = measure(boxes);
+          const std::vector<double> v = values(boxes, &obv_of);
           const size_t i = std::min_element(v.begin(), v.end()) - v.begin();
           if (v[i] < best) {
             best = v[i];
+            best_obv = obv_of[i];
             axes = trial[i];
           } else {
             step *= 0.5;
@@ -230,12 +265,29 @@ class NodeSplitter {
         }
       }
       s->axes[g] = axes;
-      s->obv[g] = best;
+      s->obv[g] = best_obv;
       // Cut, or the budget ran out inside one of this group's calls (whose boxes not reached
       // are +inf): the state is not complete.
       if (cut || spent()) return false;
     }
-    return true;
+    score_overlaps(s);
+    return !spent();
+  }
+
+  // Under kOmv: s->overlap for the groups' boxes at s->axes (0 under kObv).
+  void score_overlaps(State* s) {
+    s->overlap = 0;
+    if (!omv()) return;
+    std::vector<ShareQuery> queries;
+    for (size_t g = 0; g < s->groups.size(); ++g) {
+      ShareQuery& q = queries.emplace_back();
+      q.box = tight_box(mesh_, s->groups[g], s->axes[g]);
+      for (const Obb& c : context_)
+        if (may_meet(q.box, c)) q.earlier.push_back(c);
+      for (size_t h = 0; h < g; ++h)
+        if (may_meet(q.box, queries[h].box)) q.earlier.push_back(queries[h].box);
+    }
+    for (double v : measure_share(queries)) s->overlap += v;
   }
 
   // The objective of each box: its estimated OBV, grown by the collider margin first.
@@ -303,6 +355,78 @@ class NodeSplitter {
     return out;
   }
 
+  bool omv() const { return options_.objective == Objective::kOmv; }
+
+  // Per box of `boxes`: what it shares, outside the solid, with `others` and the context boxes
+  // together: the objective's drop for that box alone when they stay as they are.
+  std::vector<double> overlap_with(const std::vector<Obb>& boxes, const std::vector<Obb>& others) {
+    std::vector<ShareQuery> queries;
+    for (const Obb& b : boxes) {
+      ShareQuery& q = queries.emplace_back();
+      q.box = b;
+      for (const std::vector<Obb>* set : {static_cast<const std::vector<Obb>*>(&context_), &others})
+        for (const Obb& o : *set)
+          if (may_meet(b, o)) q.earlier.push_back(o);
+    }
+    return measure_share(queries);
+  }
+
+  // Whether two boxes (grown by the margin) may share volume: false when their circumscribed
+  // spheres are apart, and then they share none.
+  bool may_meet(const Obb& a, const Obb& b) const {
+    const double grow = 2 * std::sqrt(3.0) * options_.margin;
+    return (a.center - b.center).norm() <= (a.half.norm() + b.half.norm() + grow) * (1 + 1e-12);
+  }
+
+  // The estimated share of each query (its boxes grown by the margin first), recorded per
+  // search like measure()'s boxes. A query that no earlier box may meet is 0 unasked. Not asked
+  // once the budget is spent (0 then; the callers see stopped() and discard the state).
+  std::vector<double> measure_share(const std::vector<ShareQuery>& queries) {
+    std::vector<double> out(queries.size(), 0.0);
+    if (queries.empty() || stopped()) return out;
+    std::vector<ShareQuery> in;
+    std::vector<size_t> at;
+    std::vector<std::vector<uint64_t>> keys;
+    for (size_t i = 0; i < queries.size(); ++i) {
+      if (queries[i].earlier.empty()) continue;
+      ShareQuery q = queries[i];
+      if (options_.margin > 0) {
+        q.box.half.array() += options_.margin;
+        for (Obb& e : q.earlier) e.half.array() += options_.margin;
+      }
+      std::vector<uint64_t> key;
+      for (const Obb* b = &q.box; b != nullptr; b = nullptr) {
+        const BoxBits k = bits_of(*b);
+        key.insert(key.end(), k.begin(), k.end());
+      }
+      for (const Obb& e : q.earlier) {
+        const BoxBits k = bits_of(e);
+        key.insert(key.end(), k.begin(), k.end());
+      }
+      const auto hit = options_.reuse_known ? measured_shares_.find(key) : measured_shares_.end();
+      if (hit != measured_shares_.end()) {
+        out[i] = hit->second;
+        continue;
+      }
+      in.push_back(std::move(q));
+      at.push_back(i);
+      keys.push_back(std::move(key));
+    }
+    if (in.empty()) return out;
+    std::vector<double> v;
+    if (options_.concurrent_estimates) {
+      tbb::this_task_arena::isolate([&] { v = options_.share(in); });
+    } else {
+      v = options_.share(in);
+    }
+    shared_->overlaps += in.size();
+    for (size_t j = 0; j < in.size(); ++j) {
+      out[at[j]] = v[j];
+      if (options_.reuse_known) measured_shares_.emplace(std::move(keys[j]), v[j]);
+    }
+    return out;
+  }
+
  private:
   // One estimator call. When nodes are searched in parallel, the estimator's own parallel work
   // is isolated: a thread waiting for its batch helps with that batch only, and does not start
@@ -320,10 +444,10 @@ class NodeSplitter {
     for (int it = 1; it <= options_.lloyd_iterations; ++it) {
       if (!partition(faces, &state)) break;
       if (!update_boxes(&state)) break;  // cut short by the time budget: not comparable
-      report(it, state.sum());
-      const double before = best->sum();
-      if (state.sum() < before) *best = state;
-      if (!(state.sum() < before * (1 - 1e-3))) break;
+      report(it, state.objective());
+      const double before = best->objective();
+      if (state.objective() < before) *best = state;
+      if (!(state.objective() < before * (1 - 1e-3))) break;
     }
   }
 
@@ -346,8 +470,9 @@ class NodeSplitter {
           s.axes.push_back(covariance_axes(mesh_, g));
           boxes.push_back(tight_box(mesh_, g, s.axes.back()));
         }
-        const std::vector<double> v = measure(boxes);
-        screen.push_back(std::accumulate(v.begin(), v.end(), 0.0));
+        s.obv = measure(boxes);
+        score_overlaps(&s);
+        screen.push_back(s.objective());
         alternatives.push_back(std::move(s));
       }
     std::vector<size_t> order(alternatives.size());
@@ -358,7 +483,7 @@ class NodeSplitter {
       if (!update_boxes(&trial)) return;
       State trial_best = trial;
       iterate(faces, trial, &trial_best, report);
-      if (trial_best.sum() < best->sum()) {
+      if (trial_best.objective() < best->objective()) {
         *best = std::move(trial_best);
         ++shared_->adjustments;
       }
@@ -572,6 +697,17 @@ class NodeSplitter {
   }
   // The current search's boxes and their values (begin_search()).
   std::unordered_map<BoxBits, double, BoxBitsHash> measured_;
+  struct WordsHash {
+    size_t operator()(const std::vector<uint64_t>& w) const {
+      uint64_t h = 0x9e3779b97f4a7c15ull;
+      for (uint64_t x : w) h = (h ^ x) * 0x100000001b3ull + (h >> 29);
+      h = (h ^ (h >> 30)) * 0xbf58476d1ce4e5b9ull;
+      return static_cast<size_t>(h ^ (h >> 31));
+    }
+  };
+  // The current search's shares, keyed by their boxes' bits (measure_share()).
+  std::unordered_map<std::vector<uint64_t>, double, WordsHash> measured_shares_;
+  std::vector<Obb> context_;  // set_context()
 };
 
 std::vector<int32_t> merged(const std::vector<int32_t>& a, const std::vector<int32_t>& b) {
@@ -608,6 +744,7 @@ class Builder {
   void count(VariationalReport* report) const {
     report->estimates = shared_.estimates;
     report->reused = shared_.reused;
+    report->overlaps = shared_.overlaps;
     report->adjustments = shared_.adjustments;
     report->merges = shared_.merges;
     report->regroups_skipped = shared_.regroups_skipped;
@@ -709,7 +846,30 @@ class Builder {
       const int last = n.children.empty() ? d : n.level;
       for (int l = n.level; l <= last; ++l) e += (d - l + 1) * v[i];
     }
+    if (options_.objective == Objective::kOmv) {
+      // Less each layer's overlap term (each box's share with the layer's boxes before it),
+      // weighed like the layer.
+      for (int l = 0; l <= d; ++l) {
+        const std::vector<int32_t> layer = layer_members(st, l, d);
+        std::vector<ShareQuery> queries;
+        for (size_t j = 0; j < layer.size(); ++j) {
+          ShareQuery& q = queries.emplace_back();
+          q.box = boxes[layer[j]];
+          for (size_t i = 0; i < j; ++i)
+            if (splitter.may_meet(q.box, boxes[layer[i]])) q.earlier.push_back(boxes[layer[i]]);
+        }
+        for (double o : splitter.measure_share(queries)) e -= (d - l + 1) * o;
+      }
+    }
     return e;
+  }
+
+  // The nodes of layer l (of a tree of depth d): those of level l, and the leaves above it.
+  static std::vector<int32_t> layer_members(const VariationalState& st, int l, int d) {
+    std::vector<int32_t> out;
+    for (const TreeNode& n : st.nodes)
+      if (n.level == l || (n.level < l && n.children.empty() && l <= d)) out.push_back(n.id);
+    return out;
   }
 
   // One bottom-up sweep; returns the drop in estimated e it made.
@@ -731,6 +891,13 @@ class Builder {
       size_t level_faces = 0, faces_done = 0;
       for (int32_t g : grand) level_faces += st->nodes[g].faces.size();
       std::mutex progress_mutex;
+      // Under kOmv a regrouping's parents count their overlap with the layer's other boxes:
+      // those under other grandparents as they stand now, whatever the regroupings running at
+      // once do to them, so that the tree does not depend on their order.
+      layer_.clear();
+      if (options_.objective == Objective::kOmv)
+        for (int32_t id : layer_members(*st, l, d))
+          layer_.push_back({id, st->nodes[id].parent, tight_box(mesh_, st->nodes[id].faces, st->axes[id])});
       // Each regrouping reads and writes only the children and grandchildren of its node g, so
       // those of one level may run at once. The gains are added in the nodes' order, as one
       // after another would: the same sum, to the bit, and so the same decision to sweep again.
@@ -776,6 +943,21 @@ class Builder {
     const std::vector<double> v = splitter->measure(boxes);
     std::map<int32_t, double> cur;
     for (size_t i = 0; i < parents.size(); ++i) cur[parents[i]] = v[i];
+    const bool omv = options_.objective == Objective::kOmv;
+    // Under kOmv: the objective of parents a and b as they stand, their overlap with each other
+    // and with the layer's other boxes included (context_for); else their sum of OBV.
+    auto current = [&](int32_t a, int32_t b) {
+      if (!omv) return cur[a] + cur[b];
+      NodeSplitter::State s;
+      for (int32_t p : {a, b}) {
+        s.groups.push_back(st->nodes[p].faces);
+        s.axes.push_back(st->axes[p]);
+        s.obv.push_back(cur[p]);
+      }
+      splitter->set_context(context_for(*st, g, a, b));
+      splitter->score_overlaps(&s);
+      return s.objective();
+    };
     double total = 0;
     for (int pass = 0; pass < 3 && !budget_gone(*st); ++pass) {
       std::vector<Move> moves;
@@ -832,6 +1014,12 @@ class Builder {
           const size_t at = std::min_element(v.begin() + 3 * k, v.begin() + 3 * k + 3) - v.begin();
           screen[c] += v[at];
           s.axes.push_back(boxes[at].axes);
+          s.obv.push_back(v[at]);
+        }
+        if (omv) {  // the screened boxes' objective, overlaps included
+          splitter->set_context(context_for(*st, g, mv.a, mv.b));
+          splitter->score_overlaps(&s);
+          screen[c] = s.objective();
         }
       }
       std::vector<size_t> order(moves.size());
@@ -843,12 +1031,13 @@ class Builder {
       for (size_t r = 0; r < std::min<size_t>(2, order.size()); ++r) {
         const Move& mv = moves[order[r]];
         NodeSplitter::State s = cand[order[r]];
+        const double before = current(mv.a, mv.b);  // sets the context for mv.a and mv.b
         if (!splitter->update_boxes(&s)) break;  // cut short by the time budget: not comparable
-        const double before = cur[mv.a] + cur[mv.b];
-        // Kept only for a drop of 0.1 % or more of the pair's sum: smaller drops are within
-        // the estimator's discretization error at the m the builders use (docs/BENCHMARKS.md:
-        // median relative error ~1e-4, tails ~1e-3), so they would chase noise.
-        const double gain = before - s.sum();
+        // Kept only for a drop of 0.1 % or more of the pair's objective: smaller drops are
+        // within the estimator's discretization error at the m the builders use
+        // (docs/BENCHMARKS.md: median relative error ~1e-4, tails ~1e-3), so they would chase
+        // noise.
+        const double gain = before - s.objective();
         if (gain > before * 1e-3 && gain > best_gain) best_gain = gain, best = &mv, best_state = s;
       }
       if (!best) {
@@ -895,6 +1084,27 @@ class Builder {
       }
     }
     return in;
+  }
+
+  // The boxes whose overlap with regrouped parents a and b (children of g) counts in their
+  // objective: g's other children as they stand, and the layer's boxes under other nodes as
+  // they stood when the level's regroupings began (layer_). Only those that may meet a box of
+  // g's faces: every tight box of them, whatever its axes, lies in the ball of radius
+  // sqrt(3) |h| about g's box's centre c (g's box lies in the ball of radius |h| about c, and a
+  // tight box spans at most that ball's extent along each of its axes).
+  std::vector<Obb> context_for(const VariationalState& st, int32_t g, int32_t a, int32_t b) const {
+    const Obb gb = tight_box(mesh_, st.nodes[g].faces, st.axes[g]);
+    const double reach = std::sqrt(3.0) * gb.half.norm() + 2 * std::sqrt(3.0) * options_.margin;
+    auto near = [&](const Obb& q) { return (q.center - gb.center).norm() <= (reach + q.half.norm()) * (1 + 1e-12); };
+    std::vector<Obb> out;
+    for (int32_t c : st.nodes[g].children)
+      if (c != a && c != b) {
+        const Obb q = tight_box(mesh_, st.nodes[c].faces, st.axes[c]);
+        if (near(q)) out.push_back(q);
+      }
+    for (const LayerBox& q : layer_)
+      if (q.parent != g && near(q.box)) out.push_back(q.box);
+    return out;
   }
 
   void apply(VariationalState* st, const Move& mv, const NodeSplitter::State& s) {
@@ -945,6 +1155,12 @@ class Builder {
   // and finds no move again, the same tree. At most one copy of the mesh's face ids per level
   // above the last two, and none where reuse_known is off.
   std::vector<std::optional<RegroupInputs>> settled_;
+  // Under kOmv, the boxes of the layer being regrouped, as they stood when its regroupings began.
+  struct LayerBox {
+    int32_t id, parent;
+    Obb box;
+  };
+  std::vector<LayerBox> layer_;
 };
 
 }  // namespace
@@ -955,6 +1171,7 @@ Tree build_variational(const Mesh& mesh, const VariationalOptions& options, cons
   VOBB_ASSERT(!mesh.faces.empty(), "build_variational needs faces");
   VOBB_ASSERT(std::isfinite(options.margin) && options.margin >= 0, "margin finite and >= 0");
   VOBB_ASSERT(options.budget_check_seconds > 0, "budget_check_seconds > 0");
+  VOBB_ASSERT(options.objective == Objective::kObv || options.share, "the kOmv objective needs a share estimate");
   VariationalReport local_report;
   if (!report) report = &local_report;
   *report = VariationalReport{};

@@ -37,6 +37,20 @@
 // the same search (a node's split, the root's, a regrouping) takes the value it got. Both rest
 // on the estimator being a function of the box alone (ObvEstimate), and change no tree.
 //
+// Objective (`objective`). kObv, the paper's: each set of boxes is scored by the sum of their
+// estimated OBV, which counts a region that two boxes share twice. kOmv scores them by their
+// estimated OMV, the measure the certificate charges: the sum of OBV less, for each box in
+// order, what it shares outside the solid with the boxes before it (the `share` estimate),
+// which is the union's outer volume exactly, with no inclusion-exclusion term dropped. Where a
+// set's boxes change while other boxes of the layer stay (the context), they are scored by what
+// they add to the layer's OMV: their shares are taken against the context too. It applies
+// everywhere the search compares: each group's orientation (the box's OBV less its share with
+// the other groups' boxes and the context), a node's Lloyd states and adjusted splits, and the
+// merging sweeps, where a regrouped pair's context is its layer's other boxes that may meet it,
+// cousins included, as they stood when the level's regroupings began. The flooding partition
+// still grows regions by dOBV. A truncated sum, sum OBV - sum over pairs (Bonferroni's lower
+// bound), was tried first and is not offered: minimising a lower bound rewards stacking three
+// or more boxes on one free region, and it raised dino's exact e by 18 % (docs/BENCHMARKS.md).
 // Collider margin (off by default, `margin` > 0): every box the builder measures is first
 // grown by `margin` on each side, so the search minimises the sum of OBV(O ⊕ cube(margin))
 // instead of OBV(O). A collider of radius r whose centre lies outside the solid meets O only
@@ -68,6 +82,7 @@
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "common/mesh.h"
@@ -83,14 +98,26 @@ namespace vobb {
 // relies on it: it does not ask again for a box its search measured before (reuse_known).
 using ObvEstimate = std::function<std::vector<double>(const std::vector<Obb>&)>;
 
+// Per query, the estimated vol((B ∩ (E_0 ∪ ... ∪ E_{k-1})) \ X) of its box B and earlier boxes
+// E, in world volume units: what B adds to a layer's overlap term (fast/poly_overlap.h gives
+// it). A function of the query alone, like ObvEstimate.
+using ShareEstimate = std::function<std::vector<double>(const std::vector<ShareQuery>&)>;
+
+// What the search minimises for a set of boxes (see build_variational).
+enum class Objective {
+  kObv,  // the sum of their estimated OBV (the paper's)
+  kOmv,  // their estimated OMV: that sum less each box's share with the boxes before it
+};
+
 struct VariationalProgress {
   int level = 0;        // level of the children being made, or of the parents being merged
   int sweep = 0;        // 0 in the top-down pass, then the merging sweep (1, 2, ...)
   size_t node = 0;      // nodes done at that level
   size_t nodes = 0;     // nodes to do at that level
   int iteration = 0;    // Lloyd iteration within the node
-  double sum_obv = 0;   // estimated sum of OBV of the finished children at this level (of the
-                        // boxes grown by the margin, when there is one)
+  double sum_obv = 0;   // the objective of the finished children at this level (estimated sum of
+                        // OBV, less their pairs' overlap under kOmv; of the boxes grown by the
+                        // margin, when there is one)
   size_t estimates = 0; // boxes estimated so far
   double done = 0;      // rough fraction of the top-down pass done, for a remaining-time guess
   double sweep_done = 0;  // in a merging sweep: rough fraction of it done (each level re-groups
@@ -124,6 +151,8 @@ struct VariationalOptions {
   bool reuse_known = true;
   uint64_t seed = 1;         // the random starts of the orientation search
   double margin = 0;         // collider margin, world units, finite and >= 0 (see above)
+  Objective objective = Objective::kObv;
+  ShareEstimate share;       // required for kOmv, unused for kObv
   // Whether `estimate` may be called from several threads at once (the CPU twin and the GL
   // estimator may: GL draws the calls waiting at once together). Then the nodes of a level are
   // split, and the nodes of a sweep's level regrouped, in parallel (TBB, in the caller's arena); the
@@ -151,6 +180,7 @@ struct VariationalReport {
   size_t adjustments = 0;     // adjusted splits kept
   size_t estimates = 0;       // boxes estimated
   size_t reused = 0;          // boxes a search measured again, given the value it had (not estimated)
+  size_t overlaps = 0;        // shares estimated (kOmv)
   // Regroupings of a sweep not run: their inputs were those with which they last found no
   // move (see build_variational), so they would find none again.
   size_t regroups_skipped = 0;
