@@ -202,9 +202,8 @@ class NodeSplitter {
       if (stopped()) return false;
       const auto& faces = s->groups[g];
       std::array<Vec3, 3> axes = s->axes[g];
-      // Under kOmv a box's value is its OBV less its overlap with the other groups' boxes as
-      // they stand (those before g already searched) and with the context: the objective's
-      // change when this box alone moves. Under kObv it is its OBV.
+      // Under kOmv a box's value is its OBV less what it shares with the other groups' boxes as
+      // they stand (those before g already searched). Under kObv it is its OBV.
       std::vector<Obb> others;
       if (omv())
         for (size_t h = 0; h < s->groups.size(); ++h)
@@ -357,16 +356,17 @@ class NodeSplitter {
 
   bool omv() const { return options_.objective == Objective::kOmv; }
 
-  // Per box of `boxes`: what it shares, outside the solid, with `others` and the context boxes
-  // together: the objective's drop for that box alone when they stay as they are.
+  // Per box of `boxes`: what it shares, outside the solid, with `others`: the objective's drop
+  // for that box alone when they stay as they are, leaving out the context (the orientation
+  // search's measure; a state's score, score_overlaps(), takes the context in). With the
+  // context here too, dino's depth-8 build took 193 s against 11.6 s under kObv.
   std::vector<double> overlap_with(const std::vector<Obb>& boxes, const std::vector<Obb>& others) {
     std::vector<ShareQuery> queries;
     for (const Obb& b : boxes) {
       ShareQuery& q = queries.emplace_back();
       q.box = b;
-      for (const std::vector<Obb>* set : {static_cast<const std::vector<Obb>*>(&context_), &others})
-        for (const Obb& o : *set)
-          if (may_meet(b, o)) q.earlier.push_back(o);
+      for (const Obb& o : others)
+        if (may_meet(b, o)) q.earlier.push_back(o);
     }
     return measure_share(queries);
   }
