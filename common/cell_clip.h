@@ -309,11 +309,12 @@ Cell<NT> box_pair_cell(const Obb& a, const Obb& b, double snap = 0) {
 }
 
 // The double path's shortcut for a face whose shadow lies in the shadow of one upper and one
-// lower facet of the cell: there the cell's chord, and the part of it below the face, are
-// linear over the shadow wherever the face lies wholly above the cell, below it, or between its
-// facets, and the integral of a linear function over a triangle is its area times its mean at
-// the corners. The face's signed prism volume then needs no clipping. The decisions are taken
-// in rounded doubles (an estimate; the interval and rational paths always clip).
+// lower facet of the cell (docs/derivations.md, "Shared outer volume"): over the shadow the
+// cell's chord runs from z_b to z_t, both linear, and the prism holds clamp(z_face - z_b, 0,
+// z_t - z_b) of it, which is linear on each part of the shadow cut by the two lines where the
+// clamp switches; a linear function's integral over a triangle is its area times its mean at
+// the corners. The decisions are taken in rounded doubles (an estimate; the interval and
+// rational paths always clip the cell).
 class ChordMap {
  public:
   explicit ChordMap(const Cell<double>& cell) {
@@ -354,29 +355,60 @@ class ChordMap {
     if (t == nullptr) return false;
     const Facet* b = holding(bottom_, q);
     if (b == nullptr) return false;
-    double above = 0, below = 0, mean = 0;
-    double zt[3], zb[3];
+    // Over the shadow: g = z_face - z_b and h = z_t - z_b, both linear; the prism holds
+    // clamp(g, 0, h) of each chord: h where g >= h, g where 0 < g < h, else nothing.
+    Poly tri;
+    tri.n = 3;
     for (int k = 0; k < 3; ++k) {
-      zt[k] = t->z(q[k]);
-      zb[k] = b->z(q[k]);
-      above += q[k][2] >= zt[k];
-      below += q[k][2] <= zb[k];
+      const double zb = b->z(q[k]);
+      tri.p[k] = {q[k][0], q[k][1], q[k][2] - zb, t->z(q[k]) - zb};
     }
-    if (below == 3) {  // the face under the cell: its prism holds none of it
-      *term = 0;
-      return true;
-    }
-    const bool over = above == 3;
-    for (int k = 0; k < 3; ++k) {
-      if (!over && (q[k][2] < zb[k] || q[k][2] > zt[k])) return false;  // crossing a facet: clip
-      mean += (over ? zt[k] : q[k][2]) - zb[k];
-    }
-    const double twice_area = (q[1][0] - q[0][0]) * (q[2][1] - q[0][1]) - (q[1][1] - q[0][1]) * (q[2][0] - q[0][0]);
-    *term = twice_area * mean / 6;  // signed by the shadow's orientation, as the face's sign
+    Poly over, under, inside;
+    tri.clip([](const Pt& p) { return p.g - p.h; }, &over);    // g >= h
+    tri.clip([](const Pt& p) { return p.h - p.g; }, &under);   // g <= h
+    under.clip([](const Pt& p) { return p.g; }, &inside);      // and g >= 0
+    *term = over.integral([](const Pt& p) { return p.h; }) + inside.integral([](const Pt& p) { return p.g; });
     return true;
   }
 
  private:
+  // A point of the shadow with the values of g and h there.
+  struct Pt {
+    double x, y, g, h;
+  };
+  // A convex polygon of the shadow (a triangle clipped by at most two lines: 5 corners).
+  struct Poly {
+    Pt p[6];
+    int n = 0;
+    // The part where f >= 0 (f linear, given per corner), in the same cyclic order.
+    template <class F>
+    void clip(const F& f, Poly* out) const {
+      out->n = 0;
+      for (int i = 0; i < n; ++i) {
+        const Pt& a = p[i];
+        const Pt& b = p[(i + 1) % n];
+        const double fa = f(a), fb = f(b);
+        if (fa >= 0) out->p[out->n++] = a;
+        if ((fa >= 0) != (fb >= 0)) {
+          const double s = fa / (fa - fb);
+          out->p[out->n++] = {a.x + s * (b.x - a.x), a.y + s * (b.y - a.y), a.g + s * (b.g - a.g), a.h + s * (b.h - a.h)};
+        }
+      }
+      if (out->n < 3) out->n = 0;
+    }
+    // The integral of v (linear, given per corner) over the polygon, signed by its orientation:
+    // per fan triangle, its signed area times the mean of v at its corners.
+    template <class V>
+    double integral(const V& v) const {
+      double sum = 0;
+      for (int k = 1; k + 1 < n; ++k) {
+        const Pt &a = p[0], &b = p[k], &c = p[k + 1];
+        const double twice = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
+        sum += twice * (v(a) + v(b) + v(c));
+      }
+      return sum / 6;
+    }
+  };
   struct Facet {
     double gx = 0, gy = 0, z0 = 0;
     std::vector<std::array<double, 4>> edges;  // ax, ay, bx, by
