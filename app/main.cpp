@@ -221,7 +221,10 @@ vobb::Status build_tree(const vobb::Mesh& mesh, const BuildFlags& f, const vobb:
           std::snprintf(eta, sizeof eta, "  ~%.0f s left to split", now * (1 - p.done) / (p.done - done0));
         std::fprintf(stderr, "%svobb: level %d/%d  nodes done %zu/%zu  iteration %d/%d  sum %s %.6g  %.1f s%s%s", start,
                      p.level, f.depth, p.node, p.nodes, p.iteration, f.lloyd,
-                     !f.queries.empty() ? "hits" : f.collider_margin > 0 ? "grown OBV" : "OBV",
+                     !f.queries.empty()          ? "hits"
+                     : f.objective == "omv"      ? (f.collider_margin > 0 ? "grown OMV" : "OMV")
+                     : f.collider_margin > 0     ? "grown OBV"
+                                                 : "OBV",
                      p.sum_obv, now, eta, end);
       } else {
         if (p.sweep_done > 0.02)
@@ -317,6 +320,8 @@ int run_build(const std::string& mesh_path, const std::string& out, BuildFlags f
     return refuse(vobb::Status::error("--queries applies to --method variational only"));
   if (!f.queries.empty() && f.collider_margin > 0)
     return refuse(vobb::Status::error("--queries and --collider-margin are two objectives; choose one"));
+  if (f.objective == "omv" && f.method != "variational")
+    return refuse(vobb::Status::error("--objective applies to --method variational only"));
   if (!f.queries.empty() && f.objective == "omv")
     return refuse(vobb::Status::error("--queries and --objective omv are two objectives; choose one"));
   // The baseline takes well under a second and has no search to budget or resume.

@@ -430,8 +430,7 @@ class ChordMap {
 // vol(cell \ X): the cell's volume less the signed prism decomposition of X within it, over
 // the faces of `faces` (AabbTree::over_faces(mesh)) that meet the column above `reach`, a
 // double box that holds the exact cell. The direction and the faces are chosen from `reach`
-// alone, so every number type takes the same ones: then, where an interval type decides every
-// sign, each double value lies in its enclosure, the result included.
+// alone, so every number type takes the same ones.
 template <class NT>
 NT outside_volume(const Mesh& mesh, const AabbTree& faces, const Cell<NT>& cell_xyz, const Aabb& reach) {
   if (cell_xyz.empty()) return NT(0);

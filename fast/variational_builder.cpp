@@ -137,7 +137,7 @@ class NodeSplitter {
   void set_level(int level) { level_ = level; }
   // Boxes of another level follow: the pace measured so far is forgotten. The builder calls it
   // on every thread's splitter, between parallel steps.
-  void forget_pace() { pace_ = 0; }
+  void forget_pace() { pace_ = share_pace_ = 0; }
 
   // Boxes that stay as they are while this splitter's groups change, whose overlap with each
   // group counts in the objective under kOmv (a regrouping's other boxes of the layer); none
@@ -270,7 +270,7 @@ class NodeSplitter {
       if (cut || spent()) return false;
     }
     score_overlaps(s);
-    return !spent();
+    return !omv() || !spent();  // a spent budget may have left the shares out
   }
 
   // Under kOmv: s->overlap for the groups' boxes at s->axes (0 under kObv).
@@ -412,17 +412,37 @@ class NodeSplitter {
       at.push_back(i);
       keys.push_back(std::move(key));
     }
-    if (in.empty()) return out;
-    std::vector<double> v;
-    if (options_.concurrent_estimates) {
-      tbb::this_task_arena::isolate([&] { v = options_.share(in); });
-    } else {
-      v = options_.share(in);
+    auto call_share = [&](const std::vector<ShareQuery>& batch) {
+      std::vector<double> v;
+      if (options_.concurrent_estimates) {
+        tbb::this_task_arena::isolate([&] { v = options_.share(batch); });
+      } else {
+        v = options_.share(batch);
+      }
+      shared_->overlaps += batch.size();
+      return v;
+    };
+    auto keep = [&](size_t j, double v) {
+      out[at[j]] = v;
+      if (options_.reuse_known) measured_shares_.emplace(std::move(keys[j]), v);
+    };
+    if (!options_.out_of_time) {
+      const std::vector<double> v = call_share(in);
+      for (size_t j = 0; j < in.size(); ++j) keep(j, v[j]);
+      return out;
     }
-    shared_->overlaps += in.size();
-    for (size_t j = 0; j < in.size(); ++j) {
-      out[at[j]] = v[j];
-      if (options_.reuse_known) measured_shares_.emplace(std::move(keys[j]), v[j]);
+    // Under a budget, in chunks as measure() does, at the pace of the shares.
+    const size_t threads = static_cast<size_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
+    for (size_t i = 0; i < in.size() && !stopped();) {
+      size_t n = threads;
+      if (share_pace_ > 0)
+        n = std::max(threads, static_cast<size_t>(options_.budget_check_seconds / share_pace_));
+      n = std::min(n, in.size() - i);
+      const auto t0 = std::chrono::steady_clock::now();
+      const std::vector<double> v = call_share(std::vector<ShareQuery>(in.begin() + i, in.begin() + i + n));
+      for (size_t j = 0; j < n; ++j) keep(i + j, v[j]);
+      i += n;
+      share_pace_ = std::max(1e-9, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() / n);
     }
     return out;
   }
@@ -672,6 +692,7 @@ class NodeSplitter {
   // Seconds per box of this splitter's last chunk under a budget; 0: unknown. Each thread's
   // own: the nodes searched at once differ in size, and a chunk's length is this thread's.
   double pace_ = 0;
+  double share_pace_ = 0;  // the same for measure_share()
   std::vector<int32_t> local_;   // mesh face -> index in the node being partitioned, else -1
   // A box's bits: centre, axes and half extents, as the estimator sees them.
   using BoxBits = std::array<uint64_t, 15>;
@@ -801,7 +822,7 @@ class Builder {
         complete = !splitter.spent();
       }
       std::lock_guard<std::mutex> lock(progress_mutex);
-      if (complete) progress.sum_obv += s.sum();  // a cut state's sum is incomplete
+      if (complete) progress.sum_obv += s.objective();  // a cut state's sum is incomplete
       ++progress.node;
     });
     for (size_t i = 0; i < parents.size(); ++i) {
@@ -1064,7 +1085,10 @@ class Builder {
     std::vector<int32_t> ids;     // per child: its id, its unit count, then per unit its id,
                                   // its face count and its faces
     std::vector<uint64_t> axes;   // per child: its 9 axis components' bits
-    bool operator==(const RegroupInputs& o) const { return ids == o.ids && axes == o.axes; }
+    // kOmv: the bits of the layer's boxes under other nodes that may meet g's (context_for),
+    // which a regrouping's scores depend on too.
+    std::vector<uint64_t> context;
+    bool operator==(const RegroupInputs& o) const { return ids == o.ids && axes == o.axes && context == o.context; }
   };
   RegroupInputs regroup_inputs(const VariationalState& st, int32_t g) const {
     RegroupInputs in;
@@ -1083,6 +1107,19 @@ class Builder {
         in.ids.insert(in.ids.end(), st.nodes[u].faces.begin(), st.nodes[u].faces.end());
       }
     }
+    if (options_.objective == Objective::kOmv)
+      for (const Obb& q : layer_context(st, g)) {
+        const auto words = [&in](const double* v, int n) {
+          for (int k = 0; k < n; ++k) {
+            uint64_t bits;
+            std::memcpy(&bits, &v[k], sizeof bits);
+            in.context.push_back(bits);
+          }
+        };
+        words(q.center.data(), 3);
+        for (const Vec3& a : q.axes) words(a.data(), 3);
+        words(q.half.data(), 3);
+      }
     return in;
   }
 
@@ -1094,17 +1131,28 @@ class Builder {
   // tight box spans at most that ball's extent along each of its axes).
   std::vector<Obb> context_for(const VariationalState& st, int32_t g, int32_t a, int32_t b) const {
     const Obb gb = tight_box(mesh_, st.nodes[g].faces, st.axes[g]);
-    const double reach = std::sqrt(3.0) * gb.half.norm() + 2 * std::sqrt(3.0) * options_.margin;
-    auto near = [&](const Obb& q) { return (q.center - gb.center).norm() <= (reach + q.half.norm()) * (1 + 1e-12); };
     std::vector<Obb> out;
     for (int32_t c : st.nodes[g].children)
       if (c != a && c != b) {
         const Obb q = tight_box(mesh_, st.nodes[c].faces, st.axes[c]);
-        if (near(q)) out.push_back(q);
+        if (near_node(gb, q)) out.push_back(q);
       }
-    for (const LayerBox& q : layer_)
-      if (q.parent != g && near(q.box)) out.push_back(q.box);
+    for (const Obb& q : layer_context(st, g)) out.push_back(q);
     return out;
+  }
+
+  // The boxes of layer_ under other nodes than g that may meet a box of g's faces.
+  std::vector<Obb> layer_context(const VariationalState& st, int32_t g) const {
+    const Obb gb = tight_box(mesh_, st.nodes[g].faces, st.axes[g]);
+    std::vector<Obb> out;
+    for (const LayerBox& q : layer_)
+      if (q.parent != g && near_node(gb, q.box)) out.push_back(q.box);
+    return out;
+  }
+
+  bool near_node(const Obb& gb, const Obb& q) const {
+    const double reach = std::sqrt(3.0) * gb.half.norm() + 2 * std::sqrt(3.0) * options_.margin;
+    return (q.center - gb.center).norm() <= (reach + q.half.norm()) * (1 + 1e-12);
   }
 
   void apply(VariationalState* st, const Move& mv, const NodeSplitter::State& s) {
@@ -1198,14 +1246,23 @@ Tree build_variational(const Mesh& mesh, const VariationalOptions& options, cons
     save();
   }
   // Bottom-up merging sweeps while the estimated e drops by 0.1 % or more.
+  std::optional<double> known_e;  // the estimated e after the last sweep, where it was taken
   while (options.merge && !st.sweeping_done && !builder.out_of_time(&st)) {
     if (st.sweeps >= options.max_sweeps) {
       st.sweeping_done = true;
       break;
     }
-    const double e = builder.estimated_e(st);
+    const double e = known_e ? *known_e : builder.estimated_e(st);
+    known_e.reset();
     if (builder.out_of_time(&st)) break;  // e may be missing boxes; no sweep is started
-    const double gain = builder.sweep(&st);
+    double gain = builder.sweep(&st);
+    if (options.objective == Objective::kOmv && !builder.out_of_time(&st)) {
+      // The regroupings of a level each score against the layer as it stood before them, so
+      // two of them may both count a region their moves free: the sum of their gains can
+      // exceed the drop. The drop itself decides (and the next sweep starts from that e).
+      known_e = builder.estimated_e(st);
+      gain = e - *known_e;
+    }
     ++st.sweeps;
     if (!(gain >= 1e-3 * e) || st.sweeps >= options.max_sweeps) st.sweeping_done = true;
     save();

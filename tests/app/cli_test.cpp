@@ -94,6 +94,13 @@ TEST(CliBadInput, MissingFileDirectoryAndUsage) {
     EXPECT_EQ(line_count(r.err), 1u) << args << ": " << r.err;
     EXPECT_NE(r.err.find("--collider-margin"), std::string::npos) << args << ": " << r.err;
   }
+  // An objective that is neither, and two objectives at once, before the mesh is read.
+  for (const char* args : {"build x.off -o t.json --objective sum", "build x.off -o t.json --objective omv --queries q.json"}) {
+    r = vobb_cli(args);
+    EXPECT_EQ(r.code, 2) << args;
+    EXPECT_EQ(line_count(r.err), 1u) << args << ": " << r.err;
+    EXPECT_NE(r.err.find("objective"), std::string::npos) << args << ": " << r.err;
+  }
 }
 
 // The unit cube as OFF, scaled.
@@ -870,6 +877,10 @@ TEST(Cli, KilledBuildResumesToTheSameTree) {
   const CliRun margin = vobb_cli("build " + mesh + " -o " + resumed + args + " --collider-margin 0.1 --checkpoint " + dir);
   EXPECT_EQ(margin.code, 2);
   EXPECT_NE(margin.err.find("checkpoint of another build"), std::string::npos) << margin.err;
+  // So is the objective: the obv state is refused by an omv build.
+  const CliRun objective = vobb_cli("build " + mesh + " -o " + resumed + args + " --objective omv --checkpoint " + dir);
+  EXPECT_EQ(objective.code, 2);
+  EXPECT_NE(objective.err.find("checkpoint of another build"), std::string::npos) << objective.err;
   std::system(("rm -rf " + dir).c_str());
   for (const std::string& p : {whole, resumed}) std::remove(p.c_str());
 }

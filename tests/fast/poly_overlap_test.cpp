@@ -1,6 +1,6 @@
-// The pairwise overlap term (fast/poly_overlap.h): its exact value is the clipping path's,
-// its interval holds it, its double lies in the interval, and with it inclusion-exclusion
-// gives the exact OMV of two boxes and brackets that of three.
+// Shared outer volume (fast/poly_overlap.h): its exact value is the clipping path's, its
+// interval holds it, its double is that value to round-off, and with it a layer's OMV is exact:
+// inclusion-exclusion for two boxes, Bonferroni's bracket for three, and shares for any number.
 #include "fast/poly_overlap.h"
 
 #include <gtest/gtest.h>
@@ -129,11 +129,8 @@ TEST(PolyOverlap, ThreeBoxesAreBracketedAndTheGapIsTheTripleTerm) {
   cell_clip::Cell<Rational> triple = cell_clip::box_pair_cell<Rational>(boxes[0], boxes[1]);
   const box_clip::Frame<Rational> fc = box_clip::make_frame<Rational>(boxes[2]);
   for (const auto& h : cell_clip::box_planes(fc, sgn(fc.det))) triple = triple.clipped(h);
-  Aabb reach;
-  for (const Obb& b : boxes)
-    for (const Vec3& p : corners(b)) reach.extend(p);
   const AabbTree faces = AabbTree::over_faces(am.mesh);
-  const Rational triple_term = cell_clip::outside_volume(am.mesh, faces, triple, reach);
+  const Rational triple_term = cell_clip::outside_volume(am.mesh, faces, triple, cell_clip::reach_of(triple));
   EXPECT_GT(triple_term, 0);
   EXPECT_LT(sum_obv - pairs, omv);
   EXPECT_EQ(sum_obv - pairs + triple_term, omv);
@@ -218,8 +215,8 @@ namespace {
 // Sibling-like pairs on real meshes: two tight boxes of neighbouring face groups, which touch
 // the same mesh vertices where the groups meet (the builder's case), and random pairs.
 TEST(PolyOverlapReal, EstimatesAreTheExactValueToRoundOff) {
+  VOBB_REQUIRE_REAL_MESH("dino");
   for (const std::string name : {"dino"}) {
-    if (!test::exists(test::real_mesh(name))) continue;
     SCOPED_TRACE(name);
     LoadedMesh lm;
     ASSERT_TRUE(load_solid(test::real_mesh(name), &lm));
