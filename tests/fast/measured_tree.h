@@ -5,10 +5,12 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <string>
 #include <vector>
 
 #include "common/mesh.h"
 #include "common/tree.h"
+#include "common/tree_io.h"
 #include "fast/obbtree_builder.h"
 #include "fast/variational_builder.h"
 
@@ -41,6 +43,21 @@ inline Measured baseline_measured(const Mesh& mesh, int depth) {
   Measured out{build_obbtree(mesh, b), {}};
   for (const TreeNode& n : out.tree.nodes) out.axes.push_back(covariance_axes(mesh, n.faces));
   return out;
+}
+
+// The tree of a build resumed from `state`, after the state has gone through a checkpoint file
+// at `path` (written, then read back under the options' arity and depth): what a killed build
+// started again gives. Empty where the file did not round-trip (a test failure is recorded).
+inline std::string resumed_tree(const Mesh& mesh, VariationalOptions o, const ObvEstimate& estimate,
+                                const VariationalState& state, const std::string& path) {
+  EXPECT_TRUE(static_cast<bool>(write_variational_state(state, "fp", path)));
+  VariationalState back;
+  bool found = false;
+  const bool read = static_cast<bool>(read_variational_state(path, "fp", mesh.faces.size(), o.arity, o.depth, &back, &found));
+  EXPECT_TRUE(read && found);
+  if (!read || !found) return std::string();
+  o.checkpoint = nullptr;
+  return tree_to_json(build_variational(mesh, o, estimate, &back));
 }
 
 }  // namespace vobb::test

@@ -13,6 +13,7 @@
 #include "exact/certify.h"
 #include "fast/cpu_estimator.h"
 #include "fast/poly_overlap.h"
+#include "fast/measured_tree.h"
 #include "fast/variational_builder.h"
 #include "test_common.h"
 
@@ -74,14 +75,7 @@ TEST(VariationalBuilderOmv, ResumedBuildEqualsUninterrupted) {
   // From mid-way down, from the end of the top-down pass, and from the last sweep's state.
   for (size_t k : {size_t{2}, static_cast<size_t>(o.depth), saved.size() - 1}) {
     SCOPED_TRACE(k);
-    ASSERT_TRUE(write_variational_state(saved[k], "fp", path));
-    VariationalState back;
-    bool found = false;
-    ASSERT_TRUE(read_variational_state(path, "fp", mesh.faces.size(), o.arity, o.depth, &back, &found));
-    ASSERT_TRUE(found);
-    VariationalOptions r = o;
-    r.checkpoint = nullptr;
-    EXPECT_EQ(tree_to_json(build_variational(mesh, r, cpu_at(cpu, 8), &back)), whole);
+    EXPECT_EQ(test::resumed_tree(mesh, o, cpu_at(cpu, 8), saved[k], path), whole);
   }
   std::remove(path.c_str());
 }

@@ -340,14 +340,7 @@ TEST(VariationalBuilder, ResumedBuildEqualsUninterrupted) {
   const std::string path = test::temp_path("state.json");
   for (size_t k = 0; k < saved.size(); ++k) {
     SCOPED_TRACE(k);
-    ASSERT_TRUE(write_variational_state(saved[k], "fp", path));
-    VariationalState back;
-    bool found = false;
-    ASSERT_TRUE(read_variational_state(path, "fp", mesh.faces.size(), o.arity, o.depth, &back, &found));
-    ASSERT_TRUE(found);
-    VariationalOptions r = o;
-    r.checkpoint = nullptr;
-    EXPECT_EQ(tree_to_json(build_variational(mesh, r, cpu_at(cpu, 8), &back)), whole);
+    EXPECT_EQ(test::resumed_tree(mesh, o, cpu_at(cpu, 8), saved[k], path), whole);
   }
   std::remove(path.c_str());
 }
