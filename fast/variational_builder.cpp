@@ -358,8 +358,8 @@ class NodeSplitter {
 
   // Per box of `boxes`: what it shares, outside the solid, with `others`: the objective's drop
   // for that box alone when they stay as they are, leaving out the context (the orientation
-  // search's measure; a state's score, score_overlaps(), takes the context in). With the
-  // context here too, dino's depth-8 build took 193 s against 11.6 s under kObv.
+  // search's measure, for its cost: docs/BENCHMARKS.md, "Overlap-aware objective"; a state's
+  // score, score_overlaps(), takes the context in).
   std::vector<double> overlap_with(const std::vector<Obb>& boxes, const std::vector<Obb>& others) {
     std::vector<ShareQuery> queries;
     for (const Obb& b : boxes) {

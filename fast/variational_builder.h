@@ -48,9 +48,8 @@
 // the other groups' boxes and the context), a node's Lloyd states and adjusted splits, and the
 // merging sweeps, where a regrouped pair's context is its layer's other boxes that may meet it,
 // cousins included, as they stood when the level's regroupings began. The flooding partition
-// still grows regions by dOBV. A truncated sum, sum OBV - sum over pairs (Bonferroni's lower
-// bound), was tried first and is not offered: minimising a lower bound rewards stacking three
-// or more boxes on one free region, and it raised dino's exact e by 18 % (docs/BENCHMARKS.md).
+// still grows regions by dOBV. Why the score is the union's and not the pairwise truncation
+// (a lower bound on OMV): docs/derivations.md, "Shared outer volume".
 // Collider margin (off by default, `margin` > 0): every box the builder measures is first
 // grown by `margin` on each side, so the search minimises the sum of OBV(O ⊕ cube(margin))
 // instead of OBV(O). A collider of radius r whose centre lies outside the solid meets O only
