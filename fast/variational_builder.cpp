@@ -107,7 +107,7 @@ constexpr int kAdjustLevels = 4;
 struct SearchShared {
   std::atomic<size_t> estimates{0};
   std::atomic<size_t> reused{0};  // boxes of a search measured again, answered from its record
-  std::atomic<size_t> overlaps{0};  // pairs whose overlap term was estimated
+  std::atomic<size_t> overlaps{0};  // shares estimated (kOmv)
   std::atomic<size_t> adjustments{0};
   std::atomic<size_t> merges{0};
   std::atomic<size_t> regroups_skipped{0};
@@ -394,11 +394,9 @@ class NodeSplitter {
         q.box.half.array() += options_.margin;
         for (Obb& e : q.earlier) e.half.array() += options_.margin;
       }
-      std::vector<uint64_t> key;
-      for (const Obb* b = &q.box; b != nullptr; b = nullptr) {
-        const BoxBits k = bits_of(*b);
-        key.insert(key.end(), k.begin(), k.end());
-      }
+      std::vector<uint64_t> key;  // the bits of the box, then of each earlier box
+      const BoxBits own = bits_of(q.box);
+      key.insert(key.end(), own.begin(), own.end());
       for (const Obb& e : q.earlier) {
         const BoxBits k = bits_of(e);
         key.insert(key.end(), k.begin(), k.end());
@@ -412,6 +410,7 @@ class NodeSplitter {
       at.push_back(i);
       keys.push_back(std::move(key));
     }
+    if (in.empty()) return out;
     auto call_share = [&](const std::vector<ShareQuery>& batch) {
       std::vector<double> v;
       if (options_.concurrent_estimates) {
