@@ -291,23 +291,6 @@ class Cell {
   std::vector<std::vector<int>> faces_;
 };
 
-// The intersection of two boxes' certified solids as a cell (empty where either is flat or
-// they do not meet in volume).
-template <class NT>
-Cell<NT> box_pair_cell(const Obb& a, const Obb& b, double snap = 0) {
-  const box_clip::Frame<NT> fa = box_clip::make_frame<NT>(a);
-  const box_clip::Frame<NT> fb = box_clip::make_frame<NT>(b);
-  const int sa = box_clip::ClipTraits<NT>::sign(fa.det), sb = box_clip::ClipTraits<NT>::sign(fb.det);
-  if (sa == 0 || sb == 0) return Cell<NT>();
-  Cell<NT> cell = Cell<NT>::from_box(fa, sa);
-  cell.snap = snap;
-  for (const Plane<NT>& h : box_planes(fb, sb)) {
-    cell = cell.clipped(h);
-    if (cell.empty()) break;
-  }
-  return cell;
-}
-
 // The double path's shortcut for a face whose shadow lies in the shadow of one upper and one
 // lower facet of the cell (docs/derivations.md, "Shared outer volume"): over the shadow the
 // cell's chord runs from z_b to z_t, both linear, and the prism holds clamp(z_face - z_b, 0,

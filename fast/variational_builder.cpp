@@ -870,7 +870,7 @@ class Builder {
       // Less each layer's overlap term (each box's share with the layer's boxes before it),
       // weighed like the layer.
       for (int l = 0; l <= d; ++l) {
-        const std::vector<int32_t> layer = layer_members(st, l, d);
+        const std::vector<int32_t> layer = layer_members(st, l);
         std::vector<ShareQuery> queries;
         for (size_t j = 0; j < layer.size(); ++j) {
           ShareQuery& q = queries.emplace_back();
@@ -884,11 +884,11 @@ class Builder {
     return e;
   }
 
-  // The nodes of layer l (of a tree of depth d): those of level l, and the leaves above it.
-  static std::vector<int32_t> layer_members(const VariationalState& st, int l, int d) {
+  // The nodes of layer l: those of level l, and the leaves above it.
+  static std::vector<int32_t> layer_members(const VariationalState& st, int l) {
     std::vector<int32_t> out;
     for (const TreeNode& n : st.nodes)
-      if (n.level == l || (n.level < l && n.children.empty() && l <= d)) out.push_back(n.id);
+      if (n.level == l || (n.level < l && n.children.empty())) out.push_back(n.id);
     return out;
   }
 
@@ -916,8 +916,8 @@ class Builder {
       // once do to them, so that the tree does not depend on their order.
       layer_.clear();
       if (options_.objective == Objective::kOmv)
-        for (int32_t id : layer_members(*st, l, d))
-          layer_.push_back({id, st->nodes[id].parent, tight_box(mesh_, st->nodes[id].faces, st->axes[id])});
+        for (int32_t id : layer_members(*st, l))
+          layer_.push_back({st->nodes[id].parent, tight_box(mesh_, st->nodes[id].faces, st->axes[id])});
       // Each regrouping reads and writes only the children and grandchildren of its node g, so
       // those of one level may run at once. The gains are added in the nodes' order, as one
       // after another would: the same sum, to the bit, and so the same decision to sweep again.
@@ -1107,7 +1107,7 @@ class Builder {
       }
     }
     if (options_.objective == Objective::kOmv)
-      for (const Obb& q : layer_context(st, g)) {
+      for (const Obb& q : layer_context(g, tight_box(mesh_, st.nodes[g].faces, st.axes[g]))) {
         const auto words = [&in](const double* v, int n) {
           for (int k = 0; k < n; ++k) {
             uint64_t bits;
@@ -1136,13 +1136,13 @@ class Builder {
         const Obb q = tight_box(mesh_, st.nodes[c].faces, st.axes[c]);
         if (near_node(gb, q)) out.push_back(q);
       }
-    for (const Obb& q : layer_context(st, g)) out.push_back(q);
+    for (const Obb& q : layer_context(g, gb)) out.push_back(q);
     return out;
   }
 
-  // The boxes of layer_ under other nodes than g that may meet a box of g's faces.
-  std::vector<Obb> layer_context(const VariationalState& st, int32_t g) const {
-    const Obb gb = tight_box(mesh_, st.nodes[g].faces, st.axes[g]);
+  // The boxes of layer_ under other nodes than g that may meet a box of g's faces (gb: g's
+  // tight box).
+  std::vector<Obb> layer_context(int32_t g, const Obb& gb) const {
     std::vector<Obb> out;
     for (const LayerBox& q : layer_)
       if (q.parent != g && near_node(gb, q.box)) out.push_back(q.box);
@@ -1204,7 +1204,7 @@ class Builder {
   std::vector<std::optional<RegroupInputs>> settled_;
   // Under kOmv, the boxes of the layer being regrouped, as they stood when its regroupings began.
   struct LayerBox {
-    int32_t id, parent;
+    int32_t parent;
     Obb box;
   };
   std::vector<LayerBox> layer_;
