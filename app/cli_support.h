@@ -118,17 +118,6 @@ inline Status check_outputs_differ(const std::string& option, const std::string&
   return Status::ok();
 }
 
-// Whether the folder `dir` takes a new file: a probe file is made there and removed. `what`
-// begins the error line (the option and its value).
-inline Status check_folder_takes_files(const std::string& what, const std::string& dir) {
-  const std::filesystem::path probe = std::filesystem::path(dir) / (".vobb-" + std::to_string(::getpid()) + "-probe.tmp");
-  const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
-  if (fd < 0) return Status::error(what + ": cannot write in " + dir + ": " + std::strerror(errno));
-  ::close(fd);
-  ::unlink(probe.c_str());
-  return Status::ok();
-}
-
 // An output that cannot be written is refused before the run, not after hours of it. Paths
 // are resolved as write_file_atomic resolves them (common/atomic_file.h): a folder is no
 // output; a device or pipe, also through a link (/dev/stdout), is written in place and passes
@@ -152,7 +141,7 @@ inline Status check_output_is_writable(const std::string& option, const std::str
   if (name_max > 0 && target.filename().string().size() > static_cast<size_t>(name_max))
     return Status::error(option + " " + output + ": file name longer than the " + std::to_string(name_max) +
                          " bytes its folder takes");
-  return check_folder_takes_files(option + " " + output, dir.string());
+  return vobb::check_folder_takes_files(option + " " + output, dir.string());
 }
 
 // The run could not finish for a reason that is not its input (its output could be written

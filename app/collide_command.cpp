@@ -1,4 +1,9 @@
-#include "app/collide_command.h"
+#include <CLI/CLI.hpp>
+
+#include <string>
+#include <vector>
+
+#include "app/command.h"
 
 #include <fmt/printf.h>
 #include <nlohmann/json.hpp>
@@ -13,10 +18,28 @@
 #include "common/text_util.h"
 #include "common/tree_io.h"
 #include "validate/collision/collision_experiment.h"
-#include "validate/collision/query_objective.h"
+#include "collision/query_objective.h"
 
 namespace vobb::app {
+
 namespace {
+
+struct CollideFlags {
+  std::string mesh;
+  std::vector<std::string> trees;
+  int colliders = 1000;
+  double seconds = 10.0;
+  uint64_t seed = 1;
+  double collider_scale = 1.0;
+  bool static_mode = false;
+  bool no_fcl = false;
+  bool json = false;
+  std::string output;  // empty: stdout
+  // The query stream's colliders, every K-th, written as a query file (query_objective.h)
+  // for `vobb build --queries`; empty: not recorded.
+  std::string record_queries;
+  int record_every = 1;
+};
 
 std::string format_json(const CollideFlags& f, const collision::ExperimentReport& r) {
   using collision::reduction_pct;
@@ -127,7 +150,6 @@ std::string format_text(const CollideFlags& f, const collision::ExperimentReport
   return out;
 }
 
-}  // namespace
 
 CLI::App* add_collide_command(CLI::App& app, CollideFlags* f) {
   CLI::App* c = app.add_subcommand(
@@ -226,5 +248,30 @@ int run_collide_command(const CollideFlags& f) {
   }
   return kExitOk;
 }
+
+class CollideCommand final : public Command {
+ public:
+  CLI::App* add(CLI::App& app) override { return add_collide_command(app, &f_); }
+  Status check_outputs() const override {
+    std::vector<std::string> inputs = f_.trees;
+    inputs.push_back(f_.mesh);
+    Status s = check_output_is_not_input("-o", f_.output, inputs);
+    if (s) s = check_output_is_writable("-o", f_.output);
+    if (s && !f_.record_queries.empty()) {
+      s = check_output_is_not_input("--record-queries", f_.record_queries, inputs);
+      if (s) s = check_outputs_differ("--record-queries", f_.record_queries, "-o", f_.output);
+      if (s) s = check_output_is_writable("--record-queries", f_.record_queries);
+    }
+    return s;
+  }
+  int run() override { return run_collide_command(f_); }
+
+ private:
+  CollideFlags f_;
+};
+
+}  // namespace
+
+std::unique_ptr<Command> collide_command() { return std::make_unique<CollideCommand>(); }
 
 }  // namespace vobb::app

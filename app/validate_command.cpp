@@ -1,4 +1,9 @@
-#include "app/validate_command.h"
+#include <CLI/CLI.hpp>
+
+#include <string>
+#include <vector>
+
+#include "app/command.h"
 
 #include <cstdio>
 #include <filesystem>
@@ -7,6 +12,16 @@
 #include "validate/validation_suite.h"
 
 namespace vobb::app {
+
+namespace {
+
+struct ValidateFlags {
+  std::string suite = "quick";
+  std::string out;     // default: validation-<suite> in the working folder
+  std::string meshes;  // default: data/real, else the source tree's data/real
+  bool cpu_only = false;
+  bool quiet = false;
+};
 
 CLI::App* add_validate_command(CLI::App& app, ValidateFlags* f) {
   CLI::App* v = app.add_subcommand(
@@ -55,5 +70,18 @@ int run_validate_command(const ValidateFlags& f) {
               report.seconds, report.summary_path.c_str());
   return report.ok() ? kExitOk : kExitCheckFailed;
 }
+
+class ValidateCommand final : public Command {
+ public:
+  CLI::App* add(CLI::App& app) override { return add_validate_command(app, &f_); }
+  int run() override { return run_validate_command(f_); }
+
+ private:
+  ValidateFlags f_;
+};
+
+}  // namespace
+
+std::unique_ptr<Command> validate_command() { return std::make_unique<ValidateCommand>(); }
 
 }  // namespace vobb::app

@@ -11,7 +11,7 @@
 #include "bench/bench_util.h"
 #include "common/io/mesh_io.h"
 #include "exact/outer_volume.h"
-#include "fast/obbtree_builder.h"
+#include "builder/obbtree_builder.h"
 
 namespace {
 

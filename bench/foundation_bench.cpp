@@ -12,7 +12,7 @@
 
 #include "common/io/mesh_io.h"
 #include "common/solidity.h"
-#include "fast/obbtree_builder.h"
+#include "builder/obbtree_builder.h"
 
 namespace {
 

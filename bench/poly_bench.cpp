@@ -20,7 +20,7 @@
 #include "common/io/mesh_report.h"
 #include "fast/cpu_estimator.h"
 #include "fast/gl_estimator.h"
-#include "fast/obbtree_builder.h"
+#include "builder/obbtree_builder.h"
 #include "fast/poly_solver.h"
 #include "validate/box_corpus.h"
 

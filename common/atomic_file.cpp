@@ -136,4 +136,23 @@ size_t remove_stray_temporaries(const std::string& folder) {
   return removed;
 }
 
+Status check_folder_takes_files(const std::string& what, const std::string& dir) {
+  const std::filesystem::path probe = std::filesystem::path(dir) / (".vobb-" + std::to_string(::getpid()) + "-probe.tmp");
+  const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+  if (fd < 0) return Status::error(what + ": cannot write in " + dir + ": " + std::strerror(errno));
+  ::close(fd);
+  ::unlink(probe.c_str());
+  return Status::ok();
+}
+
+Status make_checkpoint_folder(const std::string& what, const std::string& folder) {
+  std::error_code ec;
+  std::filesystem::create_directories(folder, ec);
+  if (ec) return Status::error(folder + ": cannot make the checkpoint folder: " + ec.message());
+  // A folder such as /sys/kernel exists and takes no file.
+  if (Status s = check_folder_takes_files(what, folder); !s) return s;
+  remove_stray_temporaries(folder);  // a run killed while it wrote a checkpoint left its temporary file
+  return Status::ok();
+}
+
 }  // namespace vobb

@@ -32,4 +32,13 @@ Status output_target(const std::string& path, std::string* target);
 constexpr int kStrayAgeSeconds = 60;
 size_t remove_stray_temporaries(const std::string& folder);
 
+// Whether the folder `dir` takes a new file: a probe file is made there and removed. `what`
+// begins the error line (the option and its value).
+Status check_folder_takes_files(const std::string& what, const std::string& dir);
+
+// Makes a checkpoint folder (and its parents) if it is not there, checks that it takes files
+// (refused now, not warned about at every save of a run that could never resume), and clears
+// it of the temporary files of runs killed mid-write. `what` begins the error line.
+Status make_checkpoint_folder(const std::string& what, const std::string& folder);
+
 }  // namespace vobb

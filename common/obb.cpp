@@ -22,7 +22,7 @@ double volume(const Obb& box) {
   // Multiplied as mantissas in [0.5, 1) with the exponents summed apart and applied once, so
   // that no partial product underflows or overflows: left to right, h0 h1 of a needle box
   // (h = 2^-600, 2^-500, 2^200) underflowed to 0 and the box counted as flat. The relative
-  // error is that of 5 products (the estimators' round-off term, validate/estimators.h),
+  // error is that of 5 products (the estimators' round-off term, fast/cubemap_bound.h),
   // plus the one final rounding where the volume itself is subnormal.
   double mantissa = 1;
   long exponent = 0;

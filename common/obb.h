@@ -103,4 +103,18 @@ class ExactBoxContainment {
   double abs_det_d_;
 };
 
+// The separating-axis test's candidates for two boxes (anything with `axes`, a std::array of
+// three Vec3), in a fixed order: a's and b's axes (a_0, b_0, a_1, b_1, a_2, b_2), then the cross
+// products a_i x b_j. Calls `separates(L)` on each until one returns true, and returns whether
+// one did. The caller's predicate decides what separates, with its own round-off allowance.
+template <class BoxA, class BoxB, class Separates>
+bool any_separating_axis(const BoxA& a, const BoxB& b, Separates separates) {
+  for (int k = 0; k < 3; ++k)
+    if (separates(a.axes[k]) || separates(b.axes[k])) return true;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      if (separates(a.axes[i].cross(b.axes[j]))) return true;
+  return false;
+}
+
 }  // namespace vobb

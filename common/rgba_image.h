@@ -1,5 +1,5 @@
 // vobb::RgbaImage — an 8-bit RGBA image in memory, rows top-down. Header only: the renderer
-// that fills it (fast/tree_figure.h) and the PNG writer (png_io.h) share it without linking
+// that fills it (render/tree_figure.h) and the PNG writer (png_io.h) share it without linking
 // each other.
 #pragma once
 

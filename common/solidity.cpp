@@ -116,57 +116,67 @@ std::vector<std::vector<int32_t>> face_components(const Mesh& mesh) {
   return out;
 }
 
-SolidityReport check_solidity(const Mesh& mesh) {
-  SolidityReport r;
-  r.vertices = mesh.vertices.size();
-  r.faces = mesh.faces.size();
-  if (mesh.faces.empty()) {
-    r.defects.push_back({Defect::kEmpty, 0});
-    return r;
-  }
-  // Finite coordinates first: every predicate below assumes them.
-  size_t nonfinite = 0, huge = 0;
-  for (const Vec3& v : mesh.vertices) {
-    if (!v.allFinite()) ++nonfinite;
-    else if (v.cwiseAbs().maxCoeff() > kMaxCoordinate) ++huge;
-  }
+namespace {
 
-  // Degenerate faces: a repeated index, or three collinear points (exactly).
+// Faces with a repeated index or, where `geometric` (every coordinate finite and not huge),
+// three collinear corners (exactly); `count` is set to their number.
+std::vector<char> degenerate_faces(const Mesh& mesh, bool geometric, size_t* count) {
   const size_t nf = mesh.faces.size();
   std::vector<char> degenerate(nf, 0);
   size_t n_degenerate = 0;
   for (size_t f = 0; f < nf; ++f) {
     const Face& F = mesh.faces[f];
     bool deg = F[0] == F[1] || F[1] == F[2] || F[2] == F[0];
-    if (!deg && nonfinite == 0 && huge == 0) deg = collinear(mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2));
+    if (!deg && geometric) deg = collinear(mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2));
     if (deg) {
       degenerate[f] = 1;
       ++n_degenerate;
     }
   }
+  *count = n_degenerate;
+  return degenerate;
+}
 
-  // Duplicate faces: the same vertex set as an earlier face. They are reported, and left out
-  // of the self-intersection search below, where k copies of a face would cost k^2 / 2 pairs.
+// Non-degenerate faces with the same vertex set as an earlier face; `count` is set to their
+// number.
+std::vector<char> duplicate_faces(const Mesh& mesh, const std::vector<char>& degenerate,
+                                  size_t* count) {
+  const size_t nf = mesh.faces.size();
   std::vector<char> duplicate(nf, 0);
   size_t n_duplicate = 0;
-  {
-    std::vector<std::pair<std::array<int32_t, 3>, int32_t>> keys;
-    keys.reserve(nf);
-    for (size_t f = 0; f < nf; ++f) {
-      if (degenerate[f]) continue;
-      std::array<int32_t, 3> k = {mesh.faces[f][0], mesh.faces[f][1], mesh.faces[f][2]};
-      std::sort(k.begin(), k.end());
-      keys.push_back({k, static_cast<int32_t>(f)});
-    }
-    std::sort(keys.begin(), keys.end());
-    for (size_t i = 1; i < keys.size(); ++i)
-      if (keys[i].first == keys[i - 1].first) {
-        duplicate[keys[i].second] = 1;
-        ++n_duplicate;
-      }
+  std::vector<std::pair<std::array<int32_t, 3>, int32_t>> keys;
+  keys.reserve(nf);
+  for (size_t f = 0; f < nf; ++f) {
+    if (degenerate[f]) continue;
+    std::array<int32_t, 3> k = {mesh.faces[f][0], mesh.faces[f][1], mesh.faces[f][2]};
+    std::sort(k.begin(), k.end());
+    keys.push_back({k, static_cast<int32_t>(f)});
   }
+  std::sort(keys.begin(), keys.end());
+  for (size_t i = 1; i < keys.size(); ++i)
+    if (keys[i].first == keys[i - 1].first) {
+      duplicate[keys[i].second] = 1;
+      ++n_duplicate;
+    }
+  *count = n_duplicate;
+  return duplicate;
+}
 
-  // Edges: sorted (lo, hi, face, forward) records give border, non-manifold and flipped edges.
+// What the edges of the non-degenerate faces say: counts of distinct, border, non-manifold and
+// flipped edges, the faces joined across shared edges (shells), and the corners (face, k)
+// joined across the manifold edges around their vertex (fans).
+struct EdgeAnalysis {
+  explicit EdgeAnalysis(size_t nf) : shells(nf), fans(3 * nf) {}
+  size_t edges = 0, border = 0, nonmanifold = 0, inconsistent = 0;
+  DisjointSets shells;
+  // A vertex whose corners form more than one group sits where separate fans meet.
+  DisjointSets fans;
+};
+
+// Sorts (lo, hi, face, forward) records of the non-degenerate faces' edges and reads border,
+// non-manifold and flipped edges, shells and fans from them.
+EdgeAnalysis analyse_edges(const Mesh& mesh, const std::vector<char>& degenerate) {
+  const size_t nf = mesh.faces.size();
   struct EdgeRec {
     int32_t lo, hi, face;
     bool forward;
@@ -186,11 +196,7 @@ SolidityReport check_solidity(const Mesh& mesh) {
     if (x.hi != y.hi) return x.hi < y.hi;
     return x.face < y.face;
   });
-  size_t border = 0, nonmanifold = 0, inconsistent = 0;
-  DisjointSets shells(nf);
-  // Corners (face, k) joined across the manifold edges around their vertex: a vertex whose
-  // corners form more than one group sits where separate fans meet.
-  DisjointSets fans(3 * nf);
+  EdgeAnalysis out(nf);
   auto corner_of = [&](int32_t face, int32_t vertex) {
     const Face& F = mesh.faces[face];
     return 3 * face + (F[0] == vertex ? 0 : F[1] == vertex ? 1 : 2);
@@ -199,30 +205,120 @@ SolidityReport check_solidity(const Mesh& mesh) {
     const EdgeRec& first = recs[i];
     size_t j = i + 1;
     while (j < recs.size() && recs[j].lo == first.lo && recs[j].hi == first.hi) {
-      shells.unite(first.face, recs[j].face);
+      out.shells.unite(first.face, recs[j].face);
       ++j;
     }
     const size_t count = j - i;
-    ++r.edges;
-    if (count == 1) ++border;
-    else if (count > 2) ++nonmanifold;
-    else if (recs[i].forward == recs[i + 1].forward) ++inconsistent;
+    ++out.edges;
+    if (count == 1) ++out.border;
+    else if (count > 2) ++out.nonmanifold;
+    else if (recs[i].forward == recs[i + 1].forward) ++out.inconsistent;
     if (count == 2)
       for (int32_t v : {recs[i].lo, recs[i].hi})
-        fans.unite(corner_of(recs[i].face, v), corner_of(recs[i + 1].face, v));
+        out.fans.unite(corner_of(recs[i].face, v), corner_of(recs[i + 1].face, v));
     i = j;
   }
+  return out;
+}
+
+// The non-degenerate faces grouped by shell, shells in the order of their first face.
+std::vector<std::vector<int32_t>> shell_faces_of(const std::vector<char>& degenerate,
+                                                 DisjointSets* shells) {
+  const size_t nf = degenerate.size();
   std::vector<int32_t> shell_of(nf, -1);
   std::vector<std::vector<int32_t>> shell_faces;
   for (size_t f = 0; f < nf; ++f) {
     if (degenerate[f]) continue;
-    const int32_t root = shells.find(static_cast<int32_t>(f));
+    const int32_t root = shells->find(static_cast<int32_t>(f));
     if (shell_of[root] < 0) {
       shell_of[root] = static_cast<int32_t>(shell_faces.size());
       shell_faces.emplace_back();
     }
     shell_faces[shell_of[root]].push_back(static_cast<int32_t>(f));
   }
+  return shell_faces;
+}
+
+// The vertices where separate fans of non-degenerate faces meet.
+size_t pinched_vertices(const Mesh& mesh, const std::vector<char>& degenerate, DisjointSets* fans) {
+  const size_t nf = mesh.faces.size();
+  std::vector<int32_t> fan_of(mesh.vertices.size(), -1);
+  std::vector<char> pinched(mesh.vertices.size(), 0);
+  for (size_t f = 0; f < nf; ++f) {
+    if (degenerate[f]) continue;
+    for (int k = 0; k < 3; ++k) {
+      const int32_t v = mesh.faces[f][k];
+      const int32_t root = fans->find(static_cast<int32_t>(3 * f + k));
+      if (fan_of[v] < 0) fan_of[v] = root;
+      else if (fan_of[v] != root) pinched[v] = 1;
+    }
+  }
+  return static_cast<size_t>(std::count(pinched.begin(), pinched.end(), 1));
+}
+
+// The shells that face the wrong way for their nesting depth (winding number 0 outside, 1
+// inside), given the shells' exact signed volumes and their sum. The shells must be closed,
+// manifold, consistently oriented and disjoint.
+size_t inward_shells(const Mesh& mesh, const std::vector<std::vector<int32_t>>& shell_faces,
+                     const std::vector<Rational>& shell_volume, const Rational& total) {
+  size_t wrong = 0;
+  if (shell_faces.size() == 1) {
+    wrong = sgn(total) > 0 ? 0 : 1;
+  } else {
+    for (size_t s = 0; s < shell_faces.size(); ++s) {
+      // Winding number of the other shells at a vertex of this one. The vertex is off
+      // every other shell (no intersections), so the sum is an integer up to round-off.
+      const Vec3& p = mesh.corner(shell_faces[s][0], 0);
+      double omega = 0.0;
+      for (size_t t = 0; t < shell_faces.size(); ++t) {
+        if (t == s) continue;
+        for (int32_t f : shell_faces[t])
+          omega += solid_angle(p, mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2));
+      }
+      const long w = std::lround(omega / (4.0 * M_PI));
+      const int sign = sgn(shell_volume[s]);
+      const bool ok = (w == 0 && sign > 0) || (w == 1 && sign < 0);
+      if (!ok) ++wrong;
+    }
+  }
+  return wrong;
+}
+
+}  // namespace
+
+SolidityReport check_solidity(const Mesh& mesh) {
+  SolidityReport r;
+  r.vertices = mesh.vertices.size();
+  r.faces = mesh.faces.size();
+  if (mesh.faces.empty()) {
+    r.defects.push_back({Defect::kEmpty, 0});
+    return r;
+  }
+  // Finite coordinates first: every predicate below assumes them.
+  size_t nonfinite = 0, huge = 0;
+  for (const Vec3& v : mesh.vertices) {
+    if (!v.allFinite()) ++nonfinite;
+    else if (v.cwiseAbs().maxCoeff() > kMaxCoordinate) ++huge;
+  }
+
+  // Degenerate faces: a repeated index, or three collinear points (exactly).
+  const size_t nf = mesh.faces.size();
+  size_t n_degenerate = 0;
+  const std::vector<char> degenerate =
+      degenerate_faces(mesh, nonfinite == 0 && huge == 0, &n_degenerate);
+
+  // Duplicate faces: the same vertex set as an earlier face. They are reported, and left out
+  // of the self-intersection search below, where k copies of a face would cost k^2 / 2 pairs.
+  size_t n_duplicate = 0;
+  const std::vector<char> duplicate = duplicate_faces(mesh, degenerate, &n_duplicate);
+
+  // Edges: sorted (lo, hi, face, forward) records give border, non-manifold and flipped edges.
+  EdgeAnalysis analysis = analyse_edges(mesh, degenerate);
+  r.edges = analysis.edges;
+  const size_t border = analysis.border, nonmanifold = analysis.nonmanifold;
+  const size_t inconsistent = analysis.inconsistent;
+  const std::vector<std::vector<int32_t>> shell_faces =
+      shell_faces_of(degenerate, &analysis.shells);
   r.shells = shell_faces.size();
 
   if (nonfinite) r.defects.push_back({Defect::kNonFinite, nonfinite});
@@ -237,18 +333,7 @@ SolidityReport check_solidity(const Mesh& mesh) {
   if (border) r.defects.push_back({Defect::kNotClosed, border});
   if (nonmanifold) r.defects.push_back({Defect::kNonManifoldEdge, nonmanifold});
   if (border == 0 && nonmanifold == 0) {
-    std::vector<int32_t> fan_of(mesh.vertices.size(), -1);
-    std::vector<char> pinched(mesh.vertices.size(), 0);
-    for (size_t f = 0; f < nf; ++f) {
-      if (degenerate[f]) continue;
-      for (int k = 0; k < 3; ++k) {
-        const int32_t v = mesh.faces[f][k];
-        const int32_t root = fans.find(static_cast<int32_t>(3 * f + k));
-        if (fan_of[v] < 0) fan_of[v] = root;
-        else if (fan_of[v] != root) pinched[v] = 1;
-      }
-    }
-    const size_t n_pinched = static_cast<size_t>(std::count(pinched.begin(), pinched.end(), 1));
+    const size_t n_pinched = pinched_vertices(mesh, degenerate, &analysis.fans);
     if (n_pinched) r.defects.push_back({Defect::kNonManifoldVertex, n_pinched});
   }
   if (inconsistent) r.defects.push_back({Defect::kInconsistentOrientation, inconsistent});
@@ -274,26 +359,7 @@ SolidityReport check_solidity(const Mesh& mesh) {
     }
     r.volume = total;
     r.volume_known = true;
-    size_t wrong = 0;
-    if (shell_faces.size() == 1) {
-      wrong = sgn(total) > 0 ? 0 : 1;
-    } else {
-      for (size_t s = 0; s < shell_faces.size(); ++s) {
-        // Winding number of the other shells at a vertex of this one. The vertex is off
-        // every other shell (no intersections), so the sum is an integer up to round-off.
-        const Vec3& p = mesh.corner(shell_faces[s][0], 0);
-        double omega = 0.0;
-        for (size_t t = 0; t < shell_faces.size(); ++t) {
-          if (t == s) continue;
-          for (int32_t f : shell_faces[t])
-            omega += solid_angle(p, mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2));
-        }
-        const long w = std::lround(omega / (4.0 * M_PI));
-        const int sign = sgn(shell_volume[s]);
-        const bool ok = (w == 0 && sign > 0) || (w == 1 && sign < 0);
-        if (!ok) ++wrong;
-      }
-    }
+    const size_t wrong = inward_shells(mesh, shell_faces, shell_volume, total);
     if (wrong) r.defects.push_back({Defect::kInwardOriented, wrong});
   }
   return r;

@@ -35,6 +35,10 @@ struct Tree {
   std::vector<TreeNode> nodes;
 };
 
+// The weight ω(l) = D - l + 1 of layer l (0 <= l <= D) in the error of a tree of depth D,
+// e = Σ_l ω(l) OMV(layer l) (DESIGN §1): the one place it is written.
+inline int layer_weight(int depth, int level) { return depth - level + 1; }
+
 // Node ids of layer `level` (0 <= level <= depth), ascending.
 std::vector<int32_t> layer(const Tree& tree, int level);
 

@@ -450,41 +450,4 @@ void GlObvEstimator::flush(int m) {
   g.batch_constant.clear();
 }
 
-// ---- the deviation bound -----------------------------------------------------------------
-//
-// |GL - CPU| <= |GL - exact(plan)| + |CPU - exact(plan)|. The first term is the plan evaluated
-// with u = 2^-24 (analyse_plan_rounding, texel_plan.cpp, derives the per-pair terms) and GL's
-// summation: each texel blends its hits in float (assuming round-to-nearest float blending,
-// which GL does not promise but every implementation we know does), and the reduction adds per
-// lane ceil(6m^2 / 256) texels and then 8 tree levels: at most K = H + ceil(6m^2/256) + 8
-// additions per term, H the most terms in one texel, so the summation error is at most
-// gamma_K sum |values| (Higham, Accuracy and Stability of Numerical Algorithms, 2nd ed.,
-// eq. 4.4). GLSL may flush subnormals, hence the FLT_MIN terms. The read-back sum is then
-// assembled in double exactly as the CPU twin does, so the second term, cpu_rounding_bound,
-// also covers that assembly. The bound is first-principles, not fitted: the test asserts it,
-// and reports how close the observed deviations come to it.
-namespace {
-constexpr double kFloatMin = 1.1754943508222875e-38;  // FLT_MIN, 2^-126
-}  // namespace
-
-bool gl_evaluates_in_float(const BoxPlan& plan) {
-  for (const LocalTriangle& t : plan.tris) {
-    const double fn = pow2_normalizer(t.normal[0], t.normal[1], t.normal[2]);
-    if (t.plane != 0 && std::abs(t.plane * fn) < 3 * kFloatMin) return false;
-  }
-  return true;
-}
-
-double gl_deviation_bound(const BoxPlan& plan, int m) {
-  if (!gl_evaluates_in_float(plan)) return 0.0;  // evaluated by the CPU twin's code (header)
-  if (plan.flat || plan.spans.empty()) return cpu_rounding_bound(plan, m);
-  constexpr double u = 1.0 / (1 << 24);
-  const PlanRounding r = analyse_plan_rounding(plan, m, RoundingModel{u, 3 * kFloatMin, true});
-  const double K = r.most_per_texel + std::ceil(6.0 * m * m / 256) + 8;
-  const double summation = K * u / (1 - K * u) * (r.sum_abs + 2 * r.uncertain);
-  const double texel_weight = 4.0 / (3.0 * m * m);
-  return plan.frame.volume_scale * texel_weight * (r.value_errors + 2 * r.uncertain + summation) +
-         cpu_rounding_bound(plan, m);
-}
-
 }  // namespace vobb

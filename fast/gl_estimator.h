@@ -37,6 +37,7 @@
 #include "common/obb.h"
 #include "common/status.h"
 #include "fast/gl_context.h"
+#include "fast/cubemap_bound.h"
 #include "fast/texel_plan.h"
 
 namespace vobb {
@@ -96,14 +97,5 @@ class GlObvEstimator {
   std::atomic<size_t> cpu_fallbacks_{0};
   std::atomic<size_t> shared_round_trips_{0};
 };
-
-// An upper bound on |GL estimate - CPU twin estimate| for a box with this plan at resolution
-// m, in world volume units, from float32 rounding in the shaders (gl_estimator.cpp derives it).
-double gl_deviation_bound(const BoxPlan& plan, int m);
-
-// Whether the shaders can evaluate this plan (above): false when a face's scaled plane is
-// nonzero but below 3 FLT_MIN, the threshold under which analyse_plan_rounding counts its
-// pairs as uncertain in float.
-bool gl_evaluates_in_float(const BoxPlan& plan);
 
 }  // namespace vobb

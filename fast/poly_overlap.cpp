@@ -41,12 +41,7 @@ bool PolyOverlapSolver::apart(const Obb& a, const Obb& b) {
     }
     return std::abs(u.dot(d)) > ra + rb + slack;
   };
-  for (int k = 0; k < 3; ++k)
-    if (split_by(a.axes[k]) || split_by(b.axes[k])) return true;
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j)
-      if (split_by(a.axes[i].cross(b.axes[j]))) return true;
-  return false;
+  return any_separating_axis(a, b, split_by);
 }
 
 Rational PolyOverlapSolver::exact(const Obb& box, const std::vector<Obb>& earlier) const {

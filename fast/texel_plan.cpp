@@ -10,26 +10,10 @@
 
 namespace vobb {
 
-// The frame's rounding. With M = [h0 a0, h1 a1, h2 a2] taken exactly (the box as stored), L
-// the rounded inverse and w = p - c, the exact local coordinates are t = M^-1 w. Write
-// M = A H (A = [a0 a1 a2], H = diag h) and P = H L, so that L = H^-1 P, M^-1 = H^-1 A^-1 and
-//   h_k (t - L w)_k = (A^-1 (I - M L) w)_k,   A^-1 = P (I - E)^-1 with E = I - M L,
-// hence h_k |t_k - (L w)_k| <= ||P|| eps / (1 - eps) |w|_inf =: alpha |w|_inf, eps >= ||E||
-// (infinity norms), provided eps < 1. No condition number enters: the rows of L are those of
-// A^-1 scaled by 1 / h_k, each rounded at its own scale, so E stays near u even for a box of
-// aspect 1e-12. eps is E computed in double from the rounded M~ = fl(h_k a_k), plus that
-// computation's error and M - M~ (each product within u): entrywise at most
-// (gamma_4 + 2u)(|I| + |M~||L|); ||P|| from |h_k L_kj|, one rounding each. Every such sum is
-// itself computed in double, so the terms are doubled: erring wide only widens the margins.
-// Then local(p) = fl(L fl(w)) adds gamma_4 sum_j |L_kj||w_j| on axis k (local_error).
-// L is formed as H^-1 A^-1 (each row of A's inverse divided by its h_k), not by inverting M:
-// for a tiny box M's determinant, a product of three h, underflows (half extents 1e-108 give
-// 1e-324), while A^-1 and 1 / h_k stay normal. Where M~'s entries themselves may be
-// subnormal (products below 2^-1022, off by up to 2^-1075 rather than u), eps gets
-// 3 * 2^-1074 |L_ij| for the entries of row i; the entries of other rows that a subnormal
-// column of M~ meets add at most about 2.6u more, which the 12u identity term absorbs
-// (|L| ~ 1 / h: at most 3 * 2^-52 for normal half extents). Axes that double cannot invert
-// and subnormal half extents (whose inverse may overflow) give an invalid frame.
+// The box's frame, with inverse_error bounding the rounding of to_local (BoxFrame). Axes that
+// double cannot invert and subnormal half extents (whose inverse may overflow) give an invalid
+// frame.
+// Derivation: docs/derivations.md, "The box frame's rounding".
 BoxFrame box_frame(const Obb& box) {
   Eigen::Matrix3d axes, m;
   for (int k = 0; k < 3; ++k) {
@@ -92,17 +76,9 @@ Vec3 abs_cross(const Vec3& a, const Vec3& b) {
   return Vec3(x[1] * y[2] + x[2] * y[1], x[2] * y[0] + x[0] * y[2], x[0] * y[1] + x[1] * y[0]);
 }
 
-// LocalTriangle::edge_tie for E = fl(+-(p x q)). For the double texel direction d (|d_i| <= 1)
-// and the exact one d*:
-//   |fl(d . E) - d* . E*| <= |fl(d . E) - d . E| + |(d - d*) . E| + |d* . (E - E*)|
-//     <= gamma_3 |E|_1 + 3u |E|_1 + gamma_2 ||p| x |q||_1:
-// a 3-term dot product (with or without fused multiply-adds); texel_center's division (at
-// most 2u, the quotient being below 2) and subtraction (u, the result below 1) on the two
-// varying components; and each component of the cross product, a difference of two products
-// (gamma_2 of their magnitudes, fused or not). 8u on both sums covers these and the rounding
-// of the bound itself; 2^-1070 covers underflow (products below 2^-1022 lose up to 2^-1075
-// each). An edge test inside it costs a rational evaluation; only rays within rounding of an
-// edge's plane fall there.
+// LocalTriangle::edge_tie for E = fl(+-(p x q)): a bound on |fl(d . E) - d* . E*| over the
+// texel directions d (double) and d* (exact).
+// Derivation: docs/derivations.md, "Edge ties".
 double edge_tie(const Vec3& E, const Vec3& p, const Vec3& q) {
   constexpr double u = 0x1p-53;
   return 8 * u * (E.cwiseAbs().sum() + abs_cross(p, q).sum()) + 0x1p-1070;
@@ -150,12 +126,9 @@ int clip(const Vec3* in, int n, Vec3* out, const Plane& plane) {
 // the texels whose centres lie in the projected clipped polygon's bounds form the span.
 // A clipped vertex too close to the centre to project reliably gives the whole face.
 // `slack` bounds how far (Euclidean, local units) the plan's vertices may lie from the exact
-// ones (BoxFrame::local_error), so that the spans cover the exact face too: every clipping
-// plane is moved out by it (by 2 slack for the cone planes, whose normals have length sqrt 2),
-// so an exact point x inside keeps its rounded image x~ (|x - x~| <= slack) inside; and since
-// |x_a / x_k - x~_a / x~_k| <= (|u| |e_k| + |e_a|) / x~_k <= 2 slack / x~_k for e = x - x~,
-// the projected bounds are widened by 2 slack / zeta_min, zeta_min the least depth of the
-// polygon's vertices (the least over the polygon, depth being linear along it).
+// ones (BoxFrame::local_error); the clipping planes and the projected bounds are widened for
+// it, so that the spans cover the exact face too.
+// Derivation: docs/derivations.md, "Texel spans".
 bool texel_span(const LocalTriangle& t, int face, int m, bool no_far_clip, double slack, TexelSpan* span) {
   const int k = face / 2, a = (k + 1) % 3, b = (k + 2) % 3;
   const double s = face % 2 == 0 ? 1.0 : -1.0;
@@ -245,7 +218,7 @@ double resolution_bound(const BoxPlan& plan, int m) {
   // Pyramids per covered texel (header): one, or two where the centre's class may disagree
   // with the plan's faces; plus 2 per (texel, face) pair of a face near the centre, whose
   // hits the plan may get wrong, and 3e-6 per other pair for the depths of the plan's planes
-  // (plan()).
+  // (face_near_centre).
   const double off_by = plan.centre_near_surface ? 2.0 : 1.0;
   const double pyramids = static_cast<double>(count) * off_by + 2.0 * static_cast<double>(near_pairs) +
                           3e-6 * static_cast<double>(pairs);
@@ -254,39 +227,7 @@ double resolution_bound(const BoxPlan& plan, int m) {
 
 // ---- round-off of evaluating a plan -------------------------------------------------------
 //
-// Against the exact evaluation of the same plan, an evaluation with unit round-off u computes,
-// per texel and span:
-//  - the direction d: components -1 + (2i+1)/m; a division may be off by 2.5u (GLSL's
-//    allowance; IEEE double is 0.5u) and the quotient is at most 2 in magnitude, so each of the
-//    two varying components is off by at most 2.5u*2 + u (the subtraction) < 8u, absolutely;
-//    the axis component +-1 is exact;
-//  - dot products d.E with E rounded (relative u; no rounding in double) and three roundings
-//    of a 3-term sum (gamma_3): |fl(d.E) - d.E| <= 8u (|E_a| + |E_b|) + 5u sum_i |d_i E_i|
-//    =: err(E), plus underflow (model.tiny). An edge test whose |d.E| <= err(E) may come
-//    out either way ("uncertain");
-//  - zeta = plane / nd: nd has relative error r = err(n) / |nd|; with the plane rounded (u) and
-//    the division (2.5u, taken as 3u), zeta's relative error is at most
-//    z = (1 + r) / (1 - r) (1 + u)(1 + 3u) - 1, and zeta^3's at most (1 + z)^3 (1 + u)^2 - 1 =: z3;
-//  - a hit's value s (1 - zeta^3) (or -s zeta^3) is then off by at most
-//    zeta^3 z3 + u (1 + zeta^3 (1 + z3)).
-//  - A hit whose zeta lies within its error of a threshold (0 or 1) may be counted or not: at
-//    1 the two sides differ by |1 - zeta^3| plus the error above. At 0 the computed zeta keeps
-//    the exact sign as long as r < 1/2 and zeta does not underflow; otherwise (a grazing ray,
-//    or a centre within underflow of the face's plane) the pair is uncertain.
-//  - An uncertain (texel, face) pair adds 2: each side's value lies in [-1, 1]. For the CPU
-//    twin, whose edge tests are exact (cpu_edge_side), none is uncertain (exact_edges).
-//  - The reference's edge tests are exact (E* = p_a x p_b of the plan's p, LocalTriangle), so
-//    that it is a consistent ray cast; the evaluated crosses are E* rounded in double, whose
-//    error gamma_2 || |p_a| x |p_b| ||_1 err(E) includes.
-//  - A face whose plane is exactly 0 (through the centre) gives zeta = +-0 or, with nd = 0, no
-//    test at all, in every arithmetic: it never hits, and is skipped.
-// This bookkeeping itself runs in double on the plan's doubles. Against the float model its
-// own error is some 2^-29 of the terms; against the double model the terms over-count (8u for
-// the direction where IEEE double needs 2.5u, no rounding of E or of the plane, 3u for a
-// division that IEEE rounds to 0.5u), which absorbs it.
-namespace {
-
-}  // namespace
+// Derivation of the per-pair terms: docs/derivations.md, "Round-off of evaluating a plan".
 
 int exact_edge_side(const LocalTriangle& t, int k, const Texel& x) {
   if (t.edge_zero[k]) return 0;  // E* = 0, decided by plan(): the end of this function's search
@@ -403,10 +344,7 @@ PlanRounding analyse_plan_rounding(const BoxPlan& plan, int m, const RoundingMod
   return out;
 }
 
-// The CPU twin adds its terms one by one into one double (sum_texel_hits), then forms
-// scale * (constant + (4 / (3 m^2)) * sum): the recursive-summation bound gives
-// gamma_{N-1} sum |terms| for N terms, and the weight (3 roundings), its product, the sum with
-// the constant and the product with the scale (1 each) add gamma_6 of the magnitudes involved.
+// Derivation: docs/derivations.md, "The CPU twin's sum".
 double cpu_rounding_bound(const BoxPlan& plan, int m) {
   if (plan.flat) return 0.0;
   constexpr double u = 0x1p-53;
@@ -417,6 +355,141 @@ double cpu_rounding_bound(const BoxPlan& plan, int m) {
   const double magnitude = std::abs(plan.constant) + texel_weight * (r.sum_abs + 2 * r.uncertain);
   return plan.frame.volume_scale * (texel_weight * (r.value_errors + 2 * r.uncertain) + gamma * magnitude);
 }
+
+namespace {
+
+// Every field as a new BoxPlan has it, but the vectors' capacity.
+void reset_plan(BoxPlan* out) {
+  BoxPlan& plan = *out;
+  std::vector<LocalTriangle> tris = std::move(plan.tris);
+  std::vector<TexelSpan> spans = std::move(plan.spans);
+  tris.clear();
+  spans.clear();
+  plan = BoxPlan{};
+  plan.tris = std::move(tris);
+  plan.spans = std::move(spans);
+}
+
+// Marks a box whose view of the mesh the plan's doubles cannot hold (see BoxPlan::unresolved).
+void unresolve(const Obb& box, BoxPlan* out) {
+  BoxPlan& plan = *out;
+  plan.unresolved = true;
+  plan.constant = 4.0;
+  plan.tris.clear();
+  plan.spans.clear();
+  plan.centre_near_surface = false;
+  if (!(plan.frame.volume_scale > 0) || !std::isfinite(plan.frame.volume_scale))
+    plan.frame.volume_scale = volume(box) / 8;  // invalid frame: volume() is the scale
+}
+
+// Whether face t, whose plan holds e1 = p1 - p0 and e2 = p2 - p0 and lies within `slack` of the
+// exact face, may pass so near the centre that the plan's hits on it cannot be trusted
+// (LocalTriangle::near_centre); where it may not, each hit's depth is within 2^-20 relative.
+// Derivation: docs/derivations.md, "Faces near the centre".
+bool face_near_centre(const LocalTriangle& t, const Vec3& e1, const Vec3& e2, double slack) {
+  constexpr double u = 0x1p-53;
+  const Vec3 spread = e1.cwiseAbs().cwiseMax(e2.cwiseAbs());
+  const double delta = 8 * u * abs_cross(e1, e2).dot(spread) +
+                       4 * u * t.normal.cwiseAbs().dot(t.p[0].cwiseAbs()) +
+                       0x1p-1072 * (spread.sum() + t.p[0].cwiseAbs().sum() + 1);
+  return !(std::abs(t.plane) > (2 * slack * t.normal.norm() + (0x1p20 + 1) * delta) * (1 + 1e-12));
+}
+
+// Local units. Culling only needs to be conservative: a face is dropped only when its
+// exact coordinates (within local_error of the plan's) miss the cube on some axis.
+constexpr double kCullMargin = 1e-9;
+
+// Adds mesh face f, in the plan's local coordinates, and its texel spans at resolution m to
+// the plan, unless culling shows that it misses the cube; a face that the plan's doubles cannot
+// hold marks the plan unresolved instead.
+void consider_face(const Mesh& mesh, int32_t f, int m, bool no_far_clip, bool culling,
+                   BoxPlan* out) {
+  BoxPlan& plan = *out;
+  if (plan.unresolved) return;  // the plan is dropped anyway (unresolve below)
+  LocalTriangle t;
+  Vec3 err = Vec3::Zero();  // per axis, the most any of the three vertices may be off
+  for (int k = 0; k < 3; ++k) {
+    t.id[k] = mesh.faces[f][k];
+    const Vec3& v = mesh.vertices[t.id[k]];
+    t.p[k] = plan.frame.local(v);
+    err = err.cwiseMax(plan.frame.local_error(v));
+  }
+  if (!plan.far_count && culling) {
+    for (int axis = 0; axis < 3; ++axis) {
+      const double lo = std::min({t.p[0][axis], t.p[1][axis], t.p[2][axis]});
+      const double hi = std::max({t.p[0][axis], t.p[1][axis], t.p[2][axis]});
+      const double margin = std::max(kCullMargin, err[axis]);
+      if (lo > 1 + margin || hi < -1 - margin) return;  // misses the cube
+    }
+  }
+  // Every point of the exact face lies within `slack` of the plan's (barycentric weights).
+  const double slack = err.norm() * (1 + 1e-15);
+  // Kept faces must lie within 2^300 box units, so that crosses (2^601), normals (2^603),
+  // planes (2^905) and the error terms built from them stay finite, and their error bound
+  // must be finite. (Culling is sound with overflowed coordinates: an infinite coordinate
+  // stands for one beyond 2^1024 box units, and an infinite error keeps the face.)
+  const double far = std::max({t.p[0].cwiseAbs().maxCoeff(), t.p[1].cwiseAbs().maxCoeff(),
+                               t.p[2].cwiseAbs().maxCoeff()});
+  if (!(far <= 0x1p300) || !(slack < HUGE_VAL)) {
+    plan.unresolved = true;
+    return;
+  }
+  for (int k = 0; k < 3; ++k) {
+    const int a = k, b = (k + 1) % 3;
+    t.edge_cross[k] = t.id[a] < t.id[b] ? Vec3(t.p[a].cross(t.p[b])) : Vec3(-t.p[b].cross(t.p[a]));
+    t.edge_tie[k] = edge_tie(t.edge_cross[k], t.p[a], t.p[b]);
+    t.edge_zero[k] = cross_is_exactly_zero(t.edge_cross[k], t.p[a], t.p[b]);
+  }
+  const Vec3 e1 = t.p[1] - t.p[0], e2 = t.p[2] - t.p[0];
+  t.normal = e1.cross(e2);
+  if (plan.frame.mirrored) t.normal = -t.normal;
+  t.plane = t.normal.dot(t.p[0]);
+  if (!plan.far_count) t.near_centre = face_near_centre(t, e1, e2, slack);
+  const int32_t index = static_cast<int32_t>(plan.tris.size());
+  bool used = false;
+  for (int face = 0; face < 6; ++face) {
+    TexelSpan span;
+    if (!texel_span(t, face, m, no_far_clip, slack, &span)) continue;
+    span.tri = index;
+    plan.spans.push_back(span);
+    used = true;
+  }
+  if (used) plan.tris.push_back(t);
+  if (used && t.near_centre) plan.centre_near_surface = true;
+}
+
+// Calls visit(f) for every face of the mesh whose bounds (in `faces`) may meet the box, in mesh
+// order.
+template <class Visit>
+void for_each_face_near(const Mesh& mesh, const AabbTree& faces, const Obb& box,
+                        const Visit& visit) {
+  Aabb world;
+  for (const Vec3& c : corners(box)) world.extend(c);
+  // The corners are rounded at the scale of the coordinates, not of the box (a box of size
+  // 0.01 at 1e6 has corners off by 1e-10): the pad covers both, far above a few roundings.
+  const double scale = std::max(world.lo.cwiseAbs().maxCoeff(), world.hi.cwiseAbs().maxCoeff());
+  const Vec3 pad = Vec3::Constant(1e-9 * ((world.hi - world.lo).norm() + scale));
+  world.lo -= pad;
+  world.hi += pad;
+  // Faces in mesh order, as without culling: the same plan, the same float blend order.
+  thread_local std::vector<int32_t> ids;  // scratch, kept for its capacity
+  ids.clear();
+  faces.for_each_overlap(world, [&](int32_t f) { ids.push_back(f); });
+  const size_t n_faces = mesh.faces.size();
+  if (ids.size() * 256 < n_faces) {  // few: sorting costs less than a pass over all faces
+    std::sort(ids.begin(), ids.end());
+    for (int32_t f : ids) visit(f);
+  } else {  // many (a box over much of the mesh): a bit per face, read in order
+    thread_local std::vector<uint64_t> bits;
+    bits.assign((n_faces + 63) / 64, 0);
+    for (int32_t f : ids) bits[static_cast<size_t>(f) >> 6] |= uint64_t{1} << (f & 63);
+    for (size_t w = 0; w < bits.size(); ++w)
+      for (uint64_t word = bits[w]; word != 0; word &= word - 1)
+        visit(static_cast<int32_t>(64 * w + static_cast<size_t>(__builtin_ctzll(word))));
+  }
+}
+
+}  // namespace
 
 BoxPlanner::BoxPlanner(const Mesh& mesh) : mesh_(mesh), faces_(AabbTree::over_faces(mesh)) {}
 
@@ -429,15 +502,7 @@ BoxPlan BoxPlanner::plan(const Obb& box, int m) const {
 void BoxPlanner::plan(const Obb& box, int m, BoxPlan* out) const {
   VOBB_ASSERT(m >= 1, "cubemap resolution m >= 1");
   BoxPlan& plan = *out;
-  {  // every field as a new BoxPlan has it, but the vectors' capacity
-    std::vector<LocalTriangle> tris = std::move(plan.tris);
-    std::vector<TexelSpan> spans = std::move(plan.spans);
-    tris.clear();
-    spans.clear();
-    plan = BoxPlan{};
-    plan.tris = std::move(tris);
-    plan.spans = std::move(spans);
-  }
+  reset_plan(&plan);
   if (volume(box) == 0.0) {  // a flat box (or one whose volume underflows): OBV 0
     plan.flat = true;
     return;
@@ -447,18 +512,8 @@ void BoxPlanner::plan(const Obb& box, int m, BoxPlan* out) const {
     plan.flat = true;
     return;
   }
-  // A box whose view of the mesh the plan's doubles cannot hold (see BoxPlan::unresolved).
-  auto unresolve = [&plan, &box]() {
-    plan.unresolved = true;
-    plan.constant = 4.0;
-    plan.tris.clear();
-    plan.spans.clear();
-    plan.centre_near_surface = false;
-    if (!(plan.frame.volume_scale > 0) || !std::isfinite(plan.frame.volume_scale))
-      plan.frame.volume_scale = volume(box) / 8;  // invalid frame: volume() is the scale
-  };
   if (!plan.frame.valid) {
-    unresolve();
+    unresolve(box, &plan);
     return;
   }
   plan.where = locate_point(mesh_, faces_, box.center);
@@ -468,121 +523,13 @@ void BoxPlanner::plan(const Obb& box, int m, BoxPlan* out) const {
   // Without culling, spans also cover the faces' parts beyond the box, as a renderer that
   // draws the whole mesh per cubemap face would.
   const bool no_far_clip = plan.far_count || !culling_;
-  // Local units. Culling only needs to be conservative: a face is dropped only when its
-  // exact coordinates (within local_error of the plan's) miss the cube on some axis.
-  constexpr double kCullMargin = 1e-9;
-  auto consider = [&](int32_t f) {
-    if (plan.unresolved) return;  // the plan is dropped anyway (unresolve below)
-    LocalTriangle t;
-    Vec3 err = Vec3::Zero();  // per axis, the most any of the three vertices may be off
-    for (int k = 0; k < 3; ++k) {
-      t.id[k] = mesh_.faces[f][k];
-      const Vec3& v = mesh_.vertices[t.id[k]];
-      t.p[k] = plan.frame.local(v);
-      err = err.cwiseMax(plan.frame.local_error(v));
-    }
-    if (!plan.far_count && culling_) {
-      for (int axis = 0; axis < 3; ++axis) {
-        const double lo = std::min({t.p[0][axis], t.p[1][axis], t.p[2][axis]});
-        const double hi = std::max({t.p[0][axis], t.p[1][axis], t.p[2][axis]});
-        const double margin = std::max(kCullMargin, err[axis]);
-        if (lo > 1 + margin || hi < -1 - margin) return;  // misses the cube
-      }
-    }
-    // Every point of the exact face lies within `slack` of the plan's (barycentric weights).
-    const double slack = err.norm() * (1 + 1e-15);
-    // Kept faces must lie within 2^300 box units, so that crosses (2^601), normals (2^603),
-    // planes (2^905) and the error terms built from them stay finite, and their error bound
-    // must be finite. (Culling is sound with overflowed coordinates: an infinite coordinate
-    // stands for one beyond 2^1024 box units, and an infinite error keeps the face.)
-    const double far = std::max({t.p[0].cwiseAbs().maxCoeff(), t.p[1].cwiseAbs().maxCoeff(),
-                                 t.p[2].cwiseAbs().maxCoeff()});
-    if (!(far <= 0x1p300) || !(slack < HUGE_VAL)) {
-      plan.unresolved = true;
-      return;
-    }
-    for (int k = 0; k < 3; ++k) {
-      const int a = k, b = (k + 1) % 3;
-      t.edge_cross[k] = t.id[a] < t.id[b] ? Vec3(t.p[a].cross(t.p[b])) : Vec3(-t.p[b].cross(t.p[a]));
-      t.edge_tie[k] = edge_tie(t.edge_cross[k], t.p[a], t.p[b]);
-      t.edge_zero[k] = cross_is_exactly_zero(t.edge_cross[k], t.p[a], t.p[b]);
-    }
-    const Vec3 e1 = t.p[1] - t.p[0], e2 = t.p[2] - t.p[0];
-    t.normal = e1.cross(e2);
-    if (plan.frame.mirrored) t.normal = -t.normal;
-    t.plane = t.normal.dot(t.p[0]);
-    // The centre class is exact, the faces are the plan's, and the depths come from the plane
-    // the plan holds, n . x = plane with n = fl(e1 x e2), e_i = fl(p_i - p0) (mirrored: both
-    // negated, exactly). Every point x = p0 + s e1* + t e2* (s, t >= 0, s + t <= 1, e* exact) of
-    // the plan's face satisfies |n . x - plane| <= Delta, componentwise:
-    //   n . (x - p0) = (n - e1* x e2*) . (x - p0), with |n - e1* x e2*| <= 4.01 u |e1| x |e2|
-    //   (the cross's rounding, gamma_2, and the differences', u each) and |x - p0| <= max(|e1|,
-    //   |e2|) (1 + 2u); and |fl(n . p0) - n . p0| <= gamma_3 |n| . |p0|.
-    // Delta = 8u (|e1| x |e2|) . max(|e1|, |e2|) + 4u |n| . |p0|, the factors of about 2
-    // covering the rounding of Delta itself, plus underflow: each product that underflows
-    // loses up to 2^-1075, two per component of n (times |x - p0| <= spread) and three in the
-    // plane, so 2^-1072 (sum spread + sum |p0| + 1) covers them. Componentwise, so that
-    // the stretched axis of a thin box (local coordinates up to 1 / aspect) enters each term
-    // as it enters n and the plane themselves, not squared.
-    // Along a ray d the plan's hit is at plane / (n . d) and the face's at (plane + delta) /
-    // (n . d), |delta| <= Delta: relative error Delta / (|plane| - Delta). And the plan's face
-    // lies at least (|plane| - Delta) / |n| from the centre. So where
-    // |plane| > 2 slack |n| + (2^20 + 1) Delta, each hit's depth is within 2^-20 relative (its
-    // value s (1 - zeta^3) within 3e-6, resolution_bound) and the exact face (within `slack`
-    // of the plan's) stays over `slack` from the centre, on the side of it that the plan's
-    // face is. Elsewhere the plan's faces and the exact centre class may disagree: a texel the
-    // faces cover may be off by two pyramids, and this face's hits by up to 2 each
-    // (near_centre, centre_near_surface).
-    if (!plan.far_count) {
-      constexpr double u = 0x1p-53;
-      const Vec3 spread = e1.cwiseAbs().cwiseMax(e2.cwiseAbs());
-      const double delta = 8 * u * abs_cross(e1, e2).dot(spread) +
-                           4 * u * t.normal.cwiseAbs().dot(t.p[0].cwiseAbs()) +
-                           0x1p-1072 * (spread.sum() + t.p[0].cwiseAbs().sum() + 1);
-      t.near_centre =
-          !(std::abs(t.plane) > (2 * slack * t.normal.norm() + (0x1p20 + 1) * delta) * (1 + 1e-12));
-    }
-    const int32_t index = static_cast<int32_t>(plan.tris.size());
-    bool used = false;
-    for (int face = 0; face < 6; ++face) {
-      TexelSpan span;
-      if (!texel_span(t, face, m, no_far_clip, slack, &span)) continue;
-      span.tri = index;
-      plan.spans.push_back(span);
-      used = true;
-    }
-    if (used) plan.tris.push_back(t);
-    if (used && t.near_centre) plan.centre_near_surface = true;
-  };
+  auto consider = [&](int32_t f) { consider_face(mesh_, f, m, no_far_clip, culling_, &plan); };
   if (plan.far_count || !culling_) {
     for (size_t f = 0; f < mesh_.faces.size(); ++f) consider(static_cast<int32_t>(f));
   } else {
-    Aabb world;
-    for (const Vec3& c : corners(box)) world.extend(c);
-    // The corners are rounded at the scale of the coordinates, not of the box (a box of size
-    // 0.01 at 1e6 has corners off by 1e-10): the pad covers both, far above a few roundings.
-    const double scale = std::max(world.lo.cwiseAbs().maxCoeff(), world.hi.cwiseAbs().maxCoeff());
-    const Vec3 pad = Vec3::Constant(1e-9 * ((world.hi - world.lo).norm() + scale));
-    world.lo -= pad;
-    world.hi += pad;
-    // Faces in mesh order, as without culling: the same plan, the same float blend order.
-    thread_local std::vector<int32_t> ids;  // scratch, kept for its capacity
-    ids.clear();
-    faces_.for_each_overlap(world, [&](int32_t f) { ids.push_back(f); });
-    const size_t n_faces = mesh_.faces.size();
-    if (ids.size() * 256 < n_faces) {  // few: sorting costs less than a pass over all faces
-      std::sort(ids.begin(), ids.end());
-      for (int32_t f : ids) consider(f);
-    } else {  // many (a box over much of the mesh): a bit per face, read in order
-      thread_local std::vector<uint64_t> bits;
-      bits.assign((n_faces + 63) / 64, 0);
-      for (int32_t f : ids) bits[static_cast<size_t>(f) >> 6] |= uint64_t{1} << (f & 63);
-      for (size_t w = 0; w < bits.size(); ++w)
-        for (uint64_t word = bits[w]; word != 0; word &= word - 1)
-          consider(static_cast<int32_t>(64 * w + static_cast<size_t>(__builtin_ctzll(word))));
-    }
+    for_each_face_near(mesh_, faces_, box, consider);
   }
-  if (plan.unresolved) unresolve();
+  if (plan.unresolved) unresolve(box, &plan);
 }
 
 }  // namespace vobb

@@ -173,7 +173,7 @@ inline bool texel_hit(const LocalTriangle& t, const Texel& x, bool far_count, do
 // plane, as the plan holds it, puts each hit within 2^-20 of its depth (texel_plan.cpp),
 // worth 3e-6 pyramids per (texel, face) pair, which the bound adds. Evaluating the plan's
 // doubles is bounded apart (cpu_rounding_bound, gl_deviation_bound), and so is the volume
-// scale's rounding (validate/estimators.h).
+// scale's rounding (fast/cubemap_bound.h).
 double resolution_bound(const BoxPlan& plan, int m);
 
 // Scale factor 2^-e bringing the largest |x_i| into [0.5, 1): exact in binary, so it keeps

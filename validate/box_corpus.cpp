@@ -5,7 +5,7 @@
 #include <cmath>
 #include <random>
 
-#include "fast/obbtree_builder.h"
+#include "builder/obbtree_builder.h"
 
 namespace vobb::validate {
 

@@ -136,187 +136,250 @@ StatedBound fit_stated_bound(const DiscretizationResult& r, double alpha) {
   return b;
 }
 
-DiscretizationResult run_discretization_study(const DiscretizationConfig& config) {
-  const auto t0 = std::chrono::steady_clock::now();
-  DiscretizationResult r;
-  auto say = [&](const std::string& line) {
-    if (config.progress) config.progress(line);
-  };
-  const BoxSize sizes[] = {BoxSize::kLeaf, BoxSize::kMid, BoxSize::kRoot};
-  std::vector<std::pair<NamedMesh, bool>> meshes;
-  for (const NamedMesh& nm : config.fit_meshes) meshes.push_back({nm, false});
-  for (const NamedMesh& nm : config.held_out_meshes) meshes.push_back({nm, true});
+namespace {
 
+// The box sizes of each mesh's corpus, in the order the study draws them.
+constexpr BoxSize kSizes[] = {BoxSize::kLeaf, BoxSize::kMid, BoxSize::kRoot};
+
+// Passes one progress line to the configuration's callback, when it has one.
+void say(const DiscretizationConfig& config, const std::string& line) {
+  if (config.progress) config.progress(line);
+}
+
+// Running totals over the meshes: the exact solvers' times, the certified intervals' relative
+// widths, and whether GL was tried and whether it ever ran.
+struct StudyTotals {
   double clip_seconds = 0, nef_seconds = 0, clip_on_nef_boxes = 0, poly_seconds = 0;
   size_t clip_n = 0, poly_n = 0;
   std::vector<double> poly_rel;
   bool gl_ever = false, gl_tried = false;
-  for (size_t mi = 0; mi < meshes.size(); ++mi) {
-    const auto& [nm, held_out] = meshes[mi];
-    const Mesh& mesh = *nm.mesh;
-    EstimatorSet est(mesh, config.want_gl, config.perturb);
-    if (config.want_gl && !gl_tried) {
-      gl_tried = true;
-      r.gl_note = est.has_gl() ? "GL renderer: " + est.renderer() : "GL estimator unavailable: " + est.gl_status();
-    }
-    gl_ever |= est.has_gl();
-    const exact::ClipSolver clip(mesh);
-    const PolyObvSolver poly(mesh);
-    const bool time_nef = mi == 0 && config.nef_boxes_per_size > 0;
-    std::unique_ptr<exact::NefSolver> nef;
-    if (time_nef) {
-      const auto tn = std::chrono::steady_clock::now();
-      nef = std::make_unique<exact::NefSolver>(mesh);
-      r.exact_timings.push_back({"nef (build Nef(X) once)", 1, seconds_since(tn), nm.name});
-    }
-    const size_t first = r.samples.size();
-    std::vector<Obb> boxes;
-    for (int si = 0; si < 3; ++si) {
-      const uint64_t seed = (held_out ? config.held_out_seed : config.fit_seed) + 10 * mi + si;
-      const std::vector<Obb> part = box_corpus(mesh, sizes[si], config.boxes_per_size, seed);
-      // The reference: every box's certified interval, the batch on every core.
-      const auto tp = std::chrono::steady_clock::now();
-      const std::vector<PolyObv> ref = poly.evaluate(part);
-      const double per_box = part.empty() ? 0.0 : seconds_since(tp) / part.size();
-      poly_seconds += per_box * part.size();
-      poly_n += part.size();
-      for (size_t i = 0; i < part.size(); ++i) {
-        StudySample s;
-        s.mesh = nm.name;
-        s.held_out = held_out;
-        s.size = sizes[si];
-        s.index = static_cast<int>(i);
-        s.box = part[i];
-        s.box_volume = volume(part[i]);
-        s.centre = est.centre_location(part[i]);
-        s.lo = ref[i].lo;
-        s.hi = ref[i].hi;
-        s.exact = ref[i].estimate;
-        s.poly_seconds = per_box;
-        if (s.lo > 0) poly_rel.push_back((s.hi - s.lo) / s.lo);
-        if (static_cast<int>(i) < config.rational_boxes_per_size) {
-          const auto te = std::chrono::steady_clock::now();
-          const Rational v = clip.obv(part[i]);
-          const double t = seconds_since(te);
-          clip_seconds += t;
-          ++clip_n;
-          ++r.rational_checked;
-          const bool inside = Rational(s.lo) <= v && v <= Rational(s.hi);
-          r.rational_outside += !inside;
-          s.rational = inside ? 1 : -1;
-          s.exact = to_double_nearest(v);
-          if (nef && static_cast<int>(i) < config.nef_boxes_per_size) {
-            const auto tn = std::chrono::steady_clock::now();
-            const Rational w = nef->obv(part[i]);
-            nef_seconds += seconds_since(tn);
-            clip_on_nef_boxes += t;
-            ++r.nef_compared;
-            if (!(w == v)) r.nef_agrees = false;  // exact: equal rationals or a finding
-          }
-        }
-        r.samples.push_back(s);
-        boxes.push_back(part[i]);
-      }
-    }
-    say(nm.name + (held_out ? " (held out)" : " (fit)") + ": " + std::to_string(boxes.size()) +
-        " boxes, certified intervals done (" + std::to_string(config.rational_boxes_per_size) +
-        " per size checked against the exact rational)");
-    // The detail subsample: the first detail_boxes_per_size boxes of each size get R(m) (a texel
-    // plan per box and m, the costly part) and GL; the rest, the CPU twin alone.
-    std::vector<size_t> detail;
-    for (size_t i = 0; i < boxes.size(); ++i)
-      if (r.samples[first + i].index < config.detail_boxes_per_size) detail.push_back(i);
-    for (Backend backend : {Backend::kCpu, Backend::kGl}) {
-      if (backend == Backend::kGl && !est.has_gl()) continue;
-      std::vector<size_t> which = detail;
-      if (backend == Backend::kCpu) {
-        which.resize(boxes.size());
-        for (size_t i = 0; i < boxes.size(); ++i) which[i] = i;
-      }
-      std::vector<Obb> batch;
-      for (size_t i : which) batch.push_back(boxes[i]);
-      if (batch.empty()) continue;
-      if (backend == Backend::kGl) {  // warm-up: shader JIT and the atlas's first pages are not timed
-        std::vector<double> ignored;
-        est.estimate(backend, {batch[0]}, 8, &ignored);
-      }
-      for (int m : config.ms) {
-        if (backend == Backend::kGl && m > est.gl_max_m()) continue;
-        std::vector<double> secs;
-        const std::vector<double> v = est.estimate(backend, batch, m, &secs);
-        for (size_t k = 0; k < batch.size(); ++k) {
-          const size_t i = which[k];
-          StudyEval e;
-          e.sample = first + i;
-          e.backend = backend;
-          e.m = m;
-          e.estimate = v[k];
-          e.seconds = secs[k];
-          if (r.samples[first + i].index < config.detail_boxes_per_size) {
-            const EstimatorSet::Bounds bd = est.bounds(boxes[i], m);
-            e.rigorous = bd.rigorous();
-            e.deviation = bd.deviation + bd.roundoff;
-          }
-          r.evals.push_back(e);
-        }
-      }
-      say(nm.name + ": " + to_string(backend) + " estimates at every m done");
-    }
-  }
-  r.backends.push_back(Backend::kCpu);
-  if (gl_ever) r.backends.push_back(Backend::kGl);
-  if (poly_n) r.exact_timings.push_back({"poly", poly_n, poly_seconds / poly_n, "every box of the corpus (interval)"});
-  if (!poly_rel.empty()) r.poly_certified_rel_median = median(poly_rel);
-  if (clip_n) r.exact_timings.push_back({"clip", clip_n, clip_seconds / clip_n, "the rational subsample"});
-  if (r.nef_compared) {
-    r.exact_timings.push_back({"nef", r.nef_compared, nef_seconds / r.nef_compared, "first fit mesh, first boxes of each size"});
-    r.exact_timings.push_back({"clip (same boxes as nef)", r.nef_compared, clip_on_nef_boxes / r.nef_compared, ""});
-  }
+};
 
-  for (Backend b : r.backends)
+// One mesh under study and its solvers, which live while the mesh is studied.
+struct MeshUnderStudy {
+  const NamedMesh& nm;
+  bool held_out;
+  size_t index;  // among the fit meshes, then the held-out ones: seeds the corpus
+  EstimatorSet& est;
+  const exact::ClipSolver& clip;
+  const PolyObvSolver& poly;
+  const exact::NefSolver* nef;  // null except on the mesh on which Nef is timed
+};
+
+// Computes the exact rational of sample `i`'s box by clipping, checks that it lies inside the
+// sample's certified interval and makes its nearest double the sample's reference; on the Nef
+// subsample, also compares it with Nef's rational.
+void add_exact_rational(const DiscretizationConfig& config, const MeshUnderStudy& mu,
+                        const Obb& box, int i, StudySample* s, StudyTotals* totals,
+                        DiscretizationResult* r) {
+  const auto te = std::chrono::steady_clock::now();
+  const Rational v = mu.clip.obv(box);
+  const double t = seconds_since(te);
+  totals->clip_seconds += t;
+  ++totals->clip_n;
+  ++r->rational_checked;
+  const bool inside = Rational(s->lo) <= v && v <= Rational(s->hi);
+  r->rational_outside += !inside;
+  s->rational = inside ? 1 : -1;
+  s->exact = to_double_nearest(v);
+  if (mu.nef && i < config.nef_boxes_per_size) {
+    const auto tn = std::chrono::steady_clock::now();
+    const Rational w = mu.nef->obv(box);
+    totals->nef_seconds += seconds_since(tn);
+    totals->clip_on_nef_boxes += t;
+    ++r->nef_compared;
+    if (!(w == v)) r->nef_agrees = false;  // exact: equal rationals or a finding
+  }
+}
+
+// Draws the mesh's corpus, every size in turn, and appends one sample per box to r->samples
+// with its certified interval (and the exact rational on the rational subsample); returns the
+// boxes in the order of their samples.
+std::vector<Obb> add_reference_samples(const DiscretizationConfig& config, const MeshUnderStudy& mu,
+                                       StudyTotals* totals, DiscretizationResult* r) {
+  const Mesh& mesh = *mu.nm.mesh;
+  std::vector<Obb> boxes;
+  for (int si = 0; si < 3; ++si) {
+    const uint64_t seed =
+        (mu.held_out ? config.held_out_seed : config.fit_seed) + 10 * mu.index + si;
+    const std::vector<Obb> part = box_corpus(mesh, kSizes[si], config.boxes_per_size, seed);
+    // The reference: every box's certified interval, the batch on every core.
+    const auto tp = std::chrono::steady_clock::now();
+    const std::vector<PolyObv> ref = mu.poly.evaluate(part);
+    const double per_box = part.empty() ? 0.0 : seconds_since(tp) / part.size();
+    totals->poly_seconds += per_box * part.size();
+    totals->poly_n += part.size();
+    for (size_t i = 0; i < part.size(); ++i) {
+      StudySample s;
+      s.mesh = mu.nm.name;
+      s.held_out = mu.held_out;
+      s.size = kSizes[si];
+      s.index = static_cast<int>(i);
+      s.box = part[i];
+      s.box_volume = volume(part[i]);
+      s.centre = mu.est.centre_location(part[i]);
+      s.lo = ref[i].lo;
+      s.hi = ref[i].hi;
+      s.exact = ref[i].estimate;
+      s.poly_seconds = per_box;
+      if (s.lo > 0) totals->poly_rel.push_back((s.hi - s.lo) / s.lo);
+      if (static_cast<int>(i) < config.rational_boxes_per_size)
+        add_exact_rational(config, mu, part[i], static_cast<int>(i), &s, totals, r);
+      r->samples.push_back(s);
+      boxes.push_back(part[i]);
+    }
+  }
+  return boxes;
+}
+
+// Appends the estimates of the mesh's boxes (samples first, first + 1, ...) at every m: the CPU
+// twin on every box; GL, R(m) and GL's allowed deviation on the detail subsample only.
+void add_estimates(const DiscretizationConfig& config, const MeshUnderStudy& mu, size_t first,
+                   const std::vector<Obb>& boxes, DiscretizationResult* r) {
+  EstimatorSet& est = mu.est;
+  // The detail subsample: the first detail_boxes_per_size boxes of each size get R(m) (a texel
+  // plan per box and m, the costly part) and GL; the rest, the CPU twin alone.
+  std::vector<size_t> detail;
+  for (size_t i = 0; i < boxes.size(); ++i)
+    if (r->samples[first + i].index < config.detail_boxes_per_size) detail.push_back(i);
+  for (Backend backend : {Backend::kCpu, Backend::kGl}) {
+    if (backend == Backend::kGl && !est.has_gl()) continue;
+    std::vector<size_t> which = detail;
+    if (backend == Backend::kCpu) {
+      which.resize(boxes.size());
+      for (size_t i = 0; i < boxes.size(); ++i) which[i] = i;
+    }
+    std::vector<Obb> batch;
+    for (size_t i : which) batch.push_back(boxes[i]);
+    if (batch.empty()) continue;
+    if (backend == Backend::kGl) {  // warm-up: shader JIT and the atlas's first pages are not timed
+      std::vector<double> ignored;
+      est.estimate(backend, {batch[0]}, 8, &ignored);
+    }
     for (int m : config.ms) {
-      PerMStats pm{b, m, error_stats(r, [&](const StudyEval& e) { return e.backend == b && e.m == m; })};
-      if (pm.all.n) r.per_m.push_back(pm);
+      if (backend == Backend::kGl && m > est.gl_max_m()) continue;
+      std::vector<double> secs;
+      const std::vector<double> v = est.estimate(backend, batch, m, &secs);
+      for (size_t k = 0; k < batch.size(); ++k) {
+        const size_t i = which[k];
+        StudyEval e;
+        e.sample = first + i;
+        e.backend = backend;
+        e.m = m;
+        e.estimate = v[k];
+        e.seconds = secs[k];
+        if (r->samples[first + i].index < config.detail_boxes_per_size) {
+          const EstimatorSet::Bounds bd = est.bounds(boxes[i], m);
+          e.rigorous = bd.rigorous();
+          e.deviation = bd.deviation + bd.roundoff;
+        }
+        r->evals.push_back(e);
+      }
+    }
+    say(config, mu.nm.name + ": " + to_string(backend) + " estimates at every m done");
+  }
+}
+
+// Studies mesh number `mi`: builds its estimators and exact solvers (timing Nef's build on the
+// first mesh), appends its samples with their references, then their estimates.
+void study_mesh(const DiscretizationConfig& config, size_t mi, const NamedMesh& nm, bool held_out,
+                StudyTotals* totals, DiscretizationResult* r) {
+  const Mesh& mesh = *nm.mesh;
+  EstimatorSet est(mesh, config.want_gl, config.perturb);
+  if (config.want_gl && !totals->gl_tried) {
+    totals->gl_tried = true;
+    r->gl_note = est.has_gl() ? "GL renderer: " + est.renderer()
+                              : "GL estimator unavailable: " + est.gl_status();
+  }
+  totals->gl_ever |= est.has_gl();
+  const exact::ClipSolver clip(mesh);
+  const PolyObvSolver poly(mesh);
+  const bool time_nef = mi == 0 && config.nef_boxes_per_size > 0;
+  std::unique_ptr<exact::NefSolver> nef;
+  if (time_nef) {
+    const auto tn = std::chrono::steady_clock::now();
+    nef = std::make_unique<exact::NefSolver>(mesh);
+    r->exact_timings.push_back({"nef (build Nef(X) once)", 1, seconds_since(tn), nm.name});
+  }
+  const MeshUnderStudy mu{nm, held_out, mi, est, clip, poly, nef.get()};
+  const size_t first = r->samples.size();
+  const std::vector<Obb> boxes = add_reference_samples(config, mu, totals, r);
+  say(config, nm.name + (held_out ? " (held out)" : " (fit)") + ": " +
+                  std::to_string(boxes.size()) + " boxes, certified intervals done (" +
+                  std::to_string(config.rational_boxes_per_size) +
+                  " per size checked against the exact rational)");
+  add_estimates(config, mu, first, boxes, r);
+}
+
+// Appends the exact solvers' mean times per evaluation, and sets the certified intervals'
+// median relative width.
+void add_exact_timings(const StudyTotals& totals, DiscretizationResult* r) {
+  if (totals.poly_n)
+    r->exact_timings.push_back({"poly", totals.poly_n, totals.poly_seconds / totals.poly_n,
+                                "every box of the corpus (interval)"});
+  if (!totals.poly_rel.empty()) r->poly_certified_rel_median = median(totals.poly_rel);
+  if (totals.clip_n)
+    r->exact_timings.push_back(
+        {"clip", totals.clip_n, totals.clip_seconds / totals.clip_n, "the rational subsample"});
+  if (r->nef_compared) {
+    r->exact_timings.push_back({"nef", r->nef_compared, totals.nef_seconds / r->nef_compared,
+                                "first fit mesh, first boxes of each size"});
+    r->exact_timings.push_back({"clip (same boxes as nef)", r->nef_compared,
+                                totals.clip_on_nef_boxes / r->nef_compared, ""});
+  }
+}
+
+// Computes the error statistics per (backend, m), per (backend, box size, centre class) at
+// m = 32, and the fitted convergence rates per backend.
+void add_error_statistics(const DiscretizationConfig& config, DiscretizationResult* r) {
+  for (Backend b : r->backends)
+    for (int m : config.ms) {
+      PerMStats pm{b, m,
+                   error_stats(*r, [&](const StudyEval& e) { return e.backend == b && e.m == m; })};
+      if (pm.all.n) r->per_m.push_back(pm);
     }
   if (std::find(config.ms.begin(), config.ms.end(), 32) != config.ms.end())
-    for (Backend b : r.backends)
-      for (BoxSize sz : sizes)
+    for (Backend b : r->backends)
+      for (BoxSize sz : kSizes)
         for (Location loc : {Location::kInside, Location::kOutside, Location::kOnSurface}) {
-          const ErrorStats st = error_stats(r, [&](const StudyEval& e) {
-            const StudySample& s = r.samples[e.sample];
+          const ErrorStats st = error_stats(*r, [&](const StudyEval& e) {
+            const StudySample& s = r->samples[e.sample];
             return e.backend == b && e.m == 32 && s.size == sz && s.centre == loc;
           });
-          if (st.n) r.per_class_m32.push_back({b, sz, loc, st});
+          if (st.n) r->per_class_m32.push_back({b, sz, loc, st});
         }
-  for (Backend b : r.backends) {
+  for (Backend b : r->backends) {
     std::vector<double> lx, lmed, lp95, lmax;
-    for (const PerMStats& pm : r.per_m)
+    for (const PerMStats& pm : r->per_m)
       if (pm.backend == b && pm.all.rel_median > 0 && pm.all.rel_p95 > 0 && pm.all.rel_max > 0) {
         lx.push_back(std::log(double(pm.m)));
         lmed.push_back(std::log(pm.all.rel_median));
         lp95.push_back(std::log(pm.all.rel_p95));
         lmax.push_back(std::log(pm.all.rel_max));
       }
-    r.rates.push_back({b, lsq_slope(lx, lmed), lsq_slope(lx, lp95), lsq_slope(lx, lmax)});
+    r->rates.push_back({b, lsq_slope(lx, lmed), lsq_slope(lx, lp95), lsq_slope(lx, lmax)});
   }
-  r.bound = fit_stated_bound(r, config.alpha);
+}
 
-  // Richardson: per (sample, backend) the estimates at m and 2m, judged at 2m.
-  for (Backend b : r.backends)
+// Richardson: per (sample, backend) the estimates at m and 2m, judged at 2m; appends one row
+// per (backend, m) that has both.
+void add_richardson_rows(const DiscretizationConfig& config, DiscretizationResult* r) {
+  for (Backend b : r->backends)
     for (int m : config.ms) {
       if (std::find(config.ms.begin(), config.ms.end(), 2 * m) == config.ms.end()) continue;
-      std::vector<const StudyEval*> at_m(r.samples.size(), nullptr), at_2m(r.samples.size(), nullptr);
-      for (const StudyEval& e : r.evals) {
+      std::vector<const StudyEval*> at_m(r->samples.size(), nullptr),
+          at_2m(r->samples.size(), nullptr);
+      for (const StudyEval& e : r->evals) {
         if (e.backend != b) continue;
         if (e.m == m) at_m[e.sample] = &e;
         if (e.m == 2 * m) at_2m[e.sample] = &e;
       }
       RichardsonRow row{b, m};
       size_t c3 = 0, c1 = 0, c2 = 0;
-      for (size_t i = 0; i < r.samples.size(); ++i) {
+      for (size_t i = 0; i < r->samples.size(); ++i) {
         if (!at_m[i] || !at_2m[i]) continue;
         const double d = std::abs(at_m[i]->estimate - at_2m[i]->estimate);
-        const double err = at_2m[i]->abs_error(r.samples[i]);
+        const double err = at_2m[i]->abs_error(r->samples[i]);
         ++row.n;
         c3 += err <= d / 3;
         c1 += err <= d;
@@ -326,8 +389,30 @@ DiscretizationResult run_discretization_study(const DiscretizationConfig& config
       row.cover_third = double(c3) / row.n;
       row.cover_one = double(c1) / row.n;
       row.cover_two = double(c2) / row.n;
-      r.richardson.push_back(row);
+      r->richardson.push_back(row);
     }
+}
+
+}  // namespace
+
+DiscretizationResult run_discretization_study(const DiscretizationConfig& config) {
+  const auto t0 = std::chrono::steady_clock::now();
+  DiscretizationResult r;
+  std::vector<std::pair<NamedMesh, bool>> meshes;
+  for (const NamedMesh& nm : config.fit_meshes) meshes.push_back({nm, false});
+  for (const NamedMesh& nm : config.held_out_meshes) meshes.push_back({nm, true});
+
+  StudyTotals totals;
+  for (size_t mi = 0; mi < meshes.size(); ++mi) {
+    const auto& [nm, held_out] = meshes[mi];
+    study_mesh(config, mi, nm, held_out, &totals, &r);
+  }
+  r.backends.push_back(Backend::kCpu);
+  if (totals.gl_ever) r.backends.push_back(Backend::kGl);
+  add_exact_timings(totals, &r);
+  add_error_statistics(config, &r);
+  r.bound = fit_stated_bound(r, config.alpha);
+  add_richardson_rows(config, &r);
   r.seconds = seconds_since(t0);
   return r;
 }

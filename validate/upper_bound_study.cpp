@@ -4,9 +4,8 @@
 #include <cstdio>
 
 #include "exact/certify.h"
-#include "fast/obbtree_builder.h"
-#include "fast/variational_builder.h"
 #include "common/stopwatch.h"
+#include "vobb/vobb.h"
 
 namespace vobb::validate {
 bool UpperBoundResult::all_exact_hold() const {
@@ -33,26 +32,20 @@ UpperBoundResult run_upper_bound_study(const UpperBoundConfig& config, const Sta
   for (const NamedMesh& nm : config.meshes) {
     const Mesh& mesh = *nm.mesh;
     EstimatorSet est(mesh, config.want_gl, config.perturb);
-    // The builder's estimator is the unperturbed CPU twin: the trees are the object under test
-    // here, and the perturbation reaches the estimated sums below.
-    const CpuObvEstimator builder_estimator(mesh);
-    const int bm = config.variational_m;
-    const ObvEstimate estimate = [&](const std::vector<Obb>& boxes) { return builder_estimator.estimate(boxes, bm); };
     for (const char* builder : {"obbtree", "variational"}) {
       const auto tb = std::chrono::steady_clock::now();
+      // The variational builder's estimator is the unperturbed CPU twin: the trees are the
+      // object under test here, and the perturbation reaches the estimated sums below.
+      BuildOptions o;
+      o.method = std::string(builder) == "obbtree" ? Method::kObbTree : Method::kVariational;
+      o.depth = config.depth;
+      o.lloyd = config.lloyd_iterations;
+      o.sweeps = config.max_sweeps;
+      o.m = config.variational_m;
+      o.backend = vobb::Backend::kCpu;
       Tree tree;
-      if (std::string(builder) == "obbtree") {
-        ObbTreeOptions o;
-        o.depth = config.depth;
-        tree = build_obbtree(mesh, o);
-      } else {
-        VariationalOptions o;
-        o.depth = config.depth;
-        o.lloyd_iterations = config.lloyd_iterations;
-        o.max_sweeps = config.max_sweeps;
-        o.concurrent_estimates = true;  // the CPU twin may be called from several threads
-        tree = build_variational(mesh, o, estimate);
-      }
+      const Status built = build_tree(mesh, o, &tree);
+      VOBB_ASSERT(built, built.message().c_str());  // the options are the study's own
       TreeCheck tc{nm.name, builder};
       tc.build_seconds = seconds_since(tb);
       exact::CertifyOptions co;

@@ -333,4 +333,10 @@ Status load_with_assimp(const std::string& path, const std::string& display, Loa
   return Status::ok();
 }
 
+void enable_assimp() {
+  set_foreign_mesh_reader([](const std::string& path, const std::string& display, uint64_t bytes, LoadedMesh* out) {
+    return load_with_assimp(path, display, out, assimp_cpu_seconds(bytes));
+  });
+}
+
 }  // namespace vobb

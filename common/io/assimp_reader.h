@@ -1,5 +1,6 @@
-// Reading a mesh through assimp (the formats vobb does not parse itself). load_mesh() calls
-// this; it is declared here for the tests of its limits.
+// Reading a mesh through assimp (the formats vobb does not parse itself): the assimp component
+// (target vobb::assimp). enable_assimp() makes load_mesh() use it; load_with_assimp is declared
+// here for the tests of its limits.
 //
 // The import runs in a child process, so that an importer that crashes or loops on a damaged
 // file cannot take the caller with it: a crash, a loop past `cpu_seconds` of CPU time, or
@@ -14,6 +15,10 @@
 #include "common/status.h"
 
 namespace vobb {
+
+// Registers load_with_assimp with load_mesh (set_foreign_mesh_reader) for every format that
+// vobb does not parse itself.
+void enable_assimp();
 
 // The default CPU-time limit for a file of this size: 20 s plus 2 s per MiB. Assimp's text
 // importers read tens of MiB per second, so a well-formed file stays far below it.

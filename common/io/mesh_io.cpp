@@ -1,6 +1,7 @@
 #include "common/io/mesh_io.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cctype>
 #include <charconv>
 #include <cmath>
@@ -10,9 +11,7 @@
 #include <unordered_map>
 
 #include "common/atomic_file.h"
-#include "common/io/assimp_reader.h"
 #include "common/text_util.h"
-#include "vobb/config.h"
 
 namespace vobb {
 
@@ -360,81 +359,102 @@ bool integral_value(double v, long long* out) {
   return true;
 }
 
-Status read_ply(const Reader& r, LoadedMesh* out) {
-  Lines lines(r.text());
-  std::vector<std::string_view> t;
-  if (!lines.next_tokens(&t, false) || t[0] != "ply") return r.fail("not a PLY file (no 'ply' magic)");
-  std::string format;
-  std::vector<PlyElement> elems;
+// Parses the property line `t` (header line `line`) into `p`.
+Status parse_ply_property(const Reader& r, size_t line, const std::vector<std::string_view>& t,
+                          PlyProperty* p) {
+  if (t.size() >= 5 && t[1] == "list") {
+    p->is_list = true;
+    p->count_type = ply_type(t[2]);
+    p->type = ply_type(t[3]);
+    p->name = std::string(t[4]);
+    if (p->count_type == PlyType::kBad || p->type == PlyType::kBad ||
+        p->count_type == PlyType::kFloat32 || p->count_type == PlyType::kFloat64)
+      return r.fail_at(line, "bad list property types");
+  } else if (t.size() >= 3) {
+    p->type = ply_type(t[1]);
+    p->name = std::string(t[2]);
+    if (p->type == PlyType::kBad)
+      return r.fail_at(line, "unknown property type '" + std::string(t[1].substr(0, 32)) + "'");
+  } else {
+    return r.fail_at(line, "bad property line");
+  }
+  return Status::ok();
+}
+
+// Reads the header through end_header: its format and its elements with their properties.
+// `t` is the token buffer for `lines`.
+Status read_ply_header(const Reader& r, Lines* lines, std::vector<std::string_view>* t,
+                       std::string* format, std::vector<PlyElement>* elems) {
+  if (!lines->next_tokens(t, false) || (*t)[0] != "ply")
+    return r.fail("not a PLY file (no 'ply' magic)");
   bool ended = false;
-  while (lines.next_tokens(&t, false)) {
-    if (t[0] == "comment" || t[0] == "obj_info") continue;
-    if (t[0] == "format") {
-      if (t.size() < 2) return r.fail_at(lines.number(), "bad format line");
-      format = std::string(t[1]);
-      if (format != "ascii" && format != "binary_little_endian" && format != "binary_big_endian")
-        return r.fail_at(lines.number(), "unknown PLY format '" + format.substr(0, 32) + "'");
-    } else if (t[0] == "element") {
+  while (lines->next_tokens(t, false)) {
+    const std::vector<std::string_view>& tok = *t;
+    if (tok[0] == "comment" || tok[0] == "obj_info") continue;
+    if (tok[0] == "format") {
+      if (tok.size() < 2) return r.fail_at(lines->number(), "bad format line");
+      *format = std::string(tok[1]);
+      if (*format != "ascii" && *format != "binary_little_endian" && *format != "binary_big_endian")
+        return r.fail_at(lines->number(), "unknown PLY format '" + format->substr(0, 32) + "'");
+    } else if (tok[0] == "element") {
       long long n;
-      if (t.size() < 3 || !parse_int(t[2], &n) || n < 0) return r.fail_at(lines.number(), "bad element line");
-      elems.push_back({std::string(t[1]), n, {}});
-    } else if (t[0] == "property") {
-      if (elems.empty()) return r.fail_at(lines.number(), "property before any element");
+      if (tok.size() < 3 || !parse_int(tok[2], &n) || n < 0)
+        return r.fail_at(lines->number(), "bad element line");
+      elems->push_back({std::string(tok[1]), n, {}});
+    } else if (tok[0] == "property") {
+      if (elems->empty()) return r.fail_at(lines->number(), "property before any element");
       PlyProperty p;
-      if (t.size() >= 5 && t[1] == "list") {
-        p.is_list = true;
-        p.count_type = ply_type(t[2]);
-        p.type = ply_type(t[3]);
-        p.name = std::string(t[4]);
-        if (p.count_type == PlyType::kBad || p.type == PlyType::kBad || p.count_type == PlyType::kFloat32 ||
-            p.count_type == PlyType::kFloat64)
-          return r.fail_at(lines.number(), "bad list property types");
-      } else if (t.size() >= 3) {
-        p.type = ply_type(t[1]);
-        p.name = std::string(t[2]);
-        if (p.type == PlyType::kBad) return r.fail_at(lines.number(), "unknown property type '" + std::string(t[1].substr(0, 32)) + "'");
-      } else {
-        return r.fail_at(lines.number(), "bad property line");
-      }
-      elems.back().props.push_back(p);
-    } else if (t[0] == "end_header") {
+      Status s = parse_ply_property(r, lines->number(), tok, &p);
+      if (!s) return s;
+      elems->back().props.push_back(p);
+    } else if (tok[0] == "end_header") {
       ended = true;
       break;
     } else {
-      return r.fail_at(lines.number(), "unknown header line '" + std::string(t[0].substr(0, 32)) + "'");
+      return r.fail_at(lines->number(),
+                       "unknown header line '" + std::string(tok[0].substr(0, 32)) + "'");
     }
   }
   if (!ended) return r.fail("truncated: no end_header");
-  if (format.empty()) return r.fail("PLY header has no format line");
-  const size_t data_start = std::min(lines.offset(), r.text().size());
-  const size_t available = r.text().size() - data_start;
+  if (format->empty()) return r.fail("PLY header has no format line");
+  return Status::ok();
+}
+
+// Which properties hold a vertex's x, y, z and a face's vertex indices (-1: none).
+struct PlyLayout {
   int ix = -1, iy = -1, iz = -1, iface = -1;
+};
+
+// Finds the vertex coordinates and the face index list among the elements' properties.
+PlyLayout ply_layout(const std::vector<PlyElement>& elems) {
+  PlyLayout l;
   for (const PlyElement& e : elems) {
     if (e.name == "vertex")
       for (size_t k = 0; k < e.props.size(); ++k) {
         if (e.props[k].is_list) continue;
-        if (e.props[k].name == "x") ix = static_cast<int>(k);
-        if (e.props[k].name == "y") iy = static_cast<int>(k);
-        if (e.props[k].name == "z") iz = static_cast<int>(k);
+        if (e.props[k].name == "x") l.ix = static_cast<int>(k);
+        if (e.props[k].name == "y") l.iy = static_cast<int>(k);
+        if (e.props[k].name == "z") l.iz = static_cast<int>(k);
       }
     if (e.name == "face")
       for (size_t k = 0; k < e.props.size(); ++k)
         if (e.props[k].is_list && (e.props[k].name == "vertex_indices" || e.props[k].name == "vertex_index"))
-          iface = static_cast<int>(k);
+          l.iface = static_cast<int>(k);
   }
-  if (ix < 0 || iy < 0 || iz < 0) return r.fail("PLY has no vertex x, y, z properties");
-  if (iface < 0) return r.fail("PLY has no face vertex_indices list");
-  for (const PlyElement& e : elems)
-    if (!count_fits(e.count, 1, available + 1))
-      return r.fail("truncated: header promises " + std::to_string(e.count) + " " + e.name +
-                    " records but only " + std::to_string(available) + " bytes follow");
+  return l;
+}
 
-
-  Mesh& m = out->mesh;
+// Reads every element's records, ASCII from `lines` (token buffer `tokens`) or binary from
+// `bin`: the vertices into `mesh`, and each face's indices with its line (0 for binary) into
+// `polys`.
+Status read_ply_records(const Reader& r, const std::vector<PlyElement>& elems,
+                        const PlyLayout& layout, bool ascii, Lines* lines,
+                        std::vector<std::string_view>* tokens, BinaryCursor* bin,
+                        std::vector<std::pair<std::vector<long long>, size_t>>* polys, Mesh* mesh) {
+  const int ix = layout.ix, iy = layout.iy, iz = layout.iz, iface = layout.iface;
+  const std::vector<std::string_view>& t = *tokens;
+  Mesh& m = *mesh;
   std::vector<long long> idx;
-  std::vector<std::pair<std::vector<long long>, size_t>> polys;
-  const bool ascii = format == "ascii";
-  BinaryCursor bin(r.text().substr(data_start), format == "binary_big_endian");
   for (const PlyElement& e : elems) {
     const bool is_vertex = e.name == "vertex", is_face = e.name == "face";
     if (is_vertex) m.vertices.reserve(e.count);
@@ -442,9 +462,9 @@ Status read_ply(const Reader& r, LoadedMesh* out) {
       Vec3 p = Vec3::Zero();
       idx.clear();
       size_t tok = 0;
-      if (ascii && !lines.next_tokens(&t, false))
+      if (ascii && !lines->next_tokens(tokens, false))
         return r.fail("truncated: " + std::to_string(i) + " of " + std::to_string(e.count) + " " + e.name + " records");
-      const size_t line = lines.number();
+      const size_t line = lines->number();
       // Binary data has no lines: its errors name the element's record instead.
       auto at_record = [&](const std::string& why) {
         return ascii ? r.fail_at(line, why) : r.fail(e.name + " record " + std::to_string(i) + ": " + why);
@@ -458,7 +478,7 @@ Status read_ply(const Reader& r, LoadedMesh* out) {
             if (!parse_double(s, v)) return r.fail_at(line, "not a number: '" + std::string(s.substr(0, 32)) + "'");
             return Status::ok();
           }
-          if (!bin.read(type, v))
+          if (!bin->read(type, v))
             return r.fail("truncated: binary data ends inside " + e.name + " record " + std::to_string(i));
           return Status::ok();
         };
@@ -468,7 +488,7 @@ Status read_ply(const Reader& r, LoadedMesh* out) {
           if (!s) return s;
           long long n;
           if (!integral_value(v, &n) || n < 0) return at_record("bad list length");
-          if (!ascii && static_cast<unsigned long long>(n) * ply_size(prop.type) > bin.remaining())
+          if (!ascii && static_cast<unsigned long long>(n) * ply_size(prop.type) > bin->remaining())
             return r.fail("truncated: binary data ends inside " + e.name + " record " + std::to_string(i));
           for (long long j = 0; j < n; ++j) {
             s = next_value(prop.type, &v);
@@ -493,23 +513,56 @@ Status read_ply(const Reader& r, LoadedMesh* out) {
         return r.fail_at(line, "unexpected '" + std::string(t[tok].substr(0, 32)) + "' after the " + e.name +
                                    " record's " + std::to_string(tok) + " values");
       if (is_vertex) m.vertices.push_back(p);
-      if (is_face) polys.emplace_back(idx, ascii ? line : 0);
+      if (is_face) polys->emplace_back(idx, ascii ? line : 0);
     }
   }
-  // Data beyond the records the header declares would otherwise be dropped without a word
-  // (a header that undercounts its faces shows up as a hole). ASCII: any further non-blank
-  // line. Binary: any further byte but a final line break, which some writers append.
+  return Status::ok();
+}
+
+// Data beyond the records the header declares would otherwise be dropped without a word
+// (a header that undercounts its faces shows up as a hole). ASCII: any further non-blank
+// line. Binary: any further byte but a final line break, which some writers append.
+Status check_ply_end(const Reader& r, bool ascii, Lines* lines, std::vector<std::string_view>* t,
+                     const BinaryCursor& bin) {
   if (ascii) {
-    if (lines.next_tokens(&t, false))
-      return r.fail_at(lines.number(), "more data after the records the header declares: '" +
-                                           std::string(t[0].substr(0, 32)) + "'");
+    if (lines->next_tokens(t, false))
+      return r.fail_at(lines->number(), "more data after the records the header declares: '" +
+                                            std::string((*t)[0].substr(0, 32)) + "'");
   } else {
     const std::string_view rest = r.text().substr(r.text().size() - bin.remaining());
     if (!rest.empty() && rest != "\n" && rest != "\r\n")
       return r.fail(std::to_string(rest.size()) + " bytes of data after the records the header declares");
   }
+  return Status::ok();
+}
+
+Status read_ply(const Reader& r, LoadedMesh* out) {
+  Lines lines(r.text());
+  std::vector<std::string_view> t;
+  std::string format;
+  std::vector<PlyElement> elems;
+  Status s = read_ply_header(r, &lines, &t, &format, &elems);
+  if (!s) return s;
+  const size_t data_start = std::min(lines.offset(), r.text().size());
+  const size_t available = r.text().size() - data_start;
+  const PlyLayout layout = ply_layout(elems);
+  if (layout.ix < 0 || layout.iy < 0 || layout.iz < 0)
+    return r.fail("PLY has no vertex x, y, z properties");
+  if (layout.iface < 0) return r.fail("PLY has no face vertex_indices list");
+  for (const PlyElement& e : elems)
+    if (!count_fits(e.count, 1, available + 1))
+      return r.fail("truncated: header promises " + std::to_string(e.count) + " " + e.name +
+                    " records but only " + std::to_string(available) + " bytes follow");
+
+  std::vector<std::pair<std::vector<long long>, size_t>> polys;
+  const bool ascii = format == "ascii";
+  BinaryCursor bin(r.text().substr(data_start), format == "binary_big_endian");
+  s = read_ply_records(r, elems, layout, ascii, &lines, &t, &bin, &polys, &out->mesh);
+  if (!s) return s;
+  s = check_ply_end(r, ascii, &lines, &t, bin);
+  if (!s) return s;
   for (size_t fi = 0; fi < polys.size(); ++fi) {
-    Status s = r.add_polygon(polys[fi].first, polys[fi].second, fi, out);
+    s = r.add_polygon(polys[fi].first, polys[fi].second, fi, out);
     if (!s) return s;
   }
   return Status::ok();
@@ -722,6 +775,12 @@ std::string upper(std::string s) {
 
 }  // namespace
 
+namespace {
+std::atomic<ForeignMeshReader> foreign_reader{nullptr};
+}  // namespace
+
+void set_foreign_mesh_reader(ForeignMeshReader reader) { foreign_reader = reader; }
+
 Status load_mesh(const std::string& path, LoadedMesh* out) {
   *out = LoadedMesh();
   const std::string display = basename_of(path);
@@ -731,12 +790,11 @@ Status load_mesh(const std::string& path, LoadedMesh* out) {
     uint64_t size = 0;
     const Status regular = check_regular_file(path, display, "mesh file", &size);
     if (!regular) return regular;
-#if VOBB_HAVE_ASSIMP
-    Status s = load_with_assimp(path, display, out, assimp_cpu_seconds(size));
+    const ForeignMeshReader reader = foreign_reader;
+    if (reader == nullptr)
+      return Status::error(display + ": unknown mesh format '" + ext + "' (this build reads OFF, OBJ, PLY, STL)");
+    Status s = reader(path, display, size, out);
     if (!s) return s;
-#else
-    return Status::error(display + ": unknown mesh format '" + ext + "' (this build reads OFF, OBJ, PLY, STL)");
-#endif
   } else {
     std::string content;
     Status s = read_regular_file(path, display, "mesh file", &content);

@@ -3,8 +3,9 @@
 // OFF (incl. COFF/NOFF/STOFF variants), OBJ, PLY (ASCII and binary) and STL (ASCII and
 // binary) are read by vobb's own parsers, in double precision, exactly as the file writes
 // each number (std::from_chars rounds correctly). Every other format that Debian's assimp
-// knows (glTF, FBX, DAE, 3DS, ...) goes through assimp, which is built in single precision:
-// such a mesh is marked `single_precision` and its coordinates are float32-rounded.
+// knows (glTF, FBX, DAE, 3DS, ...) goes through assimp where the assimp component is enabled
+// (enable_assimp, common/io/assimp_reader.h; target vobb::assimp). Assimp is built in single
+// precision: such a mesh is marked `single_precision` and its coordinates are float32-rounded.
 //
 // After reading, exactly equal vertices are welded (-0 and +0 count as equal) and
 // unreferenced vertices dropped, keeping first-appearance order; polygons are split into
@@ -12,6 +13,7 @@
 // The reader checks syntax only; solidity is solidity.h's job.
 #pragma once
 
+#include <cstdint>
 #include <string>
 
 #include "common/mesh.h"
@@ -32,6 +34,12 @@ struct LoadedMesh {
 // Reads `path`. On failure the Status message is one line: "<file>: <reason>" or
 // "<file>:<line>: <reason>". Never throws, never aborts on bad bytes.
 Status load_mesh(const std::string& path, LoadedMesh* out);
+
+// The reader of the formats vobb does not parse itself, for a regular file of `bytes` bytes
+// (`display`: its name in messages). Without one registered, load_mesh refuses them.
+using ForeignMeshReader = Status (*)(const std::string& path, const std::string& display, uint64_t bytes,
+                                     LoadedMesh* out);
+void set_foreign_mesh_reader(ForeignMeshReader reader);
 
 // Writers, for round trips and generated data. Numbers are written with 17 significant
 // digits, so a double survives the trip. The file appears atomically (temp + rename).

@@ -559,22 +559,39 @@ TEST(CliBadInput, UnwritableStandardOutputIsExitThree) {
   EXPECT_EQ(vobb_cli("info " + mesh + " >/dev/null").code, 0);
 }
 
-TEST(Cli, BuildExportAndInfoOnAnAnalyticMesh) {
-  const std::string mesh = test::temp_path("torus.off");
-  {
-    std::ofstream f(mesh);
-    // A unit cube written by hand: 8 vertices, 12 faces.
-    f << "OFF\n8 12 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n0 0 1\n1 0 1\n0 1 1\n1 1 1\n"
-         "3 0 4 6\n3 0 6 2\n3 1 3 7\n3 1 7 5\n3 0 1 5\n3 0 5 4\n3 2 6 7\n3 2 7 3\n3 0 2 3\n3 0 3 1\n"
-         "3 4 5 7\n3 4 7 6\n";
+// A unit cube written by hand (8 vertices, 12 faces) and its depth-3 baseline tree, shared by
+// the tests below (each of them leaves both as they were).
+class CliOnCube : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    mesh_ = test::temp_path("cube.off");
+    {
+      std::ofstream f(mesh_);
+      f << "OFF\n8 12 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n0 0 1\n1 0 1\n0 1 1\n1 1 1\n"
+           "3 0 4 6\n3 0 6 2\n3 1 3 7\n3 1 7 5\n3 0 1 5\n3 0 5 4\n3 2 6 7\n3 2 7 3\n3 0 2 3\n3 0 3 1\n"
+           "3 4 5 7\n3 4 7 6\n";
+    }
+    tree_ = test::temp_path("cube_tree.json");
+    built_ = vobb_cli("build " + mesh_ + " -o " + tree_ + " --method obbtree --depth 3");
   }
+  static void TearDownTestSuite() {
+    std::remove(mesh_.c_str());
+    std::remove(tree_.c_str());
+  }
+  void SetUp() override { ASSERT_EQ(built_.code, 0) << built_.err; }
+  static std::string mesh_, tree_;
+  static CliRun built_;
+};
+std::string CliOnCube::mesh_, CliOnCube::tree_;
+CliRun CliOnCube::built_;
+
+TEST_F(CliOnCube, InfoAndBuild) {
+  const std::string& mesh = mesh_;
+  const std::string& tree = tree_;
   CliRun r = vobb_cli("info " + mesh + " --json --rational");
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.out.find("\"verdict\": \"solid\""), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("\"volume_rational\": \"1\""), std::string::npos) << r.out;
-  const std::string tree = test::temp_path("cube_tree.json");
-  r = vobb_cli("build " + mesh + " -o " + tree + " --method obbtree --depth 3");
-  ASSERT_EQ(r.code, 0) << r.err;
   Tree t;
   ASSERT_TRUE(read_tree(tree, &t));
   EXPECT_EQ(t.mesh_triangles, 12u);
@@ -594,6 +611,14 @@ TEST(Cli, BuildExportAndInfoOnAnAnalyticMesh) {
   r = vobb_cli("build " + mesh + " -o " + plain_tree + " --backend cpu --depth 2 --m 8 --quiet");
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NE(slurp(margin_tree), slurp(plain_tree));
+  for (const std::string& p : {margin_tree, plain_tree}) std::remove(p.c_str());
+}
+
+TEST_F(CliOnCube, ExportWritesEachBoxOfTheLayer) {
+  const std::string& tree = tree_;
+  CliRun r;
+  Tree t;
+  ASSERT_TRUE(read_tree(tree, &t));
   const std::string boxes = test::temp_path("layer.obj");
   r = vobb_cli("export " + tree + " --level 2 -o " + boxes);
   ASSERT_EQ(r.code, 0) << r.err;
@@ -638,6 +663,13 @@ TEST(Cli, BuildExportAndInfoOnAnAnalyticMesh) {
   }
   r = vobb_cli("export " + tree + " --level 9 -o " + boxes);
   EXPECT_EQ(r.code, 2);
+  std::remove(boxes.c_str());
+}
+
+TEST_F(CliOnCube, CertifyPassesFailsAndRefuses) {
+  const std::string& mesh = mesh_;
+  const std::string& tree = tree_;
+  CliRun r;
   // certify: a good tree passes (exit 0) with JSON per DESIGN §7; a shrunken box fails
   // (exit 1); a tree for another mesh is bad input (exit 2).
   r = vobb_cli("certify " + mesh + " " + tree + " --json --quiet");
@@ -667,6 +699,12 @@ TEST(Cli, BuildExportAndInfoOnAnAnalyticMesh) {
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("but the mesh has 4"), std::string::npos) << r.err;
   std::remove(tet.c_str());
+}
+
+TEST_F(CliOnCube, ObvEstimatesWithinTheirCertifiedBounds) {
+  const std::string& mesh = mesh_;
+  const std::string& tree = tree_;
+  CliRun r;
   // obv: the cube's root box estimated and computed exactly; JSON per DESIGN §7.
   {
     Tree t;
@@ -716,18 +754,24 @@ TEST(Cli, BuildExportAndInfoOnAnAnalyticMesh) {
     EXPECT_EQ(r.out.find("\"backend\": \"gl\""), std::string::npos) << r.out;
     std::remove(boxes.c_str());
   }
+}
+
+TEST_F(CliOnCube, VariationalTreeCertifies) {
+  const std::string& mesh = mesh_;
+  const std::string tree = test::temp_path("cube_variational.json");
+  CliRun r;
   // The variational builder (CPU twin in its loop) writes a tree that certifies.
   r = vobb_cli("build " + mesh + " -o " + tree + " --method variational --depth 3 --m 8 --backend cpu --quiet");
   ASSERT_EQ(r.code, 0) << r.err;
   r = vobb_cli("certify " + mesh + " " + tree + " --quiet");
   EXPECT_EQ(r.code, 0) << r.out << r.err;
-  for (const std::string& p : {mesh, tree, boxes, margin_tree, plain_tree}) std::remove(p.c_str());
+  std::remove(tree.c_str());
 }
 
 // R(m), the cubemap's texel bound (--r-bound), never exceeds the box: the exact OBV lies
 // between 0 and the box's volume. At m = 1 on the unit cube, R(m) of a box over the cube's top
 // face is 0.18 (CPU) and 0.32 (GL) of a box of volume 0.216 before the range clips it; obv
-// reports at most max(E, vol - E) plus its derived round-off (validate/estimators.h,
+// reports at most max(E, vol - E) plus its derived round-off (fast/cubemap_bound.h,
 // range_bound), and it still holds against the exact value. The round-off, relative to
 // max(E, vol - E) >= vol / 2: range_bound's volume U is at most vol (1 + 32 eps)(1 + 12 eps),
 // so U - E exceeds vol - E by 44 eps vol, 88 eps of the maximum; the reported box volume is

@@ -25,9 +25,9 @@
 #include "common/tree.h"
 #include "data/analytic_meshes.h"
 #include "fast/cpu_estimator.h"
-#include "fast/obbtree_builder.h"
+#include "builder/obbtree_builder.h"
 #include "fast/poly_solver.h"
-#include "fast/variational_builder.h"
+#include "builder/variational_builder.h"
 #include "special_position.h"
 #include "test_common.h"
 

@@ -13,7 +13,7 @@
 #include "exact/outer_volume.h"
 #include "common/io/mesh_report.h"
 #include "fast/poly_solver.h"
-#include "fast/variational_builder.h"
+#include "builder/variational_builder.h"
 #include "test_common.h"
 
 namespace vobb {

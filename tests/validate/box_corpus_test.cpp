@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "data/analytic_meshes.h"
-#include "fast/obbtree_builder.h"
+#include "builder/obbtree_builder.h"
 
 namespace vobb::validate {
 namespace {

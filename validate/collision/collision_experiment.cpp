@@ -12,7 +12,7 @@
 #include <memory>
 #include <random>
 
-#include "validate/collision/contact_predicates.h"
+#include "collision/contact_predicates.h"
 #include "validate/collision/fcl_referee.h"
 
 namespace vobb::collision {

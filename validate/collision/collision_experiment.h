@@ -27,7 +27,7 @@
 #include "common/mesh.h"
 #include "common/status.h"
 #include "common/tree.h"
-#include "validate/collision/tree_traversal.h"
+#include "collision/tree_traversal.h"
 
 namespace vobb::collision {
 

@@ -23,7 +23,7 @@
 #include "common/mesh.h"
 #include "common/status.h"
 #include "common/tree.h"
-#include "validate/collision/contact_predicates.h"
+#include "collision/contact_predicates.h"
 
 namespace vobb::collision {
 

@@ -1,4 +1,5 @@
 #include "common/io/mesh_io.h"
+#include "common/io/assimp_reader.h"
 
 #include <gtest/gtest.h>
 
@@ -384,6 +385,9 @@ TEST(MeshIo, RealMeshesWithAwkwardHeadersLoad) {
 }
 
 #if VOBB_HAVE_ASSIMP
+// The assimp component, enabled as the `vobb` program enables it.
+const bool assimp_enabled = (enable_assimp(), true);
+
 // Formats vobb does not parse itself go through assimp, in single precision. Assimp's RAW
 // format (nine numbers per triangle) stands in for them here.
 TEST(MeshIo, OtherFormatsGoThroughAssimpInSinglePrecision) {

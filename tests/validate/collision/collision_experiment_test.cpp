@@ -17,7 +17,7 @@
 #include "common/sha256.h"
 #include "common/tree_io.h"
 #include "data/analytic_meshes.h"
-#include "fast/obbtree_builder.h"
+#include "builder/obbtree_builder.h"
 #include "test_common.h"
 #include "validate/collision/collision_test_util.h"
 

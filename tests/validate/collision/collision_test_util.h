@@ -2,7 +2,7 @@
 #pragma once
 
 #include "common/tree.h"
-#include "fast/obbtree_builder.h"
+#include "builder/obbtree_builder.h"
 
 namespace vobb::collision::test_util {
 

@@ -10,7 +10,7 @@
 #include <random>
 
 #include "data/analytic_meshes.h"
-#include "fast/obbtree_builder.h"
+#include "builder/obbtree_builder.h"
 #include "validate/collision/collision_test_util.h"
 
 namespace vobb::collision {

@@ -1,0 +1,201 @@
+// The public face, linked without its GL component: its wiring gives the trees and values of
+// the libraries it wires, its refusals are one-line errors, and its e is the certificate's.
+#include "vobb/vobb.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "common/sha256.h"
+#include "data/analytic_meshes.h"
+#include "fast/cpu_estimator.h"
+#include "test_common.h"
+
+namespace vobb {
+namespace {
+
+BuildOptions small_build() {
+  BuildOptions o;
+  o.depth = 3;
+  o.m = 8;
+  o.backend = Backend::kCpu;
+  o.lloyd = 2;
+  o.sweeps = 1;
+  return o;
+}
+
+// build_tree's variational tree is build_variational's with the CPU twin, bit for bit, and its
+// mesh_sha256 is the mesh's.
+TEST(BuildTree, IsTheBuilderWithTheChosenEstimator) {
+  const Mesh mesh = analytic::polygonal_torus().mesh;
+  const BuildOptions o = small_build();
+  Tree via_face;
+  BuildReport report;
+  ASSERT_TRUE(build_tree(mesh, o, &via_face, &report).is_ok());
+  EXPECT_EQ(report.estimator, "cpu");
+  EXPECT_EQ(via_face.mesh_sha256, mesh_sha256(mesh));
+
+  VariationalOptions v;
+  v.depth = o.depth;
+  v.lloyd_iterations = o.lloyd;
+  v.max_sweeps = o.sweeps;
+  v.concurrent_estimates = true;
+  const CpuObvEstimator cpu(mesh);
+  Tree direct = build_variational(mesh, v, [&](const std::vector<Obb>& b) { return cpu.estimate(b, o.m); });
+  direct.mesh_sha256 = mesh_sha256(mesh);
+  EXPECT_EQ(tree_to_json(via_face), tree_to_json(direct));
+}
+
+// Without the GL component, kGl is refused in one line and kAuto takes the CPU twin even from
+// the m at which it would try a GPU.
+TEST(BuildTree, WithoutTheGlComponentGlIsRefusedAndAutoTakesTheCpuTwin) {
+  const Mesh mesh = analytic::cube().mesh;
+  BuildOptions o = small_build();
+  o.depth = 1;
+  o.backend = Backend::kGl;
+  Tree tree;
+  const Status s = build_tree(mesh, o, &tree);
+  ASSERT_FALSE(s.is_ok());
+  EXPECT_NE(s.message().find("GL is not enabled"), std::string::npos) << s.message();
+  EXPECT_EQ(s.message().find('\n'), std::string::npos);
+  o.backend = Backend::kAuto;
+  o.m = kAutoGlFromM;
+  BuildReport report;
+  ASSERT_TRUE(build_tree(mesh, o, &tree, &report).is_ok());
+  EXPECT_EQ(report.estimator, "cpu");
+}
+
+TEST(BuildTree, RefusesOptionsThatContradictEachOther) {
+  const Mesh mesh = analytic::cube().mesh;
+  struct Case {
+    std::function<void(BuildOptions*)> set;
+    std::string names;
+  };
+  const std::vector<Case> cases = {
+      {[](BuildOptions* o) { o->method = Method::kObbTree, o->checkpoint = "x"; }, "--checkpoint"},
+      {[](BuildOptions* o) { o->method = Method::kObbTree, o->time_budget = 1; }, "--time-budget"},
+      {[](BuildOptions* o) { o->method = Method::kObbTree, o->objective = Objective::kOmv; }, "--objective"},
+      {[](BuildOptions* o) { o->collider_margin = -1; }, "--collider-margin"},
+      {[](BuildOptions* o) { o->collider_margin = 1e9; }, "bounding-box diagonal"},
+      {[](BuildOptions* o) { o->queries.resize(1), o->objective = Objective::kOmv; }, "--queries"},
+      {[](BuildOptions* o) { o->depth = 31; }, "--depth"},
+      {[](BuildOptions* o) { o->arity = 1; }, "--arity"},
+  };
+  for (const Case& c : cases) {
+    BuildOptions o = small_build();
+    c.set(&o);
+    Tree tree;
+    const Status s = build_tree(mesh, o, &tree);
+    ASSERT_FALSE(s.is_ok()) << c.names;
+    EXPECT_NE(s.message().find(c.names), std::string::npos) << s.message();
+  }
+}
+
+// A build interrupted after its first saved state and started again resumes (it says so) and
+// gives the uninterrupted tree.
+TEST(BuildTree, ResumesFromItsCheckpoint) {
+  const Mesh mesh = analytic::polygonal_torus().mesh;
+  BuildOptions o = small_build();
+  Tree whole;
+  ASSERT_TRUE(build_tree(mesh, o, &whole).is_ok());
+  const std::string folder = test::temp_path("face_checkpoint");
+  std::filesystem::remove_all(folder);
+  o.checkpoint = folder;
+  struct Stop {};
+  o.saved = [](const VariationalState& st) {
+    if (st.split_levels == 2) throw Stop{};
+  };
+  Tree tree;
+  EXPECT_THROW(build_tree(mesh, o, &tree), Stop);
+  o.saved = nullptr;
+  std::vector<std::string> notes;
+  o.note = [&](const std::string& line) { notes.push_back(line); };
+  ASSERT_TRUE(build_tree(mesh, o, &tree).is_ok());
+  ASSERT_EQ(notes.size(), 1u);
+  EXPECT_EQ(notes[0].rfind("resuming from ", 0), 0u) << notes[0];
+  EXPECT_EQ(tree_to_json(tree), tree_to_json(whole));
+  std::filesystem::remove_all(folder);
+}
+
+// tree_error weighs layers as the certificate does: equal as rationals.
+TEST(Certify, TreeErrorIsTheCertificatesE) {
+  const Mesh mesh = analytic::polygonal_torus().mesh;
+  Tree tree;
+  ASSERT_TRUE(build_tree(mesh, small_build(), &tree).is_ok());
+  CertifyOptions o;
+  o.rational = true;
+  exact::Certificate c;
+  ASSERT_TRUE(certify(mesh, tree, o, &c).is_ok());
+  ASSERT_TRUE(c.ok());
+  std::vector<Rational> omv;
+  for (const exact::LayerCertificate& l : c.layers) omv.push_back(l.omv);
+  EXPECT_TRUE(tree_error(omv) == c.weighted_error);
+}
+
+TEST(Certify, RefusesATreeOfAnotherMesh) {
+  const Mesh cube = analytic::cube().mesh;
+  const Mesh scaled = analytic::cube(2.0).mesh;  // the same triangle count, other coordinates
+  Tree tree;
+  ASSERT_TRUE(build_tree(cube, small_build(), &tree).is_ok());
+  exact::Certificate c;
+  const Status s = certify(scaled, tree, CertifyOptions(), &c);
+  ASSERT_FALSE(s.is_ok());
+  EXPECT_NE(s.message().find("built for another mesh"), std::string::npos) << s.message();
+}
+
+// compare's trees are build_tree's, its certificates certify's, and its e each tree's e.
+TEST(Compare, IsBothBuildsCertified) {
+  const Mesh mesh = analytic::polygonal_torus().mesh;
+  CompareOptions o;
+  o.build = small_build();
+  o.rational = true;
+  CompareResult r;
+  ASSERT_TRUE(compare(mesh, o, &r).is_ok());
+  ASSERT_TRUE(r.certified());
+  for (int i = 0; i < 2; ++i) {
+    BuildOptions b = o.build;
+    b.method = i == 0 ? Method::kObbTree : Method::kVariational;
+    Tree tree;
+    ASSERT_TRUE(build_tree(mesh, b, &tree).is_ok());
+    EXPECT_EQ(tree_to_json(tree), tree_to_json(r.trees[i])) << i;
+    CertifyOptions co;
+    co.rational = true;
+    exact::Certificate c;
+    ASSERT_TRUE(certify(mesh, tree, co, &c).is_ok());
+    // Both trees reach depth 3 on the torus, so compare's e weighs layers as certify's does.
+    ASSERT_EQ(r.trees[i].depth, 3);
+    EXPECT_TRUE(r.e_exact[i] == c.weighted_error) << i;
+    EXPECT_EQ(r.e[i], c.weighted_error_nearest) << i;
+  }
+}
+
+// estimate_obv: each CPU estimate's certified error holds against the exact OBV, as rationals.
+TEST(EstimateObv, CertifiedErrorsHoldAgainstTheExactValue) {
+  const Mesh mesh = analytic::octahedron().mesh;
+  Obb box;
+  box.center = Vec3(0.2, 0.1, -0.3);
+  box.axes = orthonormalize({Vec3(1, 0.2, 0), Vec3(-0.2, 1, 0.1), Vec3::Zero()});
+  box.half = Vec3(0.6, 0.4, 0.5);
+  EstimateOptions o;
+  o.cpu = true;
+  o.exact = true;
+  o.ms = {4, 16};
+  o.r_bound = true;
+  ObvReport r;
+  ASSERT_TRUE(estimate_obv(mesh, {box}, o, &r).is_ok());
+  ASSERT_EQ(r.runs.size(), 2u);
+  ASSERT_EQ(r.exact.size(), 1u);
+  for (const ObvRun& run : r.runs) {
+    const Rational d = Rational(run.obv[0]) - r.exact[0];
+    EXPECT_TRUE((d < 0 ? Rational(-d) : d) <= Rational(run.bound[0])) << run.m;
+    EXPECT_TRUE((d < 0 ? Rational(-d) : d) <= Rational(run.r_bound[0])) << run.m;
+  }
+  o.cpu = false;
+  o.gl = true;  // no GL component, no fallback: refused
+  EXPECT_FALSE(estimate_obv(mesh, {box}, o, &r).is_ok());
+}
+
+}  // namespace
+}  // namespace vobb

@@ -1,0 +1,536 @@
+#include "vobb/vobb.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <memory>
+
+#include "builder/obbtree_builder.h"
+#include "collision/query_objective.h"
+#include "common/atomic_file.h"
+#include "common/sha256.h"
+#include "common/stopwatch.h"
+#include "common/text_util.h"
+#include "exact/outer_volume.h"
+#include "fast/cpu_estimator.h"
+#include "fast/cubemap_bound.h"
+#include "fast/poly_overlap.h"
+#include "fast/texel_plan.h"
+#include "vobb/gl_backend.h"
+
+namespace vobb {
+
+namespace detail {
+namespace {
+std::atomic<GlFactory> the_gl_factory{nullptr};
+}  // namespace
+void set_gl_factory(GlFactory factory) { the_gl_factory = factory; }
+GlFactory gl_factory() { return the_gl_factory; }
+}  // namespace detail
+
+namespace {
+
+void say(const std::function<void(const std::string&)>& to, const std::string& line) {
+  if (to) to(line);
+}
+
+Status make_gl(const Mesh& mesh, bool device_only, std::unique_ptr<detail::GlEstimate>* out) {
+  const detail::GlFactory factory = detail::gl_factory();
+  if (factory == nullptr)
+    return Status::error("GL is not enabled in this program (link vobb::gl and call vobb::enable_gl())");
+  return factory(mesh, device_only, out);
+}
+
+// The objective of a variational build: an OBV estimator, or the recorded queries' hits.
+struct Estimator {
+  std::unique_ptr<detail::GlEstimate> gl;
+  std::unique_ptr<CpuObvEstimator> cpu;
+  std::unique_ptr<PolyObvSolver> poly;
+  std::unique_ptr<collision::QueryHitObjective> hits;
+  ObvEstimate estimate;
+  std::string name;  // for the fingerprint and the report
+};
+
+// kAuto: GL on an EGL device from m = kAutoGlFromM; below it, on llvmpipe or without GL, the
+// CPU twin. No GL context is made where the CPU twin is chosen by m.
+Status make_estimator(const Mesh& mesh, const BuildOptions& o, Estimator* e) {
+  if (!o.queries.empty()) {
+    e->hits = std::make_unique<collision::QueryHitObjective>(mesh, o.queries);
+    say(o.note, "objective: the hits of " + std::to_string(e->hits->size()) + " recorded queries (no OBV estimator)");
+    const collision::QueryHitObjective* h = e->hits.get();
+    e->estimate = [h](const std::vector<Obb>& boxes) { return (*h)(boxes); };
+    e->name = "queries";
+    return Status::ok();
+  }
+  if (o.backend == Backend::kPoly) {
+    e->poly = std::make_unique<PolyObvSolver>(mesh);
+    const PolyObvSolver* p = e->poly.get();
+    e->estimate = [p](const std::vector<Obb>& boxes) { return p->estimate(boxes); };
+    e->name = "poly";
+    return Status::ok();
+  }
+  if (o.backend == Backend::kGl || (o.backend == Backend::kAuto && o.m >= kAutoGlFromM)) {
+    const bool auto_gl = o.backend == Backend::kAuto;
+    Status s = auto_gl && detail::gl_factory() == nullptr ? Status::error("no GL") : make_gl(mesh, auto_gl, &e->gl);
+    if (!s && !auto_gl) return s;
+    if (s && o.m > e->gl->max_m())
+      return Status::error("--m " + std::to_string(o.m) + " exceeds the GL estimator's limit");
+    if (s) say(o.note, e->gl->description());
+  }
+  const int m = o.m;
+  if (e->gl) {
+    detail::GlEstimate* g = e->gl.get();
+    e->estimate = [g, m](const std::vector<Obb>& boxes) { return g->estimate(boxes, m); };
+    e->name = "gl " + g->renderer();
+  } else {
+    e->cpu = std::make_unique<CpuObvEstimator>(mesh);
+    const CpuObvEstimator* c = e->cpu.get();
+    e->estimate = [c, m](const std::vector<Obb>& boxes) { return c->estimate(boxes, m); };
+    e->name = "cpu";
+  }
+  return Status::ok();
+}
+
+// What a variational build depends on, for its checkpoints: a state saved under another
+// fingerprint is refused, so a resumed build is the build that was interrupted. "builder 2":
+// bump when the builder's decisions change, so that older states are refused.
+std::string build_fingerprint(const Mesh& mesh, const BuildOptions& o, const std::string& estimator) {
+  auto on = [](bool b) { return std::string(b ? "on" : "off"); };
+  // The recorded-query builds name the estimator they would have had, as they always did.
+  const std::string named = estimator == "queries" ? (o.backend == Backend::kPoly ? "poly" : "cpu") : estimator;
+  return "builder 2; mesh " + mesh_sha256(mesh) + "; depth " + std::to_string(o.depth) + "; arity " +
+         std::to_string(o.arity) + "; lloyd " + std::to_string(o.lloyd) + "; seed " + std::to_string(o.seed) +
+         "; axis search " + on(o.axis_search) + "; adjust " + on(o.adjust) + "; merge " + on(o.merge) + "; sweeps " +
+         std::to_string(o.sweeps) + "; m " + std::to_string(o.m) + "; estimator " + named +
+         // Named only when set, so that states saved before the option existed still resume.
+         (o.collider_margin > 0 ? "; collider margin " + format_double(o.collider_margin) : std::string()) +
+         (o.queries.empty() ? std::string() : "; recorded queries " + o.queries_digest) +
+         (o.objective == Objective::kOmv ? "; objective omv" : "");
+}
+
+std::string state_path(const std::string& checkpoint) {
+  return (std::filesystem::path(checkpoint) / "state.json").string();
+}
+
+Status build_variational_tree(const Mesh& mesh, const BuildOptions& o, const Estimator& est, Tree* tree,
+                              VariationalReport* report) {
+  VariationalOptions opt;
+  opt.depth = o.depth;
+  opt.arity = o.arity;
+  opt.lloyd_iterations = o.lloyd;
+  opt.optimise_axes = o.axis_search;
+  opt.adjust = o.adjust;
+  opt.merge = o.merge;
+  opt.max_sweeps = o.sweeps;
+  opt.seed = o.seed;
+  opt.margin = o.collider_margin;
+  // The overlap-aware objective's shares: the polyhedral solver's doubles, whatever the OBV
+  // estimator (the cubemap has no form for them).
+  std::unique_ptr<PolyOverlapSolver> shares;
+  if (o.objective == Objective::kOmv) {
+    opt.objective = Objective::kOmv;
+    shares = std::make_unique<PolyOverlapSolver>(mesh);
+    const PolyOverlapSolver* p = shares.get();
+    opt.share = [p](const std::vector<ShareQuery>& v) { return p->estimate(v); };
+  }
+  opt.concurrent_estimates = true;  // every estimator here may be called from several threads at once
+  const auto t0 = std::chrono::steady_clock::now();
+  if (o.time_budget > 0) opt.out_of_time = [&] { return seconds_since(t0) > o.time_budget; };
+  opt.progress = o.progress;
+  VariationalState resume;
+  bool resuming = false;
+  bool warned = false;
+  if (!o.checkpoint.empty()) {
+    Status s = make_checkpoint_folder("--checkpoint " + o.checkpoint, o.checkpoint);
+    if (!s) return s;
+    const std::string path = state_path(o.checkpoint);
+    const std::string fingerprint = build_fingerprint(mesh, o, est.name);
+    s = read_variational_state(path, fingerprint, mesh.faces.size(), o.arity, o.depth, &resume, &resuming);
+    if (!s) return s;
+    if (resuming)
+      say(o.note, "resuming from " + path + " (" + std::to_string(resume.split_levels) + " levels split, " +
+                      std::to_string(resume.sweeps) + " sweeps done)");
+    opt.checkpoint = [&, fingerprint, path](const VariationalState& st) {
+      const Status w = write_variational_state(st, fingerprint, path);
+      if (!w && !warned) {
+        warned = true;
+        say(o.warning, "warning: checkpoint not saved: " + w.message());
+      }
+      if (w && o.saved) o.saved(st);
+    };
+  }
+  *tree = build_variational(mesh, opt, est.estimate, resuming ? &resume : nullptr, report);
+  const Status valid = validate_tree(*tree, "variational tree");
+  VOBB_ASSERT(valid, valid.message().c_str());  // a builder bug, not bad input
+  return Status::ok();
+}
+
+// A certification's checkpoint in `folder`: loads what is saved into `resume` and points `opt`
+// at it, and saves after each stage. The fingerprint names the mesh, the tree and the path.
+struct CertifySaver {
+  exact::CertifyState resume;
+  std::unique_ptr<exact::CertifyCheckpoint> files;
+  bool warned = false;
+
+  Status attach(const std::string& folder, const Mesh& mesh, const Tree& tree, const std::string& path,
+                const CertifyOptions& o, exact::CertifyOptions* opt) {
+    Status s = make_checkpoint_folder("--checkpoint " + folder, folder);
+    if (!s) return s;
+    const std::string tree_json = tree_to_json(tree);
+    files = std::make_unique<exact::CertifyCheckpoint>(
+        folder, std::string(exact::kCertifyVersion) + "; mesh " + mesh_sha256(mesh) + "; tree " +
+                    sha256_hex(tree_json.data(), tree_json.size()) + "; path " + path);
+    bool resuming = false;
+    s = files->load(tree, &resume, &resuming);
+    if (!s) return s;
+    opt->resume = resuming ? &resume : nullptr;
+    if (resuming)
+      say(o.note, "resuming from " + folder + " (the boxes' OBV, " + std::to_string(resume.layers.size()) + " of " +
+                      std::to_string(tree.depth + 1) + " layers done)");
+    opt->checkpoint = [this, &o](const exact::CertifyState& st) {
+      const Status w = files->save(st);
+      if (!w && !warned) {
+        warned = true;
+        say(o.warning, "warning: checkpoint not saved: " + w.message());
+      }
+      if (w && o.saved) o.saved(st);
+    };
+    return Status::ok();
+  }
+};
+
+const char* path_name(exact::OmvPath p) {
+  switch (p) {
+    case exact::OmvPath::kClip: return "clip";
+    case exact::OmvPath::kNef: return "nef";
+    case exact::OmvPath::kBoth: return "both";
+    default: return "auto";
+  }
+}
+
+Status certify_with(const Mesh& mesh, const Tree& tree, const CertifyOptions& o, const std::string& folder,
+                    const std::string& fingerprint_path, exact::Certificate* out) {
+  exact::CertifyOptions opt;
+  opt.path = o.path;
+  opt.rational = o.rational;
+  opt.progress = o.progress;
+  CertifySaver saver;
+  if (!folder.empty()) {
+    const Status s = saver.attach(folder, mesh, tree, fingerprint_path, o, &opt);
+    if (!s) return s;
+  }
+  *out = exact::certify(mesh, tree, opt);
+  return Status::ok();
+}
+
+std::string certify_folder(const std::string& checkpoint, const std::string& method) {
+  return (std::filesystem::path(checkpoint) / ("certify-" + method)).string();
+}
+
+// compare's checkpoint, checked before its long work: the variational build's state against
+// these options, and each certification's files as files.
+Status check_compare_checkpoint(const Mesh& mesh, const BuildOptions& o, const std::string& estimator) {
+  Status s = make_checkpoint_folder("--checkpoint " + o.checkpoint, o.checkpoint);
+  if (!s) return s;
+  VariationalState state;
+  bool found = false;
+  s = read_variational_state(state_path(o.checkpoint), build_fingerprint(mesh, o, estimator), mesh.faces.size(),
+                             o.arity, o.depth, &state, &found);
+  if (!s) return s;
+  for (const char* method : {"obbtree", "variational"}) {
+    const std::string folder = certify_folder(o.checkpoint, method);
+    s = make_checkpoint_folder("--checkpoint " + folder, folder);
+    if (!s) return s;
+    s = exact::CertifyCheckpoint::check_files(folder);
+    if (!s) return s;
+  }
+  return Status::ok();
+}
+
+// The certified error of an estimate E: max(|E - lo|, |E - hi|) for an enclosure [lo, hi] of the
+// exact OBV, rounded up (one ulp above the nearest double is above the true value).
+double certified_error(double e, const PolyObv& r) {
+  const double d = std::max(std::abs(e - r.lo), std::abs(e - r.hi));
+  return d == 0 ? 0.0 : std::nextafter(d, INFINITY);
+}
+
+}  // namespace
+
+Rational tree_error(const std::vector<Rational>& layer_omv) {
+  const int depth = static_cast<int>(layer_omv.size()) - 1;
+  Rational e(0);
+  for (int l = 0; l <= depth; ++l) e += Rational(layer_weight(depth, l)) * layer_omv[l];
+  return e;
+}
+
+Status check_build_options(const BuildOptions& o) {
+  const bool variational = o.method == Method::kVariational;
+  if (!std::isfinite(o.collider_margin) || o.collider_margin < 0)
+    return Status::error("--collider-margin must be a finite length >= 0");
+  if (o.collider_margin > 0 && !variational)
+    return Status::error("--collider-margin applies to --method variational only");
+  if (!o.queries.empty() && !variational) return Status::error("--queries applies to --method variational only");
+  if (!o.queries.empty() && o.collider_margin > 0)
+    return Status::error("--queries and --collider-margin are two objectives; choose one");
+  if (o.objective == Objective::kOmv && !variational)
+    return Status::error("--objective applies to --method variational only");
+  if (!o.queries.empty() && o.objective == Objective::kOmv)
+    return Status::error("--queries and --objective omv are two objectives; choose one");
+  // The baseline takes well under a second and has no search to budget or resume.
+  if (!o.checkpoint.empty() && !variational)
+    return Status::error("--checkpoint applies to --method variational only");
+  if (o.time_budget > 0 && !variational) return Status::error("--time-budget applies to --method variational only");
+  if (o.depth < 0 || o.depth > 30) return Status::error("--depth must be within 0..30");
+  if (o.arity < 2 || o.arity > 64) return Status::error("--arity must be within 2..64");
+  if (o.m < 1 || o.m > 4096) return Status::error("--m must be within 1..4096");
+  return Status::ok();
+}
+
+Status build_tree(const Mesh& mesh, const BuildOptions& o, Tree* tree, BuildReport* report) {
+  Status s = check_build_options(o);
+  if (!s) return s;
+  if (o.collider_margin > 0) {
+    // A margin beyond the model's size is no collider of this model, and it keeps the grown
+    // boxes' volumes far from overflow.
+    const Aabb box = mesh.bounds();
+    const double diagonal = (box.hi - box.lo).norm();
+    if (o.collider_margin > diagonal)
+      return Status::error("--collider-margin " + format_double(o.collider_margin) +
+                           " exceeds the mesh's bounding-box diagonal " + format_double(diagonal));
+  }
+  BuildReport local;
+  BuildReport* r = report ? report : &local;
+  *r = BuildReport();
+  if (o.method == Method::kObbTree) {
+    ObbTreeOptions opt;
+    opt.depth = o.depth;
+    opt.arity = o.arity;
+    *tree = build_obbtree(mesh, opt);
+  } else {
+    Estimator est;
+    s = make_estimator(mesh, o, &est);
+    if (!s) return s;
+    r->estimator = est.name;
+    s = build_variational_tree(mesh, o, est, tree, &r->search);
+    if (!s) return s;
+  }
+  tree->mesh_sha256 = mesh_sha256(mesh);
+  return Status::ok();
+}
+
+Status read_queries(const Mesh& mesh, const std::vector<std::string>& paths, BuildOptions* o) {
+  const std::string sha = mesh_sha256(mesh);
+  std::vector<collision::Collider>& colliders = o->queries;
+  colliders.clear();
+  for (const std::string& path : paths) {
+    collision::QueryStream stream;
+    const Status s = collision::read_query_stream(path, &stream);
+    if (!s) return s;
+    if (stream.mesh_sha256 != sha) return Status::error(basename_of(path) + ": recorded for another mesh (sha256 differs)");
+    if (colliders.size() + stream.colliders.size() > collision::kMaxRecordedQueries)
+      return Status::error("--queries: more than " + std::to_string(collision::kMaxRecordedQueries) + " colliders in all");
+    colliders.insert(colliders.end(), stream.colliders.begin(), stream.colliders.end());
+  }
+  if (colliders.empty()) return Status::error("--queries: the files hold no colliders");
+  std::string bytes;
+  for (const collision::Collider& c : colliders) {
+    double v[17] = {c.shape == collision::ColliderShape::kSphere ? 0.0 : 1.0, c.center[0], c.center[1], c.center[2],
+                    c.radius, c.half[0], c.half[1], c.half[2]};
+    for (int k = 0; k < 3; ++k)
+      for (int i = 0; i < 3; ++i) v[8 + 3 * k + i] = c.axes[k][i];
+    bytes.append(reinterpret_cast<const char*>(v), sizeof v);
+  }
+  o->queries_digest = sha256_hex(bytes.data(), bytes.size());
+  return Status::ok();
+}
+
+Status check_tree_fits(const Mesh& mesh, const Tree& tree, const std::string& tree_name) {
+  if (tree.mesh_triangles != mesh.faces.size())
+    return Status::error(tree_name + ": tree indexes " + std::to_string(tree.mesh_triangles) +
+                         " triangles but the mesh has " + std::to_string(mesh.faces.size()));
+  if (!tree.mesh_sha256.empty() && tree.mesh_sha256 != mesh_sha256(mesh))
+    return Status::error(tree_name + ": built for another mesh (sha256 differs)");
+  return Status::ok();
+}
+
+Status certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& o, exact::Certificate* certificate) {
+  Status s = check_tree_fits(mesh, tree, "tree");
+  if (!s) return s;
+  return certify_with(mesh, tree, o, o.checkpoint,
+                      std::string(path_name(o.path)) + (o.rational ? "; rational" : ""), certificate);
+}
+
+Status estimate_obv(const Mesh& mesh, const std::vector<Obb>& boxes, const EstimateOptions& o, ObvReport* out) {
+  *out = ObvReport();
+  const size_t n = boxes.size();
+  for (const Obb& b : boxes)
+    if (const std::string d = box_defect(b); !d.empty()) return Status::error("box refused: " + d);
+  bool want_cpu = o.cpu;
+  std::unique_ptr<detail::GlEstimate> gl;
+  if (o.gl) {
+    Status s = make_gl(mesh, false, &gl);
+    if (!s) {
+      if (!o.gl_fallback) return s;
+      say(o.note, "warning: " + s.message() + "; using the CPU twin instead");
+      want_cpu = true;
+    } else {
+      say(o.note, gl->description());
+      out->renderer = gl->renderer();
+      for (int m : o.ms)
+        if (m > gl->max_m()) {
+          const Status too_big = Status::error("--m " + std::to_string(m) + " exceeds the GL estimator's limit " +
+                                               std::to_string(gl->max_m()) + " on this renderer");
+          if (!o.gl_fallback) return too_big;
+          say(o.note, "warning: " + too_big.message() + "; using the CPU twin instead");
+          gl.reset();
+          out->renderer.clear();
+          want_cpu = true;
+          break;
+        }
+    }
+  }
+  // Each batch on every core: values, and the batch's seconds amortised per box.
+  auto timed = [n](const std::string& name, int m, const std::function<std::vector<double>()>& f) {
+    const auto t0 = std::chrono::steady_clock::now();
+    ObvRun r;
+    r.backend = name;
+    r.m = m;
+    r.obv = f();
+    r.seconds.assign(n, n ? seconds_since(t0) / n : 0.0);
+    return r;
+  };
+  const bool any_cubemap = want_cpu || gl;
+  // The polyhedral solver's enclosures: the poly backend's values, and every cubemap
+  // estimate's certified error.
+  if (o.poly || any_cubemap) {
+    const PolyObvSolver solver(mesh);
+    ObvRun r = timed("poly", 0, [&] {
+      out->poly = solver.evaluate(boxes);
+      std::vector<double> e(n);
+      for (size_t i = 0; i < n; ++i) e[i] = out->poly[i].estimate;
+      return e;
+    });
+    if (o.poly) out->runs.push_back(std::move(r));
+    for (size_t i = 0; i < n; ++i)
+      if (out->poly[i].exact_box)
+        say(o.note, "note: box " + std::to_string(i) + ": " + out->poly[i].why +
+                        "; its interval comes from the exact rational instead");
+  }
+  if (want_cpu) {
+    const CpuObvEstimator cpu(mesh);
+    for (int m : o.ms) out->runs.push_back(timed("cpu", m, [&] { return cpu.estimate(boxes, m); }));
+  }
+  if (gl)
+    for (int m : o.ms) out->runs.push_back(timed("gl", m, [&] { return gl->estimate(boxes, m); }));
+  // Each estimate's certified error from the enclosure; R(m) (fast/cubemap_bound.h) when asked.
+  std::unique_ptr<BoxPlanner> planner;
+  if (o.r_bound && any_cubemap) planner = std::make_unique<BoxPlanner>(mesh);
+  out->unresolved.assign(n, 0);
+  for (ObvRun& r : out->runs) {
+    r.bound.resize(n);
+    r.r_bound.assign(n, NAN);
+    for (size_t i = 0; i < n; ++i) {
+      r.bound[i] = certified_error(r.obv[i], out->poly[i]);
+      if (planner && r.m > 0) {
+        bool u = false;
+        r.r_bound[i] = std::min(cubemap_bound(*planner, r.backend == "gl", boxes[i], r.m, &u), range_bound(boxes[i], r.obv[i]));
+        out->unresolved[i] |= u;
+      }
+    }
+  }
+  for (size_t i = 0; i < n; ++i)
+    if (out->unresolved[i])
+      say(o.note, "warning: box " + std::to_string(i) +
+                      ": its view of the mesh does not fit the cubemap's doubles (faces beyond 2^300 box units); "
+                      "estimated at half its volume");
+  if (o.exact) {
+    out->exact.assign(n, Rational(0));
+    out->exact_seconds.assign(n, 0.0);
+    const exact::ClipSolver solver(mesh);
+    tbb::parallel_for(size_t{0}, n, [&](size_t i) {
+      const auto t0 = std::chrono::steady_clock::now();
+      out->exact[i] = solver.obv(boxes[i]);
+      out->exact_seconds[i] = seconds_since(t0);
+    });
+  }
+  return Status::ok();
+}
+
+std::vector<std::string> compare_checkpoint_files() {
+  std::vector<std::string> files = {"state.json"};
+  for (const char* method : {"obbtree", "variational"})
+    for (const char* name : {"obv.json", "layers.json"}) files.push_back(certify_folder("", method) + "/" + name);
+  return files;
+}
+
+const exact::LayerCertificate& CompareResult::layer(int tree, size_t level) const {
+  const auto& layers = certificates[tree].layers;
+  return layers[std::min(level, layers.size() - 1)];
+}
+
+Status compare(const Mesh& mesh, const CompareOptions& co, CompareResult* r) {
+  BuildOptions o = co.build;
+  o.method = Method::kVariational;
+  Status s = check_build_options(o);
+  if (!s) return s;
+  Estimator est;
+  s = make_estimator(mesh, o, &est);
+  if (!s) return s;
+  if (!o.checkpoint.empty()) {
+    s = check_compare_checkpoint(mesh, o, est.name);
+    if (!s) return s;
+  }
+  CertifyOptions copt;
+  copt.rational = co.rational;
+  copt.progress = co.progress;
+  copt.note = o.warning;  // a resumed certification is said even where notes are not
+  copt.warning = o.warning;
+  copt.saved = co.certify_saved;
+  for (int i = 0; i < 2; ++i) {
+    const auto t0 = std::chrono::steady_clock::now();
+    if (i == 0) {
+      ObbTreeOptions opt;
+      opt.depth = o.depth;
+      opt.arity = o.arity;
+      r->trees[0] = build_obbtree(mesh, opt);
+    } else {
+      s = build_variational_tree(mesh, o, est, &r->trees[1], &r->search);
+      if (!s) return s;
+    }
+    r->trees[i].mesh_sha256 = mesh_sha256(mesh);
+    r->build_seconds[i] = seconds_since(t0);
+    // With a checkpoint, each tree's certification keeps its own folder beside the build's state.
+    const std::string folder = o.checkpoint.empty() ? std::string() : certify_folder(o.checkpoint, r->trees[i].method);
+    s = certify_with(mesh, r->trees[i], copt, folder, co.rational ? "auto; rational" : "auto", &r->certificates[i]);
+    if (!s) return s;
+  }
+  r->levels = std::max(r->certificates[0].layers.size(), r->certificates[1].layers.size());
+  // e over layers 0 .. D of the deeper tree, with its weights. For a tree of depth D this is
+  // certify's e. Its enclosure gives the nearest double; where it cannot (a rounding tie within
+  // 1e-35), or with `rational`, the layers' rationals do.
+  const int depth = static_cast<int>(r->levels) - 1;
+  r->e_rational = co.rational;
+  for (int i = 0; i < 2; ++i) {
+    exact::MpInterval e(0);
+    for (size_t l = 0; l < r->levels; ++l)
+      e += exact::MpInterval(layer_weight(depth, static_cast<int>(l))) * r->layer(i, l).omv_enclosure;
+    if (e.nearest(&r->e[i]) && !co.rational) continue;
+    if (!r->certificates[i].rational) {
+      CertifyOptions again = copt;
+      again.rational = true;
+      s = certify_with(mesh, r->trees[i], again, "", "", &r->certificates[i]);
+      if (!s) return s;
+    }
+    std::vector<Rational> omv;
+    for (size_t l = 0; l < r->levels; ++l) omv.push_back(r->layer(i, l).omv);
+    r->e_exact[i] = tree_error(omv);
+    r->e[i] = to_double_nearest(r->e_exact[i]);
+  }
+  return Status::ok();
+}
+
+}  // namespace vobb

@@ -1,0 +1,168 @@
+// vobb's public face: the one header a C++ user includes. Load a solid, build a tree, certify
+// it exactly, estimate the outer volume of boxes, compare the two builders, and weigh layers
+// into the tree error e (DESIGN §1). Every call returns a Status: bad input (a mesh that is no
+// solid, a tree of another mesh, options that contradict each other, a damaged checkpoint)
+// is an error with a one-line message, never an exception or an abort. The library prints
+// nothing; what a run would say (the renderer, a resumed state, a checkpoint not saved) goes
+// to the `note` callbacks.
+//
+// The core (target vobb::vobb) needs CGAL, Eigen, GMP, MPFR and TBB. The GL backend and the
+// figures are the GL component (<vobb/gl.h>, target vobb::gl): without it, Backend::kGl is
+// refused and kAuto takes the CPU twin.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "builder/variational_builder.h"
+#include "collision/contact_predicates.h"
+#include "common/io/mesh_io.h"
+#include "common/io/mesh_report.h"
+#include "common/mesh.h"
+#include "common/obb.h"
+#include "common/status.h"
+#include "common/tree.h"
+#include "common/tree_io.h"
+#include "exact/certify.h"
+#include "fast/poly_solver.h"
+
+namespace vobb {
+
+// ---- loading -------------------------------------------------------------------------------
+// load_solid(path, &loaded) (common/io/mesh_io.h): reads OFF, OBJ, PLY and STL exactly (others
+// through assimp where built with it, in single precision) and refuses a mesh that is not a
+// solid, naming the defect. read_tree and write_tree (common/tree_io.h) read and write trees.
+
+// ---- the tree error ------------------------------------------------------------------------
+// e = Σ_l ω(l) OMV(layer l), ω(l) = D - l + 1 (layer_weight, common/tree.h). Given the OMV of
+// layers 0..L-1, e with the weights of a tree of depth L - 1, exactly.
+Rational tree_error(const std::vector<Rational>& layer_omv);
+
+// ---- building ------------------------------------------------------------------------------
+enum class Method { kVariational, kObbTree };
+// The OBV estimator of the variational search. kAuto: the GL estimator on a GPU (an EGL device,
+// with the GL component enabled) from m = kAutoGlFromM, where it was measured faster; else the
+// CPU twin, which gives the same texels in double. kPoly: the polyhedral solver (no m).
+enum class Backend { kAuto, kCpu, kGl, kPoly };
+inline constexpr int kAutoGlFromM = 128;
+
+struct BuildOptions {
+  Method method = Method::kVariational;
+  int depth = 8;  // 0..30
+  int arity = 2;  // 2..64
+  // The variational search (VariationalOptions, builder/variational_builder.h):
+  int m = 32;  // cubemap resolution, 1..4096; unused by kPoly
+  Backend backend = Backend::kAuto;
+  int lloyd = 4;
+  uint64_t seed = 1;
+  bool axis_search = true, adjust = false, merge = true;
+  int sweeps = 3;
+  Objective objective = Objective::kObv;  // kOmv: shares by the polyhedral solver, any backend
+  double collider_margin = 0;             // world units, 0 .. the mesh's bounding-box diagonal
+  // When not empty, the search minimises the recorded queries that hit each box instead of
+  // OBV (collision/query_objective.h), and no OBV estimator is made. queries_digest names them
+  // in the checkpoint's fingerprint (the CLI gives the SHA-256 of the colliders read).
+  std::vector<collision::Collider> queries;
+  std::string queries_digest;
+  std::string checkpoint;  // a folder; empty: none. A build started again with it resumes.
+  double time_budget = 0;  // seconds; 0: none. Then the nodes not yet split get the baseline split
+  std::function<void(const VariationalProgress&)> progress;
+  // One line each; may be empty. note: what the run chose or found (the renderer, a resumed
+  // state); warning: what it could not do and went on without (a checkpoint not saved).
+  std::function<void(const std::string&)> note, warning;
+  // Called after each checkpoint saved, with its state (a test's place to interrupt a run).
+  std::function<void(const VariationalState&)> saved;
+};
+
+struct BuildReport {
+  VariationalReport search;  // the variational search's counts
+  std::string estimator;     // "cpu", "poly", "gl <renderer>", "queries", or "" (obbtree)
+};
+
+// Reads recorded-query files (`vobb collide --record-queries`) made for this mesh into
+// options->queries, and names them in options->queries_digest.
+Status read_queries(const Mesh& mesh, const std::vector<std::string>& paths, BuildOptions* options);
+// The combinations of options that contradict each other, refused with the flag's name.
+Status check_build_options(const BuildOptions& options);
+// Builds the tree of a solid mesh; fills every field, mesh_sha256 included. Deterministic: the
+// same mesh and options give the same tree on any number of threads, and a build resumed from
+// its checkpoint gives the uninterrupted one's.
+Status build_tree(const Mesh& mesh, const BuildOptions& options, Tree* tree, BuildReport* report = nullptr);
+
+// ---- certifying ----------------------------------------------------------------------------
+struct CertifyOptions {
+  exact::OmvPath path = exact::OmvPath::kAuto;
+  bool rational = false;   // also the exact rationals of every value (exact::CertifyOptions)
+  std::string checkpoint;  // a folder; empty: none. A run started again with it resumes.
+  std::function<void(const std::string&)> progress;  // one line per finished stage
+  std::function<void(const std::string&)> note, warning;  // as for BuildOptions
+  std::function<void(const exact::CertifyState&)> saved;  // after each checkpoint saved
+};
+// Checks that the tree indexes this mesh (its triangle count and, when recorded, its SHA-256),
+// then certifies it (exact/certify.h): OMV, sum of OBV and overlap per layer, e, containment.
+// Creates no GL context. *certificate->ok() says whether it certifies.
+Status certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& options, exact::Certificate* certificate);
+// The tree-against-mesh check alone, with `tree_name` in its message.
+Status check_tree_fits(const Mesh& mesh, const Tree& tree, const std::string& tree_name);
+
+// ---- estimating OBV ------------------------------------------------------------------------
+struct EstimateOptions {
+  bool gl = false, cpu = false, poly = false, exact = false;  // which estimates to make
+  bool gl_fallback = false;  // where GL cannot run (or m exceeds its limit): the CPU twin, noted
+  std::vector<int> ms = {8, 16, 32};  // the cubemap's resolutions
+  bool r_bound = false;               // also R(m), the cubemap's rigorous texel bound
+  std::function<void(const std::string&)> note;
+};
+struct ObvRun {
+  std::string backend;  // "poly", "cpu" or "gl"
+  int m = 0;            // 0: none (poly)
+  std::vector<double> obv, seconds;  // per box; seconds: the batch's amortised
+  // Per box: the estimate's certified error from the polyhedral enclosure (rounded up), and
+  // R(m) (min with the range bound; NaN when not asked or for poly).
+  std::vector<double> bound, r_bound;
+};
+struct ObvReport {
+  std::string renderer;                 // GL's, when it ran
+  std::vector<PolyObv> poly;            // the enclosures, when any estimate was made
+  std::vector<ObvRun> runs;             // poly first, then CPU, then GL, each m ascending as given
+  std::vector<char> unresolved;         // per box: the cubemap's plan could not hold it
+  std::vector<Rational> exact;          // per box, when asked
+  std::vector<double> exact_seconds;
+};
+// Estimates of each box's OBV. Every cubemap estimate gets its certified error from the
+// polyhedral solver's enclosure. Boxes must pass box_defect (read_boxes checks them).
+Status estimate_obv(const Mesh& mesh, const std::vector<Obb>& boxes, const EstimateOptions& options, ObvReport* report);
+
+// ---- comparing the builders ----------------------------------------------------------------
+struct CompareOptions {
+  BuildOptions build;  // its method is ignored: the baseline and the variational tree are built
+  bool rational = false;
+  std::function<void(const std::string&)> progress;  // the certifications' stages
+  // build.note and build.warning also get the certifications' notes.
+  std::function<void(const exact::CertifyState&)> certify_saved;  // after each certification checkpoint
+};
+struct CompareResult {
+  Tree trees[2];                     // [0] obbtree, [1] variational
+  exact::Certificate certificates[2];
+  double build_seconds[2] = {0, 0};
+  VariationalReport search;          // the variational build's counts
+  // Layers 0..levels-1 of the deeper tree; a shallower tree's leaf layer repeats below its last.
+  size_t levels = 0;
+  // e of each tree over those layers with the deeper tree's weights: the nearest double, and the
+  // rational where `rational` was asked or the enclosure could not round.
+  double e[2] = {0, 0};
+  bool e_rational = false;
+  Rational e_exact[2];
+  bool certified() const { return certificates[0].ok() && certificates[1].ok(); }
+  const exact::LayerCertificate& layer(int tree, size_t level) const;
+};
+// Both builders on one mesh, both trees certified. With build.checkpoint, the variational build
+// keeps its state there as build_tree does, and each certification its own folder
+// (certify-obbtree/, certify-variational/).
+Status compare(const Mesh& mesh, const CompareOptions& options, CompareResult* result);
+// The files compare keeps in its checkpoint folder, relative to it.
+std::vector<std::string> compare_checkpoint_files();
+
+}  // namespace vobb
