@@ -30,7 +30,8 @@ class BuildCommand final : public Command {
     inputs.push_back(mesh_);
     Status s = check_output_is_not_input("-o", out_, inputs);
     if (s) s = check_build_flags(cmd_, flags_);
-    if (s) s = check_output_is_not_checkpoint("-o", out_, flags_.options.checkpoint, {"state.json"});
+    if (s)
+      s = check_output_is_not_checkpoint("-o", out_, flags_.options.checkpoint, {"state.json"});
     if (s) s = check_output_is_writable("-o", out_);
     return s;
   }
@@ -61,8 +62,9 @@ class BuildCommand final : public Command {
     if (o.method == Method::kVariational) say_build_report(flags_, report.search);
     s = write_tree(tree, out_);
     if (!s) return could_not_finish(s);  // its folder took a file when the run started
-    std::fprintf(stderr, "vobb: %s tree of %zu nodes, depth %d, arity %d, in %.3f s -> %s\n", tree.method.c_str(),
-                 tree.nodes.size(), tree.depth, tree.arity, seconds_since(t0), out_.c_str());
+    std::fprintf(stderr, "vobb: %s tree of %zu nodes, depth %d, arity %d, in %.3f s -> %s\n",
+                 tree.method.c_str(), tree.nodes.size(), tree.depth, tree.arity, seconds_since(t0),
+                 out_.c_str());
     return kExitOk;
   }
 

@@ -15,7 +15,8 @@ namespace vobb::app {
 namespace {
 
 const char* const kObjectiveHelp =
-    "What the variational search minimises per set of boxes: obv (the sum of their OBV) or omv (that sum less "
+    "What the variational search minimises per set of boxes: obv (the sum of their OBV) or omv "
+    "(that sum less "
     "what each shares outside the solid with those before it, by the polyhedral solver: their OMV)";
 const char* const kThreadsHelp =
     "Threads of a variational build: the nodes of a level searched at once, and each batch's "
@@ -57,15 +58,21 @@ struct ProgressLine {
     char eta[64] = "";
     if (p.sweep == 0) {
       if (p.done - done0 > 0.02)
-        std::snprintf(eta, sizeof eta, "  ~%.0f s left to split", now * (1 - p.done) / (p.done - done0));
-      std::fprintf(stderr, "%svobb: level %d/%d  nodes done %zu/%zu  iteration %d/%d  sum %s %.6g  %.1f s%s%s", start,
-                   p.level, flags.options.depth, p.node, p.nodes, p.iteration, flags.options.lloyd, objective_name(),
-                   p.sum_obv, now, eta, tty ? "     " : "\n");
+        std::snprintf(eta, sizeof eta, "  ~%.0f s left to split",
+                      now * (1 - p.done) / (p.done - done0));
+      std::fprintf(
+          stderr,
+          "%svobb: level %d/%d  nodes done %zu/%zu  iteration %d/%d  sum %s %.6g  %.1f s%s%s",
+          start, p.level, flags.options.depth, p.node, p.nodes, p.iteration, flags.options.lloyd,
+          objective_name(), p.sum_obv, now, eta, tty ? "     " : "\n");
     } else {
       if (p.sweep_done > 0.02)
-        std::snprintf(eta, sizeof eta, "  ~%.0f s left in this sweep", (now - sweep_t0) * (1 - p.sweep_done) / p.sweep_done);
-      std::fprintf(stderr, "%svobb: merging sweep %d (at most %d)  level %d  nodes done %zu/%zu  %.1f s%s%s", start,
-                   p.sweep, flags.options.sweeps, p.level, p.node, p.nodes, now, eta, tty ? "                    " : "\n");
+        std::snprintf(eta, sizeof eta, "  ~%.0f s left in this sweep",
+                      (now - sweep_t0) * (1 - p.sweep_done) / p.sweep_done);
+      std::fprintf(
+          stderr, "%svobb: merging sweep %d (at most %d)  level %d  nodes done %zu/%zu  %.1f s%s%s",
+          start, p.sweep, flags.options.sweeps, p.level, p.node, p.nodes, now, eta,
+          tty ? "                    " : "\n");
     }
     std::fflush(stderr);
   }
@@ -76,50 +83,81 @@ struct ProgressLine {
 void add_build_flags(CLI::App* cmd, BuildFlags* f, bool compare) {
   BuildOptions& o = f->options;
   if (!compare)
-    cmd->add_option("--method", f->method, "variational (the paper's) or obbtree (the OBB-Tree baseline)")
-        ->capture_default_str()->check(CLI::IsMember({"variational", "obbtree"}));
-  cmd->add_option("--depth", o.depth, "Deepest level; the root is level 0")->capture_default_str()->check(CLI::Range(0, 30));
-  cmd->add_option("--arity", o.arity, "Most children per node")->capture_default_str()->check(CLI::Range(2, 64));
+    cmd->add_option("--method", f->method,
+                    "variational (the paper's) or obbtree (the OBB-Tree baseline)")
+        ->capture_default_str()
+        ->check(CLI::IsMember({"variational", "obbtree"}));
+  cmd->add_option("--depth", o.depth, "Deepest level; the root is level 0")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 30));
+  cmd->add_option("--arity", o.arity, "Most children per node")
+      ->capture_default_str()
+      ->check(CLI::Range(2, 64));
   cmd->add_option("--m", o.m, "Cubemap resolution of the OBV estimator (variational)")
-      ->capture_default_str()->check(CLI::Range(1, 4096));
-  const std::string backend_help = "OBV estimator: auto (GL on a GPU from --m " + std::to_string(kAutoGlFromM) +
-                                   ", where it was measured faster; else the CPU twin), gl, cpu, or poly (the "
-                                   "polyhedral solver: exact to round-off, no --m)";
+      ->capture_default_str()
+      ->check(CLI::Range(1, 4096));
+  const std::string backend_help =
+      "OBV estimator: auto (GL on a GPU from --m " + std::to_string(kAutoGlFromM) +
+      ", where it was measured faster; else the CPU twin), gl, cpu, or poly (the "
+      "polyhedral solver: exact to round-off, no --m)";
   cmd->add_option("--backend", f->backend, backend_help)
-      ->capture_default_str()->check(CLI::IsMember({"auto", "gl", "cpu", "poly"}));
+      ->capture_default_str()
+      ->check(CLI::IsMember({"auto", "gl", "cpu", "poly"}));
   cmd->add_option("--lloyd", o.lloyd, "Most Lloyd iterations per node (variational)")
-      ->capture_default_str()->check(CLI::Range(0, 1000));
-  cmd->add_option("--seed", o.seed, "Seed of the orientation search's random starts")->capture_default_str()->check(kSeed);
-  cmd->add_flag("--no-axis-search", f->no_axis_search, "Ablation: keep covariance axes (no orientation search)");
+      ->capture_default_str()
+      ->check(CLI::Range(0, 1000));
+  cmd->add_option("--seed", o.seed, "Seed of the orientation search's random starts")
+      ->capture_default_str()
+      ->check(kSeed);
+  cmd->add_flag("--no-axis-search", f->no_axis_search,
+                "Ablation: keep covariance axes (no orientation search)");
   cmd->add_flag("--adjust", o.adjust,
-                "Also run the adjustment step (Lloyd from other planar splits at levels 1-4; measured to raise e, so off)");
+                "Also run the adjustment step (Lloyd from other planar splits at levels 1-4; "
+                "measured to raise e, so off)");
   cmd->add_flag("--no-merge", f->no_merge, "Ablation: no bottom-up merging sweeps");
-  cmd->add_option("--objective", f->objective, kObjectiveHelp)->capture_default_str()->check(CLI::IsMember({"obv", "omv"}));
-  cmd->add_option("--sweeps", o.sweeps, "Most bottom-up merging sweeps")->capture_default_str()->check(CLI::Range(0, 100));
+  cmd->add_option("--objective", f->objective, kObjectiveHelp)
+      ->capture_default_str()
+      ->check(CLI::IsMember({"obv", "omv"}));
+  cmd->add_option("--sweeps", o.sweeps, "Most bottom-up merging sweeps")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 100));
   if (!compare) {
-    cmd->add_option("--collider-margin", o.collider_margin,
-                    "Variational: minimise the OBV of each box grown by this length on every side (world units), "
-                    "for colliders of about this radius; 0 is the paper's objective, and at most the mesh's "
-                    "bounding-box diagonal. The stored boxes stay tight")
-        ->capture_default_str()->check(kFinite);
-    cmd->add_option("--queries", f->queries,
-                    "Variational: minimise, instead of OBV, the recorded collider queries that hit each box "
-                    "(query files from `vobb collide --record-queries`, for this mesh; several are merged). "
-                    "An objective for one application's colliders, beyond the paper; no OBV estimator is used")
+    cmd->add_option(
+           "--collider-margin", o.collider_margin,
+           "Variational: minimise the OBV of each box grown by this length on every side (world "
+           "units), "
+           "for colliders of about this radius; 0 is the paper's objective, and at most the mesh's "
+           "bounding-box diagonal. The stored boxes stay tight")
+        ->capture_default_str()
+        ->check(kFinite);
+    cmd->add_option(
+           "--queries", f->queries,
+           "Variational: minimise, instead of OBV, the recorded collider queries that hit each box "
+           "(query files from `vobb collide --record-queries`, for this mesh; several are merged). "
+           "An objective for one application's colliders, beyond the paper; no OBV estimator is "
+           "used")
         ->check(kPath)
-        ->allow_extra_args(false);  // one file per --queries, so that a MESH after it stays the MESH
+        ->allow_extra_args(
+            false);  // one file per --queries, so that a MESH after it stays the MESH
   }
-  cmd->add_option("--checkpoint", o.checkpoint,
-                  compare ? "Folder for the variational build's state after each level and sweep, as for build (the "
-                            "same flags make the same build: either command resumes the other's), and for each "
-                            "tree's certification as for certify (certify-obbtree/, certify-variational/)"
-                          : "Folder for the build state after each level and sweep; a build started again with it "
-                            "resumes and gives the same tree")
+  cmd->add_option(
+         "--checkpoint", o.checkpoint,
+         compare
+             ? "Folder for the variational build's state after each level and sweep, as for build "
+               "(the "
+               "same flags make the same build: either command resumes the other's), and for each "
+               "tree's certification as for certify (certify-obbtree/, certify-variational/)"
+             : "Folder for the build state after each level and sweep; a build started again with "
+               "it "
+               "resumes and gives the same tree")
       ->check(kPath);
-  cmd->add_option("--time-budget", o.time_budget, "Seconds; then the search stops and the rest gets the baseline split")
-      ->check(kFinite)->check(CLI::Range(1e-3, 1e9));
+  cmd->add_option("--time-budget", o.time_budget,
+                  "Seconds; then the search stops and the rest gets the baseline split")
+      ->check(kFinite)
+      ->check(CLI::Range(1e-3, 1e9));
   cmd->add_flag("--quiet", f->quiet, compare ? "No progress on stderr" : "No progress line");
-  cmd->add_option("--threads", f->threads, compare ? kCompareThreadsHelp : kThreadsHelp)->check(CLI::Range(1, 4096));
+  cmd->add_option("--threads", f->threads, compare ? kCompareThreadsHelp : kThreadsHelp)
+      ->check(CLI::Range(1, 4096));
 }
 
 Status check_build_flags(const CLI::App* cmd, const BuildFlags& f) {
@@ -135,7 +173,10 @@ Status check_build_flags(const CLI::App* cmd, const BuildFlags& f) {
 BuildOptions build_options(const BuildFlags& f) {
   BuildOptions o = f.options;
   o.method = f.method == "obbtree" ? Method::kObbTree : Method::kVariational;
-  o.backend = f.backend == "gl" ? Backend::kGl : f.backend == "cpu" ? Backend::kCpu : f.backend == "poly" ? Backend::kPoly : Backend::kAuto;
+  o.backend = f.backend == "gl"     ? Backend::kGl
+              : f.backend == "cpu"  ? Backend::kCpu
+              : f.backend == "poly" ? Backend::kPoly
+                                    : Backend::kAuto;
   o.objective = f.objective == "omv" ? Objective::kOmv : Objective::kObv;
   o.axis_search = !f.no_axis_search;
   o.merge = !f.no_merge;
@@ -145,9 +186,11 @@ BuildOptions build_options(const BuildFlags& f) {
     o.progress = [line](const VariationalProgress& p) { (*line)(p); };
     o.note = [](const std::string& s) { std::fprintf(stderr, "vobb: %s\n", one_line(s).c_str()); };
   }
-  // A warning is said even with --quiet; on a terminal the progress line is still open: end it first.
+  // A warning is said even with --quiet; on a terminal the progress line is still open: end it
+  // first.
   o.warning = [line](const std::string& s) {
-    std::fprintf(stderr, "%svobb: %s\n", line->tty && line->last >= 0 ? "\n" : "", one_line(s).c_str());
+    std::fprintf(stderr, "%svobb: %s\n", line->tty && line->last >= 0 ? "\n" : "",
+                 one_line(s).c_str());
   };
   o.saved = build_kill_hook();
   return o;
@@ -173,10 +216,13 @@ void say_build_report(const BuildFlags& f, const VariationalReport& r) {
   if (f.quiet) return;
   if (::isatty(::fileno(stderr))) std::fprintf(stderr, "\n");
   std::fprintf(stderr,
-               "vobb: %zu boxes estimated (%zu more measured again, from the search's record), %zu shares of "
-               "overlap estimated, %zu adjusted splits and %zu merges kept, %d sweeps (%zu regroupings unchanged since "
+               "vobb: %zu boxes estimated (%zu more measured again, from the search's record), %zu "
+               "shares of "
+               "overlap estimated, %zu adjusted splits and %zu merges kept, %d sweeps (%zu "
+               "regroupings unchanged since "
                "they found no move, not run again)%s\n",
-               r.estimates, r.reused, r.overlaps, r.adjustments, r.merges, r.sweeps, r.regroups_skipped,
+               r.estimates, r.reused, r.overlaps, r.adjustments, r.merges, r.sweeps,
+               r.regroups_skipped,
                r.budget_spent ? "; time budget spent: the rest got the baseline split" : "");
 }
 

@@ -1,8 +1,7 @@
 // vobb certify MESH TREE: the exact certificate (vobb/vobb.h, certify), as text or JSON.
-#include <nlohmann/json.hpp>
-
 #include <cstdio>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "app/build_flags.h"
@@ -21,7 +20,9 @@ constexpr const char* kThreadsHelp =
     "core this process may use); the values are exact, so the same for any number. Each thread "
     "that computes a union holds its own Nef polyhedron of the mesh";
 
-nlohmann::ordered_json enclosure(const exact::MpInterval& x) { return nlohmann::ordered_json::array({x.inf(), x.sup()}); }
+nlohmann::ordered_json enclosure(const exact::MpInterval& x) {
+  return nlohmann::ordered_json::array({x.inf(), x.sup()});
+}
 
 nlohmann::ordered_json layer_json(const exact::LayerCertificate& l, bool rational) {
   nlohmann::ordered_json j;
@@ -71,7 +72,8 @@ void print_json(const exact::Certificate& c, bool rational, bool single_precisio
   if (rational) j["weighted_error_rational"] = c.weighted_error.get_str();
   j["exact_obv"] = c.exact_obv;
   nlohmann::ordered_json first = nlohmann::ordered_json::array();
-  for (const auto& [node, face] : c.containment.first) first.push_back({{"node", node}, {"face", face}});
+  for (const auto& [node, face] : c.containment.first)
+    first.push_back({{"node", node}, {"face", face}});
   j["containment"] = {{"ok", c.containment.ok()},
                       {"violations", c.containment.violations},
                       {"checked_pairs", c.containment.checked_pairs},
@@ -81,15 +83,18 @@ void print_json(const exact::Certificate& c, bool rational, bool single_precisio
 }
 
 void print_text(const exact::Certificate& c, bool rational) {
-  std::printf("%5s %7s %24s %24s %24s %6s\n", "level", "boxes", "OMV", "sum OBV", "overlap", "bound");
+  std::printf("%5s %7s %24s %24s %24s %6s\n", "level", "boxes", "OMV", "sum OBV", "overlap",
+              "bound");
   for (const auto& l : c.layers)
-    std::printf("%5d %7zu %24.17g %24.17g %24.17g %6s\n", l.level, l.boxes, l.omv_nearest, l.sum_obv_nearest,
-                l.overlap_nearest, l.upper_bound_holds() ? "holds" : "FAILS");
+    std::printf("%5d %7zu %24.17g %24.17g %24.17g %6s\n", l.level, l.boxes, l.omv_nearest,
+                l.sum_obv_nearest, l.overlap_nearest, l.upper_bound_holds() ? "holds" : "FAILS");
   std::printf("weighted error e: %.17g\n", c.weighted_error_nearest);
   if (rational) std::printf("e (rational): %s\n", c.weighted_error.get_str().c_str());
-  std::printf("containment: %s (%zu violations in %zu node-face pairs)", c.containment.ok() ? "ok" : "FAILED",
-              c.containment.violations, c.containment.checked_pairs);
-  for (const auto& [node, face] : c.containment.first) std::printf(" [node %d face %d]", node, face);
+  std::printf("containment: %s (%zu violations in %zu node-face pairs)",
+              c.containment.ok() ? "ok" : "FAILED", c.containment.violations,
+              c.containment.checked_pairs);
+  for (const auto& [node, face] : c.containment.first)
+    std::printf(" [node %d face %d]", node, face);
   std::printf("\nseconds: %.3f\n", c.seconds);
 }
 
@@ -100,16 +105,22 @@ class CertifyCommand final : public Command {
     c->add_option("MESH", mesh_, "The solid mesh the tree was built for")->required();
     c->add_option("TREE", tree_path_, "Tree file")->required();
     c->add_flag("--json", json_, "Print JSON");
-    c->add_flag("--rational", rational_,
-                "Also compute and print the exact values as rationals (OMV by Nef where boxes overlap)");
+    c->add_flag(
+        "--rational", rational_,
+        "Also compute and print the exact values as rationals (OMV by Nef where boxes overlap)");
     c->add_option("--path", path_,
-                  "auto: enclosures, rationals only where a sign or a rounding needs them; clip or nef: every value "
-                  "in rationals by that path; both: auto, and Nef's and clipping's rationals compared with it")
-        ->capture_default_str()->check(CLI::IsMember({"auto", "clip", "nef", "both"}));
+                  "auto: enclosures, rationals only where a sign or a rounding needs them; clip or "
+                  "nef: every value "
+                  "in rationals by that path; both: auto, and Nef's and clipping's rationals "
+                  "compared with it")
+        ->capture_default_str()
+        ->check(CLI::IsMember({"auto", "clip", "nef", "both"}));
     c->add_flag("--quiet", quiet_, "No per-layer progress on stderr");
     c->add_option("--checkpoint", checkpoint_,
-                  "Folder for what is certified so far (obv.json: the boxes' OBV; layers.json: each finished "
-                  "layer); a run started again with the same folder resumes it and prints the same certificate")
+                  "Folder for what is certified so far (obv.json: the boxes' OBV; layers.json: "
+                  "each finished "
+                  "layer); a run started again with the same folder resumes it and prints the same "
+                  "certificate")
         ->check(kPath);
     c->add_option("--threads", threads_, kThreadsHelp)->check(CLI::Range(1, 4096));
     return c;
@@ -134,9 +145,14 @@ class CertifyCommand final : public Command {
                                : exact::OmvPath::kAuto;
     o.rational = rational_;
     o.checkpoint = checkpoint_;
-    if (!quiet_) o.progress = [](const std::string& line) { std::fprintf(stderr, "certify: %s\n", line.c_str()); };
+    if (!quiet_)
+      o.progress = [](const std::string& line) {
+        std::fprintf(stderr, "certify: %s\n", line.c_str());
+      };
     // A resumed state is said even with --quiet: it is what the certificate rests on.
-    o.note = o.warning = [](const std::string& line) { std::fprintf(stderr, "vobb: %s\n", one_line(line).c_str()); };
+    o.note = o.warning = [](const std::string& line) {
+      std::fprintf(stderr, "vobb: %s\n", one_line(line).c_str());
+    };
     o.saved = certify_kill_hook();  // build_flags.h
     exact::Certificate c;
     s = certify(mesh.mesh, tree, o, &c);

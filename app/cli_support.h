@@ -1,18 +1,18 @@
 // What the subcommands share: exit codes, the one-line error, and CLI11 validators.
 #pragma once
 
-#include <CLI/CLI.hpp>
 #include <fcntl.h>
-#include <nlohmann/json.hpp>
 #include <unistd.h>
 
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
-#include <cerrno>
 #include <cstring>
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -67,7 +67,8 @@ inline Status check_output_is_not_input(const std::string& option, const std::st
   for (const std::string& in : inputs) {
     std::error_code ec;
     if (std::filesystem::equivalent(output, in, ec) && !ec)
-      return Status::error(option + " " + output + ": is the input file " + in + "; choose another output");
+      return Status::error(option + " " + output + ": is the input file " + in +
+                           "; choose another output");
   }
   return Status::ok();
 }
@@ -78,7 +79,8 @@ inline Status check_output_is_not_input(const std::string& option, const std::st
 // be made a folder by the run and fail at its end. Both are compared as absolute paths with
 // links and dot parts resolved as far as they exist.
 inline Status check_output_is_not_checkpoint(const std::string& option, const std::string& output,
-                                             const std::string& folder, const std::vector<std::string>& names) {
+                                             const std::string& folder,
+                                             const std::vector<std::string>& names) {
   namespace fs = std::filesystem;
   if (output.empty() || folder.empty()) return Status::ok();
   std::string followed;
@@ -90,12 +92,12 @@ inline Status check_output_is_not_checkpoint(const std::string& option, const st
     const fs::path own = fs::weakly_canonical(fs::absolute(fs::path(folder) / name, ec), ec);
     if (ec) continue;
     if (own == out)
-      return Status::error(option + " " + output + ": is this run's checkpoint file " + (fs::path(folder) / name).string() +
-                           "; choose another output");
+      return Status::error(option + " " + output + ": is this run's checkpoint file " +
+                           (fs::path(folder) / name).string() + "; choose another output");
     for (fs::path above = own.parent_path(); !above.empty(); above = above.parent_path()) {
       if (above == out)
-        return Status::error(option + " " + output + ": is a folder of this run's checkpoint " + folder +
-                             "; choose another output");
+        return Status::error(option + " " + output + ": is a folder of this run's checkpoint " +
+                             folder + "; choose another output");
       if (above == above.parent_path()) break;
     }
   }
@@ -109,12 +111,14 @@ inline Status check_outputs_differ(const std::string& option, const std::string&
   namespace fs = std::filesystem;
   if (output.empty() || other.empty()) return Status::ok();
   std::string a, b;
-  if (!output_target(output, &a) || !output_target(other, &b)) return Status::ok();  // check_output_is_writable says why
+  if (!output_target(output, &a) || !output_target(other, &b))
+    return Status::ok();  // check_output_is_writable says why
   std::error_code ec1, ec2;
   const fs::path pa = fs::weakly_canonical(fs::absolute(a, ec1), ec1);
   const fs::path pb = fs::weakly_canonical(fs::absolute(b, ec2), ec2);
   if (!ec1 && !ec2 && pa == pb)
-    return Status::error(option + " " + output + ": is also the file of " + other_option + "; choose another output");
+    return Status::error(option + " " + output + ": is also the file of " + other_option +
+                         "; choose another output");
   return Status::ok();
 }
 
@@ -129,18 +133,21 @@ inline Status check_output_is_writable(const std::string& option, const std::str
   if (output.empty()) return Status::ok();
   std::error_code ec;
   const fs::file_status st = fs::status(output, ec);
-  if (fs::is_directory(st)) return Status::error(option + " " + output + ": is a folder; name a file");
+  if (fs::is_directory(st))
+    return Status::error(option + " " + output + ": is a folder; name a file");
   if (fs::exists(st) && !fs::is_regular_file(st)) return Status::ok();
   std::string followed;
-  if (Status s = output_target(output, &followed); !s) return Status::error(option + " " + s.message());
+  if (Status s = output_target(output, &followed); !s)
+    return Status::error(option + " " + s.message());
   const fs::path target(followed);
   fs::path dir = target.parent_path();
   if (dir.empty()) dir = ".";
-  if (!fs::is_directory(dir, ec)) return Status::error(option + " " + output + ": no such folder " + dir.string());
+  if (!fs::is_directory(dir, ec))
+    return Status::error(option + " " + output + ": no such folder " + dir.string());
   const long name_max = ::pathconf(dir.c_str(), _PC_NAME_MAX);
   if (name_max > 0 && target.filename().string().size() > static_cast<size_t>(name_max))
-    return Status::error(option + " " + output + ": file name longer than the " + std::to_string(name_max) +
-                         " bytes its folder takes");
+    return Status::error(option + " " + output + ": file name longer than the " +
+                         std::to_string(name_max) + " bytes its folder takes");
   return vobb::check_folder_takes_files(option + " " + output, dir.string());
 }
 
@@ -162,8 +169,9 @@ inline std::string& pending_precision_note() {
 }
 inline void note_precision(const std::string& path, const LoadedMesh& mesh) {
   if (!mesh.single_precision) return;
-  pending_precision_note() = "vobb: " + one_line(basename_of(path)) + ": read in single precision through assimp (" +
-                             one_line(mesh.format) + "): the results are for its coordinates rounded to float32; OFF, "
+  pending_precision_note() = "vobb: " + one_line(basename_of(path)) +
+                             ": read in single precision through assimp (" + one_line(mesh.format) +
+                             "): the results are for its coordinates rounded to float32; OFF, "
                              "OBJ, PLY and ASCII STL files are read as written\n";
 }
 inline void say_pending_notes() {
@@ -189,14 +197,15 @@ inline const CLI::Validator kFinite(
 
 // A file or folder name given to an option: not empty ('-o ""' named nothing, and a build ran
 // to its end before the write failed).
-inline const CLI::Validator kPath([](std::string& s) -> std::string { return s.empty() ? "an empty name" : ""; },
-                                  "PATH");
+inline const CLI::Validator kPath(
+    [](std::string& s) -> std::string { return s.empty() ? "an empty name" : ""; }, "PATH");
 
 // A seed: decimal digits only, at most 2^64 - 1.
 inline const CLI::Validator kSeed(
     [](std::string& s) -> std::string {
-      const bool digits = !s.empty() && s.size() <= 20 &&
-                          std::all_of(s.begin(), s.end(), [](unsigned char c) { return std::isdigit(c) != 0; });
+      const bool digits =
+          !s.empty() && s.size() <= 20 &&
+          std::all_of(s.begin(), s.end(), [](unsigned char c) { return std::isdigit(c) != 0; });
       if (!digits || (s.size() == 20 && s > "18446744073709551615"))
         return "seed '" + s + "' is not an integer in [0, 2^64 - 1]";
       return "";

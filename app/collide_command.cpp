@@ -1,24 +1,21 @@
-#include <CLI/CLI.hpp>
+#include <fmt/printf.h>
 
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <cstdlib>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
-#include "app/command.h"
-
-#include <fmt/printf.h>
-#include <nlohmann/json.hpp>
-
-#include <cstdio>
-#include <cstdlib>
-
 #include "app/cli_support.h"
+#include "app/command.h"
+#include "collision/query_objective.h"
 #include "common/atomic_file.h"
 #include "common/io/mesh_report.h"
 #include "common/sha256.h"
 #include "common/text_util.h"
 #include "common/tree_io.h"
 #include "validate/collision/collision_experiment.h"
-#include "collision/query_objective.h"
 
 namespace vobb::app {
 
@@ -81,7 +78,8 @@ std::string format_json(const CollideFlags& f, const collision::ExperimentReport
       jt["fcl_leaf_tests"] = t.fcl.leaf_tests;
       if (t0.fcl.available) {
         jt["fcl_reduction_pct"] = reduction_pct(t0.fcl.bv_tests, t.fcl.bv_tests);
-        jt["fcl_tree_node_reduction_pct"] = reduction_pct(t0.fcl.tree_node_bv_tests, t.fcl.tree_node_bv_tests);
+        jt["fcl_tree_node_reduction_pct"] =
+            reduction_pct(t0.fcl.tree_node_bv_tests, t.fcl.tree_node_bv_tests);
       }
       jt["fcl_answer_disagreements"] = t.fcl.answer_disagreements;
       jt["fcl_face_disagreements"] = t.fcl.face_disagreements;
@@ -104,30 +102,37 @@ std::string format_text(const CollideFlags& f, const collision::ExperimentReport
   using ull = unsigned long long;
   // The text shows changes (negative: fewer tests), the JSON reductions (positive: fewer).
   // Adding +0.0 turns the first tree's -0.0 into 0.0, which prints without a sign.
-  auto change_pct = [](double first, double other) { return -collision::reduction_pct(first, other) + 0.0; };
+  auto change_pct = [](double first, double other) {
+    return -collision::reduction_pct(first, other) + 0.0;
+  };
   std::string out;
   const double unit = r.dynamic ? r.simulated_seconds : static_cast<double>(r.queries);
-  out += fmt::sprintf("%s: %llu queries (%llu touching), %.3g s simulated, collider scale %g; brute force agrees: %s\n",
-                r.dynamic ? "dynamic" : "static", static_cast<ull>(r.queries), static_cast<ull>(r.touching_queries),
-                r.simulated_seconds, f.collider_scale,
-                r.brute_force_agrees ? "yes" : ("NO (" + r.first_disagreement + ")").c_str());
+  out += fmt::sprintf(
+      "%s: %llu queries (%llu touching), %.3g s simulated, collider scale %g; brute force agrees: "
+      "%s\n",
+      r.dynamic ? "dynamic" : "static", static_cast<ull>(r.queries),
+      static_cast<ull>(r.touching_queries), r.simulated_seconds, f.collider_scale,
+      r.brute_force_agrees ? "yes" : ("NO (" + r.first_disagreement + ")").c_str());
   out += fmt::sprintf("%-28s %14s %10s %14s %10s %10s %9s %14s %14s %9s %9s\n", "tree", "box tests",
-                r.dynamic ? "per s" : "per query", "leaf tests", "contacts", "narrow s", "change %", "fcl bv tests",
-                "fcl on nodes", "fcl %", "nodes %");
+                      r.dynamic ? "per s" : "per query", "leaf tests", "contacts", "narrow s",
+                      "change %", "fcl bv tests", "fcl on nodes", "fcl %", "nodes %");
   const auto& t0 = r.trees.front();
   for (const auto& t : r.trees) {
-    out += fmt::sprintf("%-28s %14llu %10.4g %14llu %10llu %10.3f %+9.2f", t.name.c_str(), static_cast<ull>(t.counts.box_tests),
-                  t.counts.box_tests / unit, static_cast<ull>(t.counts.leaf_tests), static_cast<ull>(t.counts.contacts),
-                  t.narrow_phase_seconds, change_pct(t0.counts.box_tests, t.counts.box_tests));
+    out +=
+        fmt::sprintf("%-28s %14llu %10.4g %14llu %10llu %10.3f %+9.2f", t.name.c_str(),
+                     static_cast<ull>(t.counts.box_tests), t.counts.box_tests / unit,
+                     static_cast<ull>(t.counts.leaf_tests), static_cast<ull>(t.counts.contacts),
+                     t.narrow_phase_seconds, change_pct(t0.counts.box_tests, t.counts.box_tests));
     // FCL's columns only where it ran on this tree, its changes only where it ran on the first.
     if (!t.fcl.available) {
       out += fmt::sprintf(" %14s %14s %9s %9s\n", "-", "-", "-", "-");
       continue;
     }
-    out += fmt::sprintf(" %14llu %14llu", static_cast<ull>(t.fcl.bv_tests), static_cast<ull>(t.fcl.tree_node_bv_tests));
+    out += fmt::sprintf(" %14llu %14llu", static_cast<ull>(t.fcl.bv_tests),
+                        static_cast<ull>(t.fcl.tree_node_bv_tests));
     if (t0.fcl.available)
       out += fmt::sprintf(" %+9.2f %+9.2f\n", change_pct(t0.fcl.bv_tests, t.fcl.bv_tests),
-                    change_pct(t0.fcl.tree_node_bv_tests, t.fcl.tree_node_bv_tests));
+                          change_pct(t0.fcl.tree_node_bv_tests, t.fcl.tree_node_bv_tests));
     else
       out += fmt::sprintf(" %9s %9s\n", "-", "-");
   }
@@ -145,39 +150,55 @@ std::string format_text(const CollideFlags& f, const collision::ExperimentReport
     out += "\n";
   }
   if (r.fcl_own.available)
-    out += fmt::sprintf("FCL's own OBB tree: %llu bv tests, %llu leaf tests\n", static_cast<ull>(r.fcl_own.bv_tests),
-                  static_cast<ull>(r.fcl_own.leaf_tests));
+    out +=
+        fmt::sprintf("FCL's own OBB tree: %llu bv tests, %llu leaf tests\n",
+                     static_cast<ull>(r.fcl_own.bv_tests), static_cast<ull>(r.fcl_own.leaf_tests));
   return out;
 }
 
-
 CLI::App* add_collide_command(CLI::App& app, CollideFlags* f) {
   CLI::App* c = app.add_subcommand(
-      "collide", "Collision experiment (paper §5): collider–box tests per tree, checked against brute force");
+      "collide",
+      "Collision experiment (paper §5): collider–box tests per tree, checked against brute force");
   c->add_option("MESH", f->mesh, "The solid mesh the trees were built for")->required();
   c->add_option("TREES", f->trees, "Tree files; reductions are relative to the first")->required();
-  c->add_option("--colliders", f->colliders, "Falling colliders (at most 10^6, all held in memory) or, with --static, poses (at most 10^7)")
-      ->capture_default_str()->check(CLI::Range(1, 10000000));
+  c->add_option("--colliders", f->colliders,
+                "Falling colliders (at most 10^6, all held in memory) or, with --static, poses (at "
+                "most 10^7)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 10000000));
   c->add_option("--seconds", f->seconds, "Simulated seconds (dynamic mode)")
-      ->capture_default_str()->check(vobb::app::kFinite)->check(CLI::Range(0.0, 1e6));
-  c->add_option("--seed", f->seed, "Seed of the collider stream")->capture_default_str()->check(vobb::app::kSeed);
-  c->add_option("--collider-scale", f->collider_scale,
-                "Multiplies every collider's size (at 1: spheres of radius 2-8 % and boxes of half side "
-                "1.5-6 % of R, half the diagonal of the first tree's root box); the random draws are the "
-                "same for any value")
-      ->capture_default_str()->check(vobb::app::kFinite)->check(CLI::Range(0.01, 10.0));
+      ->capture_default_str()
+      ->check(vobb::app::kFinite)
+      ->check(CLI::Range(0.0, 1e6));
+  c->add_option("--seed", f->seed, "Seed of the collider stream")
+      ->capture_default_str()
+      ->check(vobb::app::kSeed);
+  c->add_option(
+       "--collider-scale", f->collider_scale,
+       "Multiplies every collider's size (at 1: spheres of radius 2-8 % and boxes of half side "
+       "1.5-6 % of R, half the diagonal of the first tree's root box); the random draws are the "
+       "same for any value")
+      ->capture_default_str()
+      ->check(vobb::app::kFinite)
+      ->check(CLI::Range(0.01, 10.0));
   c->add_flag("--static", f->static_mode, "No dynamics: poses sampled on and near the surface");
   c->add_flag("--no-fcl", f->no_fcl, "Skip the FCL replay");
   c->add_flag("--json", f->json, "Print JSON (DESIGN §7)");
-  c->add_option("-o,--output", f->output, "Write the report to this file (atomically) instead of stdout")
+  c->add_option("-o,--output", f->output,
+                "Write the report to this file (atomically) instead of stdout")
       ->check(vobb::app::kPath);
-  c->add_option("--record-queries", f->record_queries,
-                "Also write the run's queries (the colliders, in the mesh's frame) to this query file, for "
-                "`vobb build --queries`; record with other seeds than the runs you report")
+  c->add_option(
+       "--record-queries", f->record_queries,
+       "Also write the run's queries (the colliders, in the mesh's frame) to this query file, for "
+       "`vobb build --queries`; record with other seeds than the runs you report")
       ->check(vobb::app::kPath);
   CLI::Option* record = c->get_option("--record-queries");
-  c->add_option("--record-every", f->record_every, "Record every K-th query only (with --record-queries)")
-      ->capture_default_str()->check(CLI::Range(1, 1000000000))->needs(record);
+  c->add_option("--record-every", f->record_every,
+                "Record every K-th query only (with --record-queries)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 1000000000))
+      ->needs(record);
   return c;
 }
 
@@ -218,7 +239,9 @@ int run_collide_command(const CollideFlags& f) {
   // Nothing has been written yet (outputs are written whole at the end), so ending here
   // leaves no partial file.
   opt.on_physics_failure = [&](const std::string& why) {
-    std::fprintf(stderr, "vobb: %s: the physics engine stopped: %s (its tolerances are absolute, so extreme model scales trip it); use --static\n",
+    std::fprintf(stderr,
+                 "vobb: %s: the physics engine stopped: %s (its tolerances are absolute, so "
+                 "extreme model scales trip it); use --static\n",
                  one_line(basename_of(f.mesh)).c_str(), one_line(why).c_str());
     std::fflush(stderr);
     std::_Exit(2);
@@ -243,7 +266,8 @@ int run_collide_command(const CollideFlags& f) {
     if (!s) return could_not_finish(s);  // its folder took a file when the run started
   }
   if (!report.brute_force_agrees) {
-    std::fprintf(stderr, "vobb: collide: a tree disagrees with brute force: %s\n", one_line(report.first_disagreement).c_str());
+    std::fprintf(stderr, "vobb: collide: a tree disagrees with brute force: %s\n",
+                 one_line(report.first_disagreement).c_str());
     return kExitCheckFailed;
   }
   return kExitOk;

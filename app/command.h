@@ -3,7 +3,6 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
-
 #include <memory>
 #include <vector>
 
@@ -23,6 +22,11 @@ class Command {
   // The exit code (cli_support.h).
   virtual int run() = 0;
 };
+
+// Parses the line, runs the command it names after its output checks, with --threads applied,
+// and returns the exit code: usage errors, bad input, a thrown exception (out of memory, a
+// library's internal check) and an unwritable standard output each end in one line on stderr.
+int run_command_line(int argc, char** argv, std::vector<std::unique_ptr<Command>> commands);
 
 std::unique_ptr<Command> info_command();
 std::unique_ptr<Command> build_command();

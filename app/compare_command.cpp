@@ -1,9 +1,8 @@
 // vobb compare MESH: both builders, both trees certified (vobb/vobb.h, compare): OMV per layer,
 // its change, and each tree's e; with --figure, both trees drawn (vobb/gl.h).
-#include <nlohmann/json.hpp>
-
 #include <cstdio>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "app/build_flags.h"
@@ -23,7 +22,8 @@ void print_json(const CompareResult& r, bool rational, bool single_precision) {
   nlohmann::ordered_json doc, rows = nlohmann::ordered_json::array();
   for (size_t l = 0; l < r.levels; ++l) {
     const double a = r.layer(0, l).omv_nearest, b = r.layer(1, l).omv_nearest;
-    nlohmann::ordered_json row = {{"level", l}, {"omv_baseline", a}, {"omv_variational", b}, {"change_pct", change(a, b)}};
+    nlohmann::ordered_json row = {
+        {"level", l}, {"omv_baseline", a}, {"omv_variational", b}, {"change_pct", change(a, b)}};
     if (rational) {
       row["omv_baseline_rational"] = r.layer(0, l).omv.get_str();
       row["omv_variational_rational"] = r.layer(1, l).omv.get_str();
@@ -53,36 +53,46 @@ void print_text(const CompareResult& r, bool rational) {
     std::printf("%5zu %24.17g %24.17g %+10.2f\n", l, a, b, change(a, b));
   }
   if (r.trees[0].depth != r.trees[1].depth)
-    std::printf("\nthe obbtree tree has depth %d and the variational one %d: the shallower one's leaf layer is repeated "
-                "below its last, and both e are over layers 0..%zu\n",
-                r.trees[0].depth, r.trees[1].depth, r.levels - 1);
-  std::printf("\ne obbtree %.17g, e variational %.17g, change %+.2f %%\n", r.e[0], r.e[1], change(r.e[0], r.e[1]));
+    std::printf(
+        "\nthe obbtree tree has depth %d and the variational one %d: the shallower one's leaf "
+        "layer is repeated "
+        "below its last, and both e are over layers 0..%zu\n",
+        r.trees[0].depth, r.trees[1].depth, r.levels - 1);
+  std::printf("\ne obbtree %.17g, e variational %.17g, change %+.2f %%\n", r.e[0], r.e[1],
+              change(r.e[0], r.e[1]));
   if (rational)
-    std::printf("e obbtree (rational): %s\ne variational (rational): %s\n", r.e_exact[0].get_str().c_str(),
-                r.e_exact[1].get_str().c_str());
-  std::printf("build seconds: obbtree %.3f, variational %.3f; both certified: %s\n", r.build_seconds[0],
-              r.build_seconds[1], r.certified() ? "yes" : "NO");
+    std::printf("e obbtree (rational): %s\ne variational (rational): %s\n",
+                r.e_exact[0].get_str().c_str(), r.e_exact[1].get_str().c_str());
+  std::printf("build seconds: obbtree %.3f, variational %.3f; both certified: %s\n",
+              r.build_seconds[0], r.build_seconds[1], r.certified() ? "yes" : "NO");
 }
 
 class CompareCommand final : public Command {
  public:
   CLI::App* add(CLI::App& app) override {
-    cmd_ = app.add_subcommand("compare", "Both builders, both trees certified exactly: OMV per layer and e");
+    cmd_ = app.add_subcommand("compare",
+                              "Both builders, both trees certified exactly: OMV per layer and e");
     cmd_->add_option("MESH", mesh_, "Solid mesh")->required();
     add_build_flags(cmd_, &flags_, /*compare=*/true);
     cmd_->add_flag("--json", json_, "Print JSON (DESIGN §7)");
-    cmd_->add_flag("--rational", rational_, "Also print each exact value (OMV per layer, e) as a rational");
-    cmd_->add_option("--figure", figure_, "Also draw both trees' boxes at levels 1..8 over the mesh to this PNG")
+    cmd_->add_flag("--rational", rational_,
+                   "Also print each exact value (OMV per layer, e) as a rational");
+    cmd_->add_option("--figure", figure_,
+                     "Also draw both trees' boxes at levels 1..8 over the mesh to this PNG")
         ->check(kPath);
-    cmd_->add_option("--figure-up", figure_up_, "The mesh's up axis in the figure: x, y, z, -x, -y or -z")
-        ->capture_default_str()->check(CLI::IsMember({"x", "y", "z", "-x", "-y", "-z"}));
+    cmd_->add_option("--figure-up", figure_up_,
+                     "The mesh's up axis in the figure: x, y, z, -x, -y or -z")
+        ->capture_default_str()
+        ->check(CLI::IsMember({"x", "y", "z", "-x", "-y", "-z"}));
     return cmd_;
   }
 
   Status check_outputs() const override {
     Status s = check_build_flags(cmd_, flags_);
     if (s) s = check_output_is_not_input("--figure", figure_, {mesh_});
-    if (s) s = check_output_is_not_checkpoint("--figure", figure_, flags_.options.checkpoint, compare_checkpoint_files());
+    if (s)
+      s = check_output_is_not_checkpoint("--figure", figure_, flags_.options.checkpoint,
+                                         compare_checkpoint_files());
     if (s) s = check_output_is_writable("--figure", figure_);
     return s;
   }
@@ -98,7 +108,10 @@ class CompareCommand final : public Command {
     o.build = build_options(flags_);
     o.rational = rational_;
     o.certify_saved = certify_kill_hook();
-    if (!flags_.quiet) o.progress = [](const std::string& line) { std::fprintf(stderr, "vobb: %s\n", line.c_str()); };
+    if (!flags_.quiet)
+      o.progress = [](const std::string& line) {
+        std::fprintf(stderr, "vobb: %s\n", line.c_str());
+      };
     CompareResult r;
     s = compare(loaded.mesh, o, &r);
     if (!s) return refuse(s);
@@ -115,7 +128,8 @@ class CompareCommand final : public Command {
       s = write_png(figure_, image);
       if (!s) return could_not_finish(s);  // its folder took a file when the run started
       std::fprintf(stderr,
-                   "vobb: figure %s: %dx%d px; row 1 obbtree (baseline), row 2 variational; columns levels %d..%d\n",
+                   "vobb: figure %s: %dx%d px; row 1 obbtree (baseline), row 2 variational; "
+                   "columns levels %d..%d\n",
                    figure_.c_str(), fig.width, fig.height, fig.first_level, fig.last_level);
     }
     return r.certified() ? kExitOk : kExitCheckFailed;

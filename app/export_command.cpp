@@ -35,11 +35,13 @@ class ExportCommand final : public Command {
     Status s = read_tree(tree_path_, &tree);
     if (!s) return refuse(s);
     if (level_ < 0 || level_ > tree.depth)
-      return refuse(Status::error("--level " + std::to_string(level_) + ": " + basename_of(tree_path_) +
-                                  " has levels 0 to " + std::to_string(tree.depth)));
+      return refuse(Status::error("--level " + std::to_string(level_) + ": " +
+                                  basename_of(tree_path_) + " has levels 0 to " +
+                                  std::to_string(tree.depth)));
     s = export_layer(tree, level_, out_);
     if (!s) return could_not_finish(s);  // the level and the format were checked before
-    std::fprintf(stderr, "vobb: layer %d (%zu boxes) -> %s\n", level_, layer(tree, level_).size(), out_.c_str());
+    std::fprintf(stderr, "vobb: layer %d (%zu boxes) -> %s\n", level_, layer(tree, level_).size(),
+                 out_.c_str());
     return kExitOk;
   }
 

@@ -1,46 +1,15 @@
-// vobb — the command line. Registers the commands (app/*_command.cpp), parses the line, and
-// runs the one named. Exit codes (DESIGN §7): 0 ok, 1 a check failed, 2 bad input or usage, 3
-// the run could not finish; with a one-line reason on stderr.
-#include <tbb/global_control.h>
-
+// vobb — the command line: registers the commands (one file each under app/) and runs the one
+// named on the line (command.h). Exit codes (DESIGN §7): 0 ok, 1 a check failed, 2 bad input or
+// usage, 3 the run could not finish; with a one-line reason on stderr.
 #include <csignal>
-#include <cstdio>
-#include <exception>
 #include <memory>
-#include <new>
-#include <optional>
-#include <string>
+#include <utility>
 #include <vector>
 
-#include "app/cli_support.h"
 #include "app/command.h"
 #include "common/io/assimp_reader.h"
 #include "vobb/config.h"
 #include "vobb/gl.h"
-
-namespace {
-
-using vobb::app::kExitBadInput;
-using vobb::app::kExitCheckFailed;
-using vobb::app::kExitCouldNotFinish;
-using vobb::app::kExitOk;
-using vobb::app::one_line;
-
-// The command named on the line, or "" when none; an unknown one is refused with the list.
-bool named_command(int argc, char** argv, CLI::App& app, std::string* command) {
-  if (argc < 2 || argv[1][0] == '-') return true;
-  std::string names;
-  for (const CLI::App* sc : app.get_subcommands([](CLI::App*) { return true; })) {
-    names += (names.empty() ? "" : ", ") + sc->get_name();
-    if (sc->get_name() == argv[1]) *command = argv[1];
-  }
-  if (!command->empty()) return true;
-  std::fprintf(stderr, "vobb: usage: unknown command '%s'; the commands are %s (see vobb --help)\n",
-               one_line(argv[1]).c_str(), names.c_str());
-  return false;
-}
-
-}  // namespace
 
 int main(int argc, char** argv) {
   // A reader that closes the pipe early (vobb info M | head -1) makes a write fail with EPIPE,
@@ -50,9 +19,6 @@ int main(int argc, char** argv) {
 #if VOBB_HAVE_ASSIMP
   vobb::enable_assimp();
 #endif
-  CLI::App app{"vobb: tight oriented-bounding-box trees for solid meshes, with exact outer volumes"};
-  app.require_subcommand(1);
-  app.set_version_flag("--version", VOBB_VERSION);
   std::vector<std::unique_ptr<vobb::app::Command>> commands;
   commands.push_back(vobb::app::info_command());
   commands.push_back(vobb::app::build_command());
@@ -62,58 +28,5 @@ int main(int argc, char** argv) {
   commands.push_back(vobb::app::validate_command());
   commands.push_back(vobb::app::collide_command());
   commands.push_back(vobb::app::export_command());
-  std::vector<CLI::App*> parsers;
-  for (auto& c : commands) parsers.push_back(c->add(app));
-
-  // A usage error of a known command points to that command's help.
-  std::string command;
-  if (!named_command(argc, argv, app, &command)) return kExitBadInput;
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::CallForHelp& e) {
-    return app.exit(e);
-  } catch (const CLI::CallForAllHelp& e) {
-    return app.exit(e);
-  } catch (const CLI::CallForVersion& e) {
-    return app.exit(e);
-  } catch (const CLI::ParseError& e) {
-    std::string what = e.what();
-    for (char& c : what)
-      if (c == '\n') c = ' ';
-    const std::string help = command.empty() ? "vobb --help" : "vobb " + command + " --help";
-    std::fprintf(stderr, "vobb%s: usage: %s (see %s)\n", command.empty() ? "" : (" " + command).c_str(),
-                 one_line(what).c_str(), help.c_str());
-    return kExitBadInput;
-  }
-  vobb::app::Command* run = nullptr;
-  for (size_t i = 0; i < commands.size(); ++i)
-    if (parsers[i]->parsed()) run = commands[i].get();
-  if (run == nullptr) return kExitBadInput;
-  if (const vobb::Status s = run->check_outputs(); !s) return vobb::app::refuse(s);
-  // The values, and so the trees and certificates, do not depend on how many threads.
-  std::optional<tbb::global_control> thread_limit;
-  if (run->threads() > 0)
-    thread_limit.emplace(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(run->threads()));
-  // Bad input never throws (it is a Status); what can is running out of memory, or a library's
-  // own assertion (CGAL's). Either ends the run with one line, not an abort.
-  const std::string who = command.empty() ? "vobb" : "vobb " + command;
-  int rc;
-  try {
-    rc = run->run();
-  } catch (const std::bad_alloc&) {
-    std::fprintf(stderr, "%s: out of memory\n", who.c_str());
-    return kExitCouldNotFinish;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "%s: internal error: %s\n", who.c_str(), one_line(e.what()).c_str());
-    return kExitCouldNotFinish;
-  }
-  // A report printed to a full disk or a closed stream must not end as a success.
-  if (std::fflush(stdout) != 0 || std::ferror(stdout)) {
-    std::fprintf(stderr, "%s: cannot write standard output\n", who.c_str());
-    return kExitCouldNotFinish;
-  }
-  // A run that ends with its results names the single-precision read (say_pending_notes); a
-  // refusal or a run that could not finish keeps to its one line.
-  if (rc == kExitOk || rc == kExitCheckFailed) vobb::app::say_pending_notes();
-  return rc;
+  return vobb::app::run_command_line(argc, argv, std::move(commands));
 }

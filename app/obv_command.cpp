@@ -1,9 +1,8 @@
 // vobb obv MESH --boxes B: OBV of boxes by the chosen backends (vobb/vobb.h, estimate_obv).
-#include <nlohmann/json.hpp>
-
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -20,18 +19,27 @@ namespace {
 class ObvCommand final : public Command {
  public:
   CLI::App* add(CLI::App& app) override {
-    CLI::App* c = app.add_subcommand("obv", "OBV of boxes: cubemap estimates at several m, and the exact value");
+    CLI::App* c = app.add_subcommand(
+        "obv", "OBV of boxes: cubemap estimates at several m, and the exact value");
     c->add_option("MESH", mesh_, "Solid mesh")->required();
-    c->add_option("--boxes", boxes_path_, "Box file {\"boxes\":[{center, axes, half_extents}]}")->required();
-    c->add_option("--m", ms_, "Cubemap resolutions, e.g. 8,16,32")->delimiter(',')->check(CLI::Range(1, 4096));
+    c->add_option("--boxes", boxes_path_, "Box file {\"boxes\":[{center, axes, half_extents}]}")
+        ->required();
+    c->add_option("--m", ms_, "Cubemap resolutions, e.g. 8,16,32")
+        ->delimiter(',')
+        ->check(CLI::Range(1, 4096));
     c->add_option("--backend", backend_,
-                  "gl (EGL: a GPU, else llvmpipe), cpu (the double-precision twin), poly (the polyhedral solver: "
-                  "an estimate and its certified interval), exact, all, or auto (gl, else cpu with a warning)")
-        ->capture_default_str()->check(CLI::IsMember({"auto", "gl", "cpu", "poly", "exact", "all"}));
+                  "gl (EGL: a GPU, else llvmpipe), cpu (the double-precision twin), poly (the "
+                  "polyhedral solver: "
+                  "an estimate and its certified interval), exact, all, or auto (gl, else cpu with "
+                  "a warning)")
+        ->capture_default_str()
+        ->check(CLI::IsMember({"auto", "gl", "cpu", "poly", "exact", "all"}));
     c->add_flag("--r-bound", r_bound_,
-                "Also print R(m), the cubemap's rigorous texel bound, beside each cubemap estimate's certified error");
+                "Also print R(m), the cubemap's rigorous texel bound, beside each cubemap "
+                "estimate's certified error");
     c->add_flag("--json", json_, "Print JSON");
-    c->add_flag("--rational", rational_, "With the exact backend, also print each exact OBV as a rational");
+    c->add_flag("--rational", rational_,
+                "With the exact backend, also print each exact OBV as a rational");
     return c;
   }
 
@@ -53,7 +61,9 @@ class ObvCommand final : public Command {
     o.gl_fallback = backend_ != "gl";
     o.ms = ms_;
     o.r_bound = r_bound_;
-    o.note = [](const std::string& line) { std::fprintf(stderr, "vobb: %s\n", one_line(line).c_str()); };
+    o.note = [](const std::string& line) {
+      std::fprintf(stderr, "vobb: %s\n", one_line(line).c_str());
+    };
     ObvReport r;
     s = estimate_obv(mesh.mesh, boxes, o, &r);
     if (!s) return refuse(s);
@@ -70,8 +80,9 @@ class ObvCommand final : public Command {
     for (size_t i = 0; i < r.exact.size(); ++i) exact[i] = to_double_nearest(r.exact[i]);
     nlohmann::ordered_json out = nlohmann::ordered_json::array();
     if (!json_)
-      std::printf("%5s %8s %5s %24s %24s %12s %12s %10s%s%s\n", "box", "backend", "m", "OBV", "exact", "rel.error",
-                  "bound", "seconds", r_bound_ ? "         R(m)" : "", want_poly ? "  certified interval" : "");
+      std::printf("%5s %8s %5s %24s %24s %12s %12s %10s%s%s\n", "box", "backend", "m", "OBV",
+                  "exact", "rel.error", "bound", "seconds", r_bound_ ? "         R(m)" : "",
+                  want_poly ? "  certified interval" : "");
     for (size_t i = 0; i < n; ++i) {
       nlohmann::ordered_json jb;
       jb["index"] = i;
@@ -99,11 +110,13 @@ class ObvCommand final : public Command {
         if (r_bound_ && run.m > 0) e["r_bound"] = run.r_bound[i];
         e["seconds"] = run.seconds[i];
         est.push_back(e);
-        if (!json_) print_row(i, run, want_exact ? &exact[i] : nullptr, r.poly.empty() ? nullptr : &r.poly[i], want_poly);
+        if (!json_)
+          print_row(i, run, want_exact ? &exact[i] : nullptr, r.poly.empty() ? nullptr : &r.poly[i],
+                    want_poly);
       }
       if (!json_ && r.runs.empty())
-        std::printf("%5zu %8s %5s %24.17g %24s %12s %12s %10.6f\n", i, "exact", "-", exact[i], "-", "-", "-",
-                    r.exact_seconds[i]);
+        std::printf("%5zu %8s %5s %24.17g %24s %12s %12s %10.6f\n", i, "exact", "-", exact[i], "-",
+                    "-", "-", r.exact_seconds[i]);
       jb["estimates"] = est;
       out.push_back(jb);
     }
@@ -114,20 +127,24 @@ class ObvCommand final : public Command {
       doc["boxes"] = out;
       std::printf("%s\n", report_json(doc).c_str());
     } else if (rational_ && want_exact) {
-      for (size_t i = 0; i < n; ++i) std::printf("box %zu exact (rational): %s\n", i, r.exact[i].get_str().c_str());
+      for (size_t i = 0; i < n; ++i)
+        std::printf("box %zu exact (rational): %s\n", i, r.exact[i].get_str().c_str());
     }
   }
 
-  void print_row(size_t i, const ObvRun& run, const double* exact, const PolyObv* poly, bool want_poly) const {
+  void print_row(size_t i, const ObvRun& run, const double* exact, const PolyObv* poly,
+                 bool want_poly) const {
     char rel[32] = "-", ex[40] = "-", mm[16] = "-", rb[24] = "", iv[64] = "";
-    if (exact && *exact != 0) std::snprintf(rel, sizeof rel, "%.3e", std::abs(run.obv[i] - *exact) / *exact);
+    if (exact && *exact != 0)
+      std::snprintf(rel, sizeof rel, "%.3e", std::abs(run.obv[i] - *exact) / *exact);
     if (exact) std::snprintf(ex, sizeof ex, "%.17g", *exact);
     if (run.m > 0) std::snprintf(mm, sizeof mm, "%d", run.m);
     if (r_bound_ && run.m > 0) std::snprintf(rb, sizeof rb, " %12.3e", run.r_bound[i]);
     if (r_bound_ && run.m == 0) std::snprintf(rb, sizeof rb, " %12s", "-");
-    if (want_poly && run.m == 0 && poly) std::snprintf(iv, sizeof iv, "  [%.17g, %.17g]", poly->lo, poly->hi);
-    std::printf("%5zu %8s %5s %24.17g %24s %12s %12.3e %10.6f%s%s\n", i, run.backend.c_str(), mm, run.obv[i], ex, rel,
-                run.bound[i], run.seconds[i], rb, iv);
+    if (want_poly && run.m == 0 && poly)
+      std::snprintf(iv, sizeof iv, "  [%.17g, %.17g]", poly->lo, poly->hi);
+    std::printf("%5zu %8s %5s %24.17g %24s %12s %12.3e %10.6f%s%s\n", i, run.backend.c_str(), mm,
+                run.obv[i], ex, rel, run.bound[i], run.seconds[i], rb, iv);
   }
 
   std::string mesh_, boxes_path_, backend_ = "auto";

@@ -4,14 +4,14 @@
 // Every configuration runs in this one process, so the ratios compare like with like. Each GL
 // value of the full batch is also checked against gl_deviation_bound; the run fails above it.
 // Usage: vobb-bench-estimator MESH [--m M] [--leaves N] [--roots N] [--ablation-boxes N]
+#include <tbb/task_arena.h>
+
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <string>
 #include <vector>
-
-#include <tbb/task_arena.h>
 
 #include "bench/bench_util.h"
 #include "common/io/mesh_report.h"
@@ -25,7 +25,8 @@ using vobb::bench::seconds;
 
 double max_abs_diff(const std::vector<double>& a, const std::vector<double>& b) {
   double d = 0;
-  for (size_t i = 0; i < a.size(); ++i) d = std::max(d, std::abs(a[i] - b[i]) / std::max(1e-300, std::abs(b[i])));
+  for (size_t i = 0; i < a.size(); ++i)
+    d = std::max(d, std::abs(a[i] - b[i]) / std::max(1e-300, std::abs(b[i])));
   return d;
 }
 
@@ -33,7 +34,9 @@ double max_abs_diff(const std::vector<double>& a, const std::vector<double>& b) 
 
 int main(int argc, char** argv) {
   if (argc < 2) {
-    std::fprintf(stderr, "usage: vobb-bench-estimator MESH [--m M] [--leaves N] [--roots N] [--ablation-boxes N]\n");
+    std::fprintf(
+        stderr,
+        "usage: vobb-bench-estimator MESH [--m M] [--leaves N] [--roots N] [--ablation-boxes N]\n");
     return 2;
   }
   int m = 32, leaves = 1000, roots = 100, ablation = 100;
@@ -52,25 +55,31 @@ int main(int argc, char** argv) {
     return 2;
   }
   vobb::CpuObvEstimator cpu(lm.mesh);
-  std::printf("mesh %s, %zu faces, m = %d, renderer: %s\n", argv[1], lm.mesh.faces.size(), m, gl->renderer().c_str());
-  std::printf("%-6s %6s %-28s %12s %14s\n", "boxes", "count", "configuration", "ms per OBV", "max rel diff");
+  std::printf("mesh %s, %zu faces, m = %d, renderer: %s\n", argv[1], lm.mesh.faces.size(), m,
+              gl->renderer().c_str());
+  std::printf("%-6s %6s %-28s %12s %14s\n", "boxes", "count", "configuration", "ms per OBV",
+              "max rel diff");
   bool bound_exceeded = false;
   using vobb::validate::BoxSize;
   for (BoxSize size : {BoxSize::kLeaf, BoxSize::kRoot}) {
     const int count = size == BoxSize::kLeaf ? leaves : roots;
     const auto boxes = vobb::validate::box_corpus(lm.mesh, size, count, 2026);
     const char* name = vobb::validate::to_string(size);
-    gl->estimate(std::vector<vobb::Obb>(boxes.begin(), boxes.begin() + 1), m);  // warm-up: shader JIT, atlas
+    gl->estimate(std::vector<vobb::Obb>(boxes.begin(), boxes.begin() + 1),
+                 m);  // warm-up: shader JIT, atlas
     std::vector<double> ref, v;
     double t = seconds([&] { ref = cpu.estimate(boxes, m); });
-    std::printf("%-6s %6d %-28s %12.4f %14s\n", name, count, "cpu twin, all threads", 1e3 * t / count, "(reference)");
+    std::printf("%-6s %6d %-28s %12.4f %14s\n", name, count, "cpu twin, all threads",
+                1e3 * t / count, "(reference)");
     // The same batch on one thread: the values must not change (each box is one thread's).
     t = seconds([&] { tbb::task_arena(1).execute([&] { v = cpu.estimate(boxes, m); }); });
-    std::printf("%-6s %6d %-28s %12.4f %14.2e\n", name, count, "cpu twin, one thread", 1e3 * t / count, max_abs_diff(v, ref));
+    std::printf("%-6s %6d %-28s %12.4f %14.2e\n", name, count, "cpu twin, one thread",
+                1e3 * t / count, max_abs_diff(v, ref));
     size_t trips = gl->round_trips();
     t = seconds([&] { v = gl->estimate(boxes, m); });
-    std::printf("%-6s %6d %-28s %12.4f %14.2e   (%zu round trips)\n", name, count, "gl, batched, first call", 1e3 * t / count,
-                max_abs_diff(v, ref), gl->round_trips() - trips);
+    std::printf("%-6s %6d %-28s %12.4f %14.2e   (%zu round trips)\n", name, count,
+                "gl, batched, first call", 1e3 * t / count, max_abs_diff(v, ref),
+                gl->round_trips() - trips);
     // Each GL value against the CPU twin's within the derived float bound (gl_estimator.h):
     // the worst |GL - CPU| / bound over the batch. Above 1 is a defect, and fails the run.
     double worst = 0;
@@ -81,26 +90,31 @@ int main(int argc, char** argv) {
       const double ratio = diff == 0 ? 0.0 : bound > 0 ? diff / bound : HUGE_VAL;
       worst = std::isnan(ratio) ? HUGE_VAL : std::max(worst, ratio);
     }
-    std::printf("%-6s %6d %-28s %12s %14.2e   (worst |gl - cpu| / gl_deviation_bound)\n", name, count,
-                "gl against its bound", "-", worst);
+    std::printf("%-6s %6d %-28s %12s %14.2e   (worst |gl - cpu| / gl_deviation_bound)\n", name,
+                count, "gl against its bound", "-", worst);
     // The first call pays for first touches of the atlas's pages; the rest are steady state.
     // Ablations on the first `ablation` boxes, against the full configuration on the same boxes.
-    const std::vector<vobb::Obb> few(boxes.begin(), boxes.begin() + std::min<size_t>(boxes.size(), ablation));
+    const std::vector<vobb::Obb> few(boxes.begin(),
+                                     boxes.begin() + std::min<size_t>(boxes.size(), ablation));
     const int n = static_cast<int>(few.size());
     std::vector<double> few_ref;
     t = seconds([&] { few_ref = gl->estimate(few, m); });
-    std::printf("%-6s %6d %-28s %12.4f %14s\n", name, n, "gl, culled, batched (again)", 1e3 * t / n, "-");
+    std::printf("%-6s %6d %-28s %12.4f %14s\n", name, n, "gl, culled, batched (again)", 1e3 * t / n,
+                "-");
     gl->set_batching(false);
     t = seconds([&] { v = gl->estimate(few, m); });
-    std::printf("%-6s %6d %-28s %12.4f %14.2e\n", name, n, "gl, culled, one box per trip", 1e3 * t / n, max_abs_diff(v, few_ref));
+    std::printf("%-6s %6d %-28s %12.4f %14.2e\n", name, n, "gl, culled, one box per trip",
+                1e3 * t / n, max_abs_diff(v, few_ref));
     gl->set_batching(true);
     gl->set_culling(false);
     t = seconds([&] { v = gl->estimate(few, m); });
-    std::printf("%-6s %6d %-28s %12.4f %14.2e\n", name, n, "gl, all faces, batched", 1e3 * t / n, max_abs_diff(v, few_ref));
+    std::printf("%-6s %6d %-28s %12.4f %14.2e\n", name, n, "gl, all faces, batched", 1e3 * t / n,
+                max_abs_diff(v, few_ref));
     gl->set_culling(true);
     cpu.set_culling(false);
     t = seconds([&] { v = cpu.estimate(few, m); });
-    std::printf("%-6s %6d %-28s %12.4f %14.2e\n", name, n, "cpu twin, all faces", 1e3 * t / n, max_abs_diff(v, few_ref));
+    std::printf("%-6s %6d %-28s %12.4f %14.2e\n", name, n, "cpu twin, all faces", 1e3 * t / n,
+                max_abs_diff(v, few_ref));
     cpu.set_culling(true);
     // Where the time goes: the CPU-side plan alone (shared by both backends), on one thread
     // (GL plans a batch on every core, the CPU twin each box on one).
@@ -110,7 +124,9 @@ int main(int argc, char** argv) {
     std::printf("%-6s %6d %-28s %12.4f %14s\n", name, n, "plan only, one thread", 1e3 * t / n, "-");
   }
   if (bound_exceeded) {
-    std::fprintf(stderr, "vobb-bench-estimator: a GL value is outside gl_deviation_bound of the CPU twin's\n");
+    std::fprintf(
+        stderr,
+        "vobb-bench-estimator: a GL value is outside gl_deviation_bound of the CPU twin's\n");
     return 1;
   }
   return 0;

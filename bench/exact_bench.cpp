@@ -9,9 +9,9 @@
 #include <vector>
 
 #include "bench/bench_util.h"
+#include "builder/obbtree_builder.h"
 #include "common/io/mesh_io.h"
 #include "exact/outer_volume.h"
-#include "builder/obbtree_builder.h"
 
 namespace {
 
@@ -63,11 +63,13 @@ int main(int argc, char** argv) {
   const double root_clip = seconds([&] { c = clip.obv(tree.nodes[0].box); });
   const double root_nef = seconds([&] { a = nef->obv(tree.nodes[0].box); });
   disagree += a != c;
-  std::printf("| mesh | depth | boxes | path | median leaf OBV s | root OBV s |\n|---|---|---|---|---|---|\n");
+  std::printf(
+      "| mesh | depth | boxes | path | median leaf OBV s | root OBV s "
+      "|\n|---|---|---|---|---|---|\n");
   std::printf("| %s | %d | %zu leaves + root | clip (box frame) | %.4f | %.4f |\n", argv[1], depth,
               leaf_boxes.size(), median(leaf_clip), root_clip);
-  std::printf("| %s | %d | %zu leaves + root | Nef (Nef(X) built once: %.2f s) | %.4f | %.4f |\n", argv[1],
-              depth, leaf_boxes.size(), nef_build, median(leaf_nef), root_nef);
+  std::printf("| %s | %d | %zu leaves + root | Nef (Nef(X) built once: %.2f s) | %.4f | %.4f |\n",
+              argv[1], depth, leaf_boxes.size(), nef_build, median(leaf_nef), root_nef);
   std::printf("paths disagree on %zu boxes\n", disagree);
   return disagree ? 1 : 0;
 }

@@ -10,9 +10,9 @@
 #include <string>
 #include <vector>
 
+#include "builder/obbtree_builder.h"
 #include "common/io/mesh_io.h"
 #include "common/solidity.h"
-#include "builder/obbtree_builder.h"
 
 namespace {
 
@@ -33,10 +33,14 @@ int main(int argc, char** argv) {
   int repeat = 5;
   std::vector<std::string> meshes;
   for (int i = 1; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--repeat") && i + 1 < argc) repeat = std::max(1, std::atoi(argv[++i]));
-    else meshes.push_back(argv[i]);
+    if (!std::strcmp(argv[i], "--repeat") && i + 1 < argc)
+      repeat = std::max(1, std::atoi(argv[++i]));
+    else
+      meshes.push_back(argv[i]);
   }
-  std::printf("| mesh | faces | load s | solidity s | build d8 s | build d12 s | nodes d12 | recheck d12 s |\n");
+  std::printf(
+      "| mesh | faces | load s | solidity s | build d8 s | build d12 s | nodes d12 | recheck d12 s "
+      "|\n");
   std::printf("|---|---|---|---|---|---|---|---|\n");
   for (const std::string& path : meshes) {
     vobb::LoadedMesh lm;
@@ -61,8 +65,8 @@ int main(int argc, char** argv) {
     const double re = median_seconds(repeat, [&] { ok = vobb::check_conservative(m, t12).ok(); });
     const size_t slash = path.find_last_of('/');
     std::printf("| %s | %zu | %.3f | %.3f | %.3f | %.3f | %zu | %.3f%s |\n",
-                path.substr(slash == std::string::npos ? 0 : slash + 1).c_str(), m.faces.size(), load,
-                solid, b8, b12, t12.nodes.size(), re, ok ? "" : " (VIOLATION)");
+                path.substr(slash == std::string::npos ? 0 : slash + 1).c_str(), m.faces.size(),
+                load, solid, b8, b12, t12.nodes.size(), re, ok ? "" : " (VIOLATION)");
   }
   return 0;
 }

@@ -26,10 +26,12 @@ using vobb::exact::MpInterval;
 
 // The overlap term of `boxes` (sum over j of box j's share): its enclosure, and the rational
 // when `exact` (the clipping path, box by box).
-MpInterval overlap(const FilteredSolver& fs, const std::vector<Obb>& boxes, bool exact, Rational* q) {
+MpInterval overlap(const FilteredSolver& fs, const std::vector<Obb>& boxes, bool exact,
+                   Rational* q) {
   const std::vector<std::vector<int32_t>> earlier = fs.rational().earlier_neighbours(boxes);
   std::vector<Enclosed> terms(boxes.size());
-  tbb::parallel_for(size_t{0}, boxes.size(), [&](size_t j) { terms[j] = fs.overlap_term(boxes, j, earlier[j]); });
+  tbb::parallel_for(size_t{0}, boxes.size(),
+                    [&](size_t j) { terms[j] = fs.overlap_term(boxes, j, earlier[j]); });
   MpInterval sum(0);
   for (const Enclosed& t : terms) sum += t.value;
   if (!exact) return sum;
@@ -57,13 +59,15 @@ int main(int argc, char** argv) {
     return 2;
   }
   const FilteredSolver fs(mesh.mesh);
-  std::printf("%5s %6s %14s %14s %14s %8s %s\n", "level", "boxes", "G (all)", "siblings", "cousins", "cousin %", "by");
+  std::printf("%5s %6s %14s %14s %14s %8s %s\n", "level", "boxes", "G (all)", "siblings", "cousins",
+              "cousin %", "by");
   for (int level = 1; level <= tree.depth; ++level) {
     std::vector<Obb> boxes;
     std::map<int32_t, std::vector<Obb>> families;  // by parent
     for (int32_t id : vobb::layer(tree, level)) {
       boxes.push_back(tree.nodes[id].box);
-      families[tree.nodes[id].level == level ? tree.nodes[id].parent : id].push_back(tree.nodes[id].box);
+      families[tree.nodes[id].level == level ? tree.nodes[id].parent : id].push_back(
+          tree.nodes[id].box);
     }
     // The enclosures first; where one of the three cannot be rounded, the layer in rationals.
     for (bool exact : {false, true}) {

@@ -25,22 +25,28 @@
 int main(int argc, char** argv) {
   using namespace vobb;
   if (argc < 2) {
-    std::fprintf(stderr, "usage: vobb-bench-plan MESH [--m M] [--boxes N] [--repeat R] [--skip-from W]\n");
+    std::fprintf(stderr,
+                 "usage: vobb-bench-plan MESH [--m M] [--boxes N] [--repeat R] [--skip-from W]\n");
     return 2;
   }
   int m = 32, count = 200, repeat = 3, skip_from = kSkipFromWidth;
   for (int i = 2; i + 1 < argc; i += 2) {
-    if (!std::strcmp(argv[i], "--m")) m = std::atoi(argv[i + 1]);
-    else if (!std::strcmp(argv[i], "--boxes")) count = std::atoi(argv[i + 1]);
-    else if (!std::strcmp(argv[i], "--repeat")) repeat = std::atoi(argv[i + 1]);
-    else if (!std::strcmp(argv[i], "--skip-from")) skip_from = std::atoi(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--m"))
+      m = std::atoi(argv[i + 1]);
+    else if (!std::strcmp(argv[i], "--boxes"))
+      count = std::atoi(argv[i + 1]);
+    else if (!std::strcmp(argv[i], "--repeat"))
+      repeat = std::atoi(argv[i + 1]);
+    else if (!std::strcmp(argv[i], "--skip-from"))
+      skip_from = std::atoi(argv[i + 1]);
     else {
       std::fprintf(stderr, "vobb-bench-plan: unknown option %s\n", argv[i]);
       return 2;
     }
   }
   if (m < 1 || count < 1 || repeat < 1 || skip_from < 1) {
-    std::fprintf(stderr, "vobb-bench-plan: --m, --boxes, --repeat and --skip-from must be at least 1\n");
+    std::fprintf(stderr,
+                 "vobb-bench-plan: --m, --boxes, --repeat and --skip-from must be at least 1\n");
     return 2;
   }
   LoadedMesh lm;
@@ -51,8 +57,9 @@ int main(int argc, char** argv) {
   }
   const BoxPlanner planner(lm.mesh);
   const CpuObvEstimator cpu(lm.mesh);
-  std::printf("%-5s %-7s %6s %8s %14s %10s %10s %12s %12s %9s\n", "size", "aspect", "boxes", "flagged", "median bnd/vol",
-              "us/plan", "us/CPU est", "us/sums all", "us/sums skip", "tested");
+  std::printf("%-5s %-7s %6s %8s %14s %10s %10s %12s %12s %9s\n", "size", "aspect", "boxes",
+              "flagged", "median bnd/vol", "us/plan", "us/CPU est", "us/sums all", "us/sums skip",
+              "tested");
   bool differ = false;
   for (auto size : {validate::BoxSize::kLeaf, validate::BoxSize::kMid, validate::BoxSize::kRoot}) {
     const std::vector<Obb> corpus = validate::box_corpus(lm.mesh, size, count, 11);
@@ -75,10 +82,12 @@ int main(int argc, char** argv) {
       for (int r = 0; r < repeat; ++r) {
         auto t0 = std::chrono::steady_clock::now();
         for (const Obb& b : boxes) sink += planner.plan(b, m).spans.size();
-        best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+        best = std::min(
+            best, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
         t0 = std::chrono::steady_clock::now();
         for (const Obb& b : boxes) sum += cpu.estimate(b, m);
-        best_cpu = std::min(best_cpu, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+        best_cpu = std::min(
+            best_cpu, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
       }
       // The texel sums alone, each way, alternated, best of `repeat`.
       std::vector<BoxPlan> plans;
@@ -97,18 +106,24 @@ int main(int argc, char** argv) {
             sums.push_back(sum_texel_hits(p, m, width, &n));
             tested += n;
           }
-          const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+          const double t =
+              std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
           (way == 0 ? best_all : best_skip) = std::min(way == 0 ? best_all : best_skip, t);
           (way == 0 ? tested_all : tested_skip) = tested;
-          if (way == 0) first = sums;
-          else if (sums != first) differ = true;
+          if (way == 0)
+            first = sums;
+          else if (sums != first)
+            differ = true;
         }
       }
-      std::printf("%-5s %-7g %6zu %7.0f%% %14.3f %10.1f %10.1f %12.1f %12.1f %8.0f%%%s\n", validate::to_string(size), aspect,
-                  ratio.size(), 100.0 * flagged / std::max<size_t>(1, ratio.size()),
-                  ratio.empty() ? 0.0 : ratio[ratio.size() / 2], 1e6 * best / boxes.size(), 1e6 * best_cpu / boxes.size(),
-                  1e6 * best_all / boxes.size(), 1e6 * best_skip / boxes.size(),
-                  100.0 * tested_skip / std::max<size_t>(1, tested_all), sink == 0 || !(sum > 0) ? " (no spans)" : "");
+      std::printf("%-5s %-7g %6zu %7.0f%% %14.3f %10.1f %10.1f %12.1f %12.1f %8.0f%%%s\n",
+                  validate::to_string(size), aspect, ratio.size(),
+                  100.0 * flagged / std::max<size_t>(1, ratio.size()),
+                  ratio.empty() ? 0.0 : ratio[ratio.size() / 2], 1e6 * best / boxes.size(),
+                  1e6 * best_cpu / boxes.size(), 1e6 * best_all / boxes.size(),
+                  1e6 * best_skip / boxes.size(),
+                  100.0 * tested_skip / std::max<size_t>(1, tested_all),
+                  sink == 0 || !(sum > 0) ? " (no spans)" : "");
     }
   }
   if (differ) {

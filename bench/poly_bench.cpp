@@ -17,10 +17,10 @@
 #include <vector>
 
 #include "bench/bench_util.h"
+#include "builder/obbtree_builder.h"
 #include "common/io/mesh_report.h"
 #include "fast/cpu_estimator.h"
 #include "fast/gl_estimator.h"
-#include "builder/obbtree_builder.h"
 #include "fast/poly_solver.h"
 #include "validate/box_corpus.h"
 
@@ -38,27 +38,34 @@ double median(std::vector<double> v) {
 
 int main(int argc, char** argv) {
   if (argc < 2) {
-    std::fprintf(stderr, "usage: vobb-bench-poly MESH [--m M] [--boxes N] [--exact-boxes N] [--no-gl]\n");
+    std::fprintf(stderr,
+                 "usage: vobb-bench-poly MESH [--m M] [--boxes N] [--exact-boxes N] [--no-gl]\n");
     return 2;
   }
   int m = 32, count = 200, exact_count = 20;
   bool want_gl = true;
   for (int i = 2; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--no-gl")) want_gl = false;
-    else if (i + 1 < argc && !std::strcmp(argv[i], "--m")) m = std::atoi(argv[++i]);
-    else if (i + 1 < argc && !std::strcmp(argv[i], "--boxes")) count = std::atoi(argv[++i]);
-    else if (i + 1 < argc && !std::strcmp(argv[i], "--exact-boxes")) exact_count = std::atoi(argv[++i]);
+    if (!std::strcmp(argv[i], "--no-gl"))
+      want_gl = false;
+    else if (i + 1 < argc && !std::strcmp(argv[i], "--m"))
+      m = std::atoi(argv[++i]);
+    else if (i + 1 < argc && !std::strcmp(argv[i], "--boxes"))
+      count = std::atoi(argv[++i]);
+    else if (i + 1 < argc && !std::strcmp(argv[i], "--exact-boxes"))
+      exact_count = std::atoi(argv[++i]);
   }
   vobb::LoadedMesh lm;
   if (!vobb::bench::load_or_say(argv[1], &lm)) return 2;
   std::unique_ptr<vobb::GlObvEstimator> gl;
   vobb::Status s;
-  if (want_gl && !(s = vobb::GlObvEstimator::create(lm.mesh, &gl))) std::fprintf(stderr, "no GL: %s\n", s.message().c_str());
+  if (want_gl && !(s = vobb::GlObvEstimator::create(lm.mesh, &gl)))
+    std::fprintf(stderr, "no GL: %s\n", s.message().c_str());
   const vobb::PolyObvSolver poly(lm.mesh);
   const vobb::CpuObvEstimator cpu(lm.mesh);
   std::printf("mesh %s, %zu faces, m = %d, renderer: %s\n", argv[1], lm.mesh.faces.size(), m,
               gl ? gl->renderer().c_str() : "(none)");
-  std::printf("%-5s %5s %-34s %12s %12s\n", "boxes", "count", "configuration", "ms per box", "median rel");
+  std::printf("%-5s %5s %-34s %12s %12s\n", "boxes", "count", "configuration", "ms per box",
+              "median rel");
   tbb::task_arena one(1);
   using vobb::validate::BoxSize;
   // The seeded corpora, then the level-8 boxes of the baseline tree as they are (tight boxes:
@@ -66,9 +73,12 @@ int main(int argc, char** argv) {
   const vobb::Tree tree = vobb::build_obbtree(lm.mesh, vobb::ObbTreeOptions{});
   std::vector<vobb::Obb> tree8;
   for (const vobb::TreeNode& node : tree.nodes)
-    if (node.level == tree.depth && static_cast<int>(tree8.size()) < count) tree8.push_back(node.box);
+    if (node.level == tree.depth && static_cast<int>(tree8.size()) < count)
+      tree8.push_back(node.box);
   for (int corpus = 0; corpus < 4; ++corpus) {
-    const BoxSize size = corpus == 1 ? BoxSize::kMid : corpus == 2 ? BoxSize::kRoot : BoxSize::kLeaf;
+    const BoxSize size = corpus == 1   ? BoxSize::kMid
+                         : corpus == 2 ? BoxSize::kRoot
+                                       : BoxSize::kLeaf;
     const auto boxes = corpus == 3 ? tree8 : vobb::validate::box_corpus(lm.mesh, size, count, 2026);
     const char* name = corpus == 3 ? "tree8" : vobb::validate::to_string(size);
     const int n = static_cast<int>(boxes.size());
@@ -102,10 +112,12 @@ int main(int argc, char** argv) {
       exact_signs += r.exact_signs;
     }
     row("poly, interval, one thread", t, rel(mid));
-    std::printf("%-5s %5d %-34s %12s %12.2e   (median width / vol; median %g faces visited; %d exact boxes, %ld exact "
-                "faces, %ld exact signs)\n",
-                name, n, "poly, interval width", "-", median(width), median(visited), exact_boxes, exact_faces,
-                exact_signs);
+    std::printf(
+        "%-5s %5d %-34s %12s %12.2e   (median width / vol; median %g faces visited; %d exact "
+        "boxes, %ld exact "
+        "faces, %ld exact signs)\n",
+        name, n, "poly, interval width", "-", median(width), median(visited), exact_boxes,
+        exact_faces, exact_signs);
     t = seconds([&] { est = poly.estimate(boxes); });
     row("poly, double, all threads", t);
     t = seconds([&] { ev = poly.evaluate(boxes); });

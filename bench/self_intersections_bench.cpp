@@ -55,13 +55,19 @@ int main(int argc, char** argv) {
   size_t stop_at = 0;
   std::vector<std::string> meshes;
   for (int i = 1; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--repeat") && i + 1 < argc) repeat = std::max(1, std::atoi(argv[++i]));
-    else if (!std::strcmp(argv[i], "--reference-limit") && i + 1 < argc) limit = std::atof(argv[++i]);
-    else if (!std::strcmp(argv[i], "--stop-at") && i + 1 < argc) stop_at = std::strtoull(argv[++i], nullptr, 10);
-    else meshes.push_back(argv[i]);
+    if (!std::strcmp(argv[i], "--repeat") && i + 1 < argc)
+      repeat = std::max(1, std::atoi(argv[++i]));
+    else if (!std::strcmp(argv[i], "--reference-limit") && i + 1 < argc)
+      limit = std::atof(argv[++i]);
+    else if (!std::strcmp(argv[i], "--stop-at") && i + 1 < argc)
+      stop_at = std::strtoull(argv[++i], nullptr, 10);
+    else
+      meshes.push_back(argv[i]);
   }
-  std::printf("| mesh | faces | most faces at a vertex | pairs | search s | exact tests | filter steps | box-pair search s | box-pair / search |%s\n",
-              stop_at ? " search stopped at P s | its pairs | search / stopped |" : "");
+  std::printf(
+      "| mesh | faces | most faces at a vertex | pairs | search s | exact tests | filter steps | "
+      "box-pair search s | box-pair / search |%s\n",
+      stop_at ? " search stopped at P s | its pairs | search / stopped |" : "");
   std::printf("|---|---|---|---|---|---|---|---|---|%s\n", stop_at ? "---|---|---|" : "");
   for (const std::string& path : meshes) {
     vobb::LoadedMesh lm;
@@ -81,7 +87,8 @@ int main(int argc, char** argv) {
     }
     vobb::SelfIntersectionSearch found;
     std::vector<double> t_new, t_old;
-    for (int r = 0; r < repeat; ++r) t_new.push_back(seconds([&] { found = vobb::find_self_intersections(m, skip); }));
+    for (int r = 0; r < repeat; ++r)
+      t_new.push_back(seconds([&] { found = vobb::find_self_intersections(m, skip); }));
     size_t old_pairs = 0;
     for (int r = 0; r < repeat && limit > 0; ++r) {
       t_old.push_back(seconds([&] { old_pairs = box_pairs(m, skip); }));
@@ -95,8 +102,8 @@ int main(int argc, char** argv) {
     }
     const double tn = median(t_new);
     std::printf("| %s | %zu | %d | %zu | %.3f | %zu | %zu |", path.c_str(), m.faces.size(),
-                *std::max_element(valence.begin(), valence.end()), found.pairs, tn, found.exact_tests,
-                found.filter_steps);
+                *std::max_element(valence.begin(), valence.end()), found.pairs, tn,
+                found.exact_tests, found.filter_steps);
     if (t_old.empty()) {
       std::printf(" skipped | skipped |");
     } else {
@@ -110,8 +117,8 @@ int main(int argc, char** argv) {
         t_cut.push_back(seconds([&] { cut = vobb::find_self_intersections(m, skip, stop_at); }));
       // Stopped or not, the pairs it found are the full search's first ones: never more.
       if (cut.pairs > found.pairs || (!cut.stopped && cut.pairs != found.pairs)) {
-        std::fprintf(stderr, "%s: the stopped search found %zu pairs, the full one %zu\n", path.c_str(),
-                     cut.pairs, found.pairs);
+        std::fprintf(stderr, "%s: the stopped search found %zu pairs, the full one %zu\n",
+                     path.c_str(), cut.pairs, found.pairs);
         return 1;
       }
       const double tc = median(t_cut);

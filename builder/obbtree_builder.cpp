@@ -12,7 +12,7 @@ namespace {
 
 struct Moments {
   double area = 0.0;
-  Vec3 first = Vec3::Zero();                    // sum A m
+  Vec3 first = Vec3::Zero();                         // sum A m
   Eigen::Matrix3d second = Eigen::Matrix3d::Zero();  // sum (A/12)(9 m m^T + p p^T + q q^T + r r^T)
 };
 
@@ -45,8 +45,8 @@ Vec3 faces_center(const Mesh& mesh, const std::vector<int32_t>& faces) {
 }
 
 // Splits `faces` in two by the RAPID rule along `axis`; `mean` is the split coordinate.
-void split_faces(const Mesh& mesh, const std::vector<int32_t>& faces, const Vec3& axis,
-                 double mean, std::vector<int32_t>* left, std::vector<int32_t>* right) {
+void split_faces(const Mesh& mesh, const std::vector<int32_t>& faces, const Vec3& axis, double mean,
+                 std::vector<int32_t>* left, std::vector<int32_t>* right) {
   std::vector<std::pair<double, int32_t>> key;
   key.reserve(faces.size());
   for (int32_t f : faces) {
@@ -95,13 +95,15 @@ std::array<Vec3, 3> covariance_axes(const Mesh& mesh, const std::vector<int32_t>
   return orthonormalize({a0, a1, a0.cross(a1)});
 }
 
-std::vector<std::vector<int32_t>> split_into_groups(const Mesh& mesh, const std::vector<int32_t>& faces, int arity) {
+std::vector<std::vector<int32_t>> split_into_groups(const Mesh& mesh,
+                                                    const std::vector<int32_t>& faces, int arity) {
   std::vector<std::vector<int32_t>> groups{faces};
   while (static_cast<int>(groups.size()) < arity) {
     // The largest group with more than one face; the first on ties.
     size_t best = groups.size();
     for (size_t g = 0; g < groups.size(); ++g)
-      if (groups[g].size() > 1 && (best == groups.size() || groups[g].size() > groups[best].size())) best = g;
+      if (groups[g].size() > 1 && (best == groups.size() || groups[g].size() > groups[best].size()))
+        best = g;
     if (best == groups.size()) break;
     std::vector<int32_t> left, right;
     split_by_rapid_rule(mesh, groups[best], &left, &right);

@@ -29,7 +29,8 @@ Tree build_obbtree(const Mesh& mesh, const ObbTreeOptions& options);
 
 // The baseline's split of one node's faces into at most `arity` groups (the rule above), each
 // sorted by face id. Fewer groups when the faces run out.
-std::vector<std::vector<int32_t>> split_into_groups(const Mesh& mesh, const std::vector<int32_t>& faces, int arity);
+std::vector<std::vector<int32_t>> split_into_groups(const Mesh& mesh,
+                                                    const std::vector<int32_t>& faces, int arity);
 
 // Area-weighted covariance axes of the given faces: major axis first, right-handed, each
 // with its largest-magnitude component positive (axes 0 and 1) so that the result is unique.

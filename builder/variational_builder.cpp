@@ -1,11 +1,11 @@
 #include "builder/variational_builder.h"
 
-#include <Eigen/Geometry>
-#include <nlohmann/json.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
+
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -15,6 +15,7 @@
 #include <limits>
 #include <map>
 #include <mutex>
+#include <nlohmann/json.hpp>
 #include <numeric>
 #include <optional>
 #include <queue>
@@ -23,11 +24,11 @@
 #include <tuple>
 #include <unordered_map>
 
+#include "builder/obbtree_builder.h"
 #include "common/atomic_file.h"
 #include "common/json_parse.h"
 #include "common/status.h"
 #include "common/text_util.h"
-#include "builder/obbtree_builder.h"
 
 namespace vobb {
 
@@ -47,7 +48,8 @@ Obb box_from_projections(const std::array<Vec3, 3>& axes, const Vec3& lo, const 
 
 }  // namespace
 
-Obb tight_box(const Mesh& mesh, const std::vector<int32_t>& faces, const std::array<Vec3, 3>& axes) {
+Obb tight_box(const Mesh& mesh, const std::vector<int32_t>& faces,
+              const std::array<Vec3, 3>& axes) {
   Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
   for (int32_t f : faces)
     for (int c = 0; c < 3; ++c) {
@@ -89,7 +91,9 @@ std::vector<std::array<int32_t, 3>> face_neighbours(const Mesh& mesh) {
 }
 
 Vec3 centroid(const Mesh& mesh, int32_t f) {
-  return (mesh.vertices[mesh.faces[f][0]] + mesh.vertices[mesh.faces[f][1]] + mesh.vertices[mesh.faces[f][2]]) / 3.0;
+  return (mesh.vertices[mesh.faces[f][0]] + mesh.vertices[mesh.faces[f][1]] +
+          mesh.vertices[mesh.faces[f][2]]) /
+         3.0;
 }
 
 std::array<Vec3, 3> rotate(const std::array<Vec3, 3>& axes, int about, double angle) {
@@ -106,7 +110,7 @@ constexpr int kAdjustLevels = 4;
 // spent for all.
 struct SearchShared {
   std::atomic<size_t> estimates{0};
-  std::atomic<size_t> reused{0};  // boxes of a search measured again, answered from its record
+  std::atomic<size_t> reused{0};    // boxes of a search measured again, answered from its record
   std::atomic<size_t> overlaps{0};  // shares estimated (kOmv)
   std::atomic<size_t> adjustments{0};
   std::atomic<size_t> merges{0};
@@ -227,11 +231,13 @@ class NodeSplitter {
         // More for the big boxes of the top levels, which weigh most in e.
         std::vector<std::array<Vec3, 3>> starts{covariance_axes(mesh_, faces)};
         const int random_starts = level_ <= 3 ? 32 : 4;
-        std::mt19937_64 rng(options_.seed ^ (0x9e3779b97f4a7c15ull * (faces.front() + 1)) ^ faces.size());
+        std::mt19937_64 rng(options_.seed ^ (0x9e3779b97f4a7c15ull * (faces.front() + 1)) ^
+                            faces.size());
         for (int r = 0; r < random_starts; ++r) {
           Eigen::Quaterniond q;
           auto gauss = [&] {  // Box-Muller on the generator's raw bits: the same on every machine
-            const double u1 = (static_cast<double>(rng() >> 11) + 1) * 0x1.0p-53, u2 = static_cast<double>(rng() >> 11) * 0x1.0p-53;
+            const double u1 = (static_cast<double>(rng() >> 11) + 1) * 0x1.0p-53,
+                         u2 = static_cast<double>(rng() >> 11) * 0x1.0p-53;
             return std::sqrt(-2 * std::log(u1)) * std::cos(2 * M_PI * u2);
           };
           q.coeffs() << gauss(), gauss(), gauss(), gauss();
@@ -334,7 +340,8 @@ class NodeSplitter {
       for (size_t j = 0; j < in.size(); ++j) keep(j, v[j]);
       return out;
     }
-    const size_t threads = static_cast<size_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
+    const size_t threads =
+        static_cast<size_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
     auto chunk_at = [&](double per_box, size_t left) {
       if (per_box <= 0) return threads;  // not measured yet
       const double t = options_.budget_check_seconds;
@@ -349,7 +356,8 @@ class NodeSplitter {
       shared_->estimates += n;
       i += n;
       // Never 0 once measured (a call too quick for the clock counts as 1 ns a box).
-      pace_ = std::max(1e-9, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() / n);
+      pace_ = std::max(
+          1e-9, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() / n);
     }
     return out;
   }
@@ -431,17 +439,20 @@ class NodeSplitter {
       return out;
     }
     // Under a budget, in chunks as measure() does, at the pace of the shares.
-    const size_t threads = static_cast<size_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
+    const size_t threads =
+        static_cast<size_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
     for (size_t i = 0; i < in.size() && !stopped();) {
       size_t n = threads;
       if (share_pace_ > 0)
         n = std::max(threads, static_cast<size_t>(options_.budget_check_seconds / share_pace_));
       n = std::min(n, in.size() - i);
       const auto t0 = std::chrono::steady_clock::now();
-      const std::vector<double> v = call_share(std::vector<ShareQuery>(in.begin() + i, in.begin() + i + n));
+      const std::vector<double> v =
+          call_share(std::vector<ShareQuery>(in.begin() + i, in.begin() + i + n));
       for (size_t j = 0; j < n; ++j) keep(i + j, v[j]);
       i += n;
-      share_pace_ = std::max(1e-9, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() / n);
+      share_pace_ = std::max(
+          1e-9, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() / n);
     }
     return out;
   }
@@ -474,7 +485,8 @@ class NodeSplitter {
   // they end lower. Alternatives: along each covariance axis of the node's faces, cut into
   // `arity` chunks of equal face count and of equal extent. All are screened by the estimated
   // sum of their groups' covariance-axis boxes; the two best screened run the full iterations.
-  void adjust(const std::vector<int32_t>& faces, State* best, const std::function<void(int, double)>& report) {
+  void adjust(const std::vector<int32_t>& faces, State* best,
+              const std::function<void(int, double)>& report) {
     const std::array<Vec3, 3> axes = covariance_axes(mesh_, faces);
     std::vector<State> alternatives;
     std::vector<double> screen;
@@ -496,7 +508,8 @@ class NodeSplitter {
       }
     std::vector<size_t> order(alternatives.size());
     std::iota(order.begin(), order.end(), 0);
-    std::stable_sort(order.begin(), order.end(), [&](size_t x, size_t y) { return screen[x] < screen[y]; });
+    std::stable_sort(order.begin(), order.end(),
+                     [&](size_t x, size_t y) { return screen[x] < screen[y]; });
     for (size_t r = 0; r < std::min<size_t>(2, order.size()); ++r) {
       State trial = alternatives[order[r]];
       if (!update_boxes(&trial)) return;
@@ -511,7 +524,8 @@ class NodeSplitter {
 
   // `faces` ordered by their centroids' projection on `dir` (ties by id), cut into `arity`
   // contiguous chunks: of equal count, or at equal steps of the projection's range.
-  std::vector<std::vector<int32_t>> planar_split(const std::vector<int32_t>& faces, const Vec3& dir, bool equal_count) {
+  std::vector<std::vector<int32_t>> planar_split(const std::vector<int32_t>& faces, const Vec3& dir,
+                                                 bool equal_count) {
     std::vector<std::pair<double, int32_t>> key;
     for (int32_t f : faces) key.emplace_back(centroid(mesh_, f).dot(dir), f);
     std::sort(key.begin(), key.end());
@@ -532,12 +546,32 @@ class NodeSplitter {
     return out;
   }
 
+  // The groups a face may join in the flooding partition: those of its assigned neighbours
+  // (owner, by local id), ascending and without repeats; all k groups for an isolated seed
+  // (`from` < 0).
+  std::vector<size_t> flood_candidates(int32_t face, int32_t from, size_t k,
+                                       const std::vector<int32_t>& owner) const {
+    std::vector<size_t> cand;
+    if (from < 0) {
+      for (size_t g = 0; g < k; ++g) cand.push_back(g);
+      return cand;
+    }
+    for (int32_t n : adj_[face]) {
+      const int32_t j = local_[n];
+      if (j >= 0 && owner[j] >= 0) cand.push_back(owner[j]);
+    }
+    std::sort(cand.begin(), cand.end());
+    cand.erase(std::unique(cand.begin(), cand.end()), cand.end());
+    return cand;
+  }
+
   // Flooding partition from the current boxes; false when it cannot make `groups` groups, or
   // when the time budget is spent before one of its batches of estimates.
   bool partition(const std::vector<int32_t>& faces, State* s) {
     const size_t k = s->groups.size();
     std::vector<Vec3> origin;  // where each region's distances are measured from
-    for (size_t g = 0; g < k; ++g) origin.push_back(tight_box(mesh_, s->groups[g], s->axes[g]).center);
+    for (size_t g = 0; g < k; ++g)
+      origin.push_back(tight_box(mesh_, s->groups[g], s->axes[g]).center);
     // Local ids of this node's faces (-1 for other faces), cleared again on the way out.
     if (local_.size() != mesh_.faces.size()) local_.assign(mesh_.faces.size(), -1);
     for (size_t i = 0; i < faces.size(); ++i) local_[faces[i]] = static_cast<int32_t>(i);
@@ -568,10 +602,13 @@ class NodeSplitter {
       }
       return *nlo != lo[g] || *nhi != hi[g];
     };
-    auto make_box = [&](size_t g, const Vec3& l, const Vec3& h) { return box_from_projections(s->axes[g], l, h); };
+    auto make_box = [&](size_t g, const Vec3& l, const Vec3& h) {
+      return box_from_projections(s->axes[g], l, h);
+    };
     using Entry = std::tuple<double, int32_t, int32_t>;  // distance, local face, group
     std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> queue;
-    auto assign = [&](int32_t i, size_t g, const Vec3& l, const Vec3& h, bool grew, double new_obv) {
+    auto assign = [&](int32_t i, size_t g, const Vec3& l, const Vec3& h, bool grew,
+                      double new_obv) {
       owner[i] = static_cast<int32_t>(g);
       if (grew) {
         lo[g] = l;
@@ -619,21 +656,11 @@ class NodeSplitter {
       const auto [dist, i, from] = queue.top();
       queue.pop();
       if (owner[i] >= 0) continue;
-      // Candidates: the groups of the assigned neighbours (all groups for an isolated seed).
-      std::vector<size_t> cand;
-      if (from < 0) {
-        for (size_t g = 0; g < k; ++g) cand.push_back(g);
-      } else {
-        for (int32_t n : adj_[faces[i]]) {
-          const int32_t j = local_[n];
-          if (j >= 0 && owner[j] >= 0) cand.push_back(owner[j]);
-        }
-        std::sort(cand.begin(), cand.end());
-        cand.erase(std::unique(cand.begin(), cand.end()), cand.end());
-      }
+      const std::vector<size_t> cand = flood_candidates(faces[i], from, k, owner);
       std::vector<Vec3> nl(cand.size()), nh(cand.size());
       std::vector<bool> grows(cand.size());
-      for (size_t c = 0; c < cand.size(); ++c) grows[c] = box_with(cand[c], faces[i], &nl[c], &nh[c]);
+      for (size_t c = 0; c < cand.size(); ++c)
+        grows[c] = box_with(cand[c], faces[i], &nl[c], &nh[c]);
       size_t pick = 0;
       double pick_obv = -1;
       bool any_free = false;
@@ -687,12 +714,12 @@ class NodeSplitter {
   const VariationalOptions& options_;
   const ObvEstimate& estimate_;
   SearchShared* shared_;
-  int level_ = 0;                // level of the boxes being fitted
+  int level_ = 0;  // level of the boxes being fitted
   // Seconds per box of this splitter's last chunk under a budget; 0: unknown. Each thread's
   // own: the nodes searched at once differ in size, and a chunk's length is this thread's.
   double pace_ = 0;
-  double share_pace_ = 0;  // the same for measure_share()
-  std::vector<int32_t> local_;   // mesh face -> index in the node being partitioned, else -1
+  double share_pace_ = 0;       // the same for measure_share()
+  std::vector<int32_t> local_;  // mesh face -> index in the node being partitioned, else -1
   // A box's bits: centre, axes and half extents, as the estimator sees them.
   using BoxBits = std::array<uint64_t, 15>;
   struct BoxBitsHash {
@@ -745,8 +772,12 @@ class Builder {
 
  public:
   Builder(const Mesh& mesh, const VariationalOptions& options, const ObvEstimate& estimate)
-      : mesh_(mesh), options_(options), adjacency_(face_neighbours(mesh)),
-        splitters_([this, &estimate] { return NodeSplitter(mesh_, adjacency_, options_, estimate, &shared_); }) {}
+      : mesh_(mesh),
+        options_(options),
+        adjacency_(face_neighbours(mesh)),
+        splitters_([this, &estimate] {
+          return NodeSplitter(mesh_, adjacency_, options_, estimate, &shared_);
+        }) {}
 
   // Whether the time budget is spent (a state resumed after it was keeps it spent). Only
   // between parallel steps: it writes the state.
@@ -778,7 +809,8 @@ class Builder {
     NodeSplitter& splitter = splitters_.local();
     splitter.set_level(0);
     // The root's axes: the best of the covariance axes and the search, like any group's.
-    st->axes = {out_of_time(st) ? covariance_axes(mesh_, root.faces) : splitter.optimise_single(root.faces)};
+    st->axes = {out_of_time(st) ? covariance_axes(mesh_, root.faces)
+                                : splitter.optimise_single(root.faces)};
     record_cut(st);  // if the root's search was cut short
   }
 
@@ -798,7 +830,8 @@ class Builder {
     // the parents' order below, and the tree is the same.
     std::vector<NodeSplitter::State> split(parents.size());
     for_each_node(parents.size(), [&](size_t i) {
-      const std::vector<int32_t>& faces = st->nodes[parents[i]].faces;  // not written until all are split
+      const std::vector<int32_t>& faces =
+          st->nodes[parents[i]].faces;  // not written until all are split
       NodeSplitter::State& s = split[i];
       bool complete = false;
       if (budget_gone(*st)) {  // the time budget is spent: the baseline's split and axes
@@ -811,7 +844,8 @@ class Builder {
           std::lock_guard<std::mutex> lock(progress_mutex);
           progress.iteration = it;
           progress.estimates = shared_.estimates;
-          progress.done = (st->split_levels + static_cast<double>(progress.node) / parents.size()) / options_.depth;
+          progress.done = (st->split_levels + static_cast<double>(progress.node) / parents.size()) /
+                          options_.depth;
           if (options_.progress) {
             VariationalProgress q = progress;
             q.sum_obv += sum;
@@ -852,7 +886,8 @@ class Builder {
   double estimated_e(const VariationalState& st) {
     const int d = depth(st);
     std::vector<Obb> boxes;
-    for (size_t i = 0; i < st.nodes.size(); ++i) boxes.push_back(tight_box(mesh_, st.nodes[i].faces, st.axes[i]));
+    for (size_t i = 0; i < st.nodes.size(); ++i)
+      boxes.push_back(tight_box(mesh_, st.nodes[i].faces, st.axes[i]));
     forget_pace();  // the root first, then ever smaller boxes
     NodeSplitter& splitter = splitters_.local();
     // Not this thread's last search's boxes: which search that was depends on timing, and the
@@ -917,7 +952,8 @@ class Builder {
       layer_.clear();
       if (options_.objective == Objective::kOmv)
         for (int32_t id : layer_members(*st, l))
-          layer_.push_back({st->nodes[id].parent, tight_box(mesh_, st->nodes[id].faces, st->axes[id])});
+          layer_.push_back(
+              {st->nodes[id].parent, tight_box(mesh_, st->nodes[id].faces, st->axes[id])});
       // Each regrouping reads and writes only the children and grandchildren of its node g, so
       // those of one level may run at once. The gains are added in the nodes' order, as one
       // after another would: the same sum, to the bit, and so the same decision to sweep again.
@@ -931,8 +967,9 @@ class Builder {
         faces_done += st->nodes[grand[i]].faces.size();
         ++progress.node;
         progress.estimates = shared_.estimates;
-        progress.sweep_done = ((d - 1 - l) + static_cast<double>(faces_done) / std::max<size_t>(level_faces, 1)) /
-                              std::max(d - 1, 1);
+        progress.sweep_done =
+            ((d - 1 - l) + static_cast<double>(faces_done) / std::max<size_t>(level_faces, 1)) /
+            std::max(d - 1, 1);
         if (options_.progress) options_.progress(progress);
       });
       for (double g : gains) gain += layer_weight(d, l) * g;
@@ -1006,8 +1043,10 @@ class Builder {
               std::vector<int32_t> uf = from, ut = to;
               ut.push_back(uf[x]);
               uf.erase(uf.begin() + x);
-              if (dir) add(a, b, ut, uf);
-              else add(a, b, uf, ut);
+              if (dir)
+                add(a, b, ut, uf);
+              else
+                add(a, b, uf, ut);
             }
           }
         }
@@ -1044,7 +1083,8 @@ class Builder {
       }
       std::vector<size_t> order(moves.size());
       std::iota(order.begin(), order.end(), 0);
-      std::stable_sort(order.begin(), order.end(), [&](size_t x, size_t y) { return screen[x] < screen[y]; });
+      std::stable_sort(order.begin(), order.end(),
+                       [&](size_t x, size_t y) { return screen[x] < screen[y]; });
       double best_gain = 0;
       NodeSplitter::State best_state;
       const Move* best = nullptr;
@@ -1052,7 +1092,7 @@ class Builder {
         const Move& mv = moves[order[r]];
         NodeSplitter::State s = cand[order[r]];
         const double before = current(mv.a, mv.b);  // sets the context for mv.a and mv.b
-        if (!splitter->update_boxes(&s)) break;  // cut short by the time budget: not comparable
+        if (!splitter->update_boxes(&s)) break;     // cut short by the time budget: not comparable
         // Kept only for a drop of 0.1 % or more of the pair's objective: smaller drops are
         // within the estimator's discretization error at the m the builders use
         // (docs/BENCHMARKS.md: median relative error ~1e-4, tails ~1e-3), so they would chase
@@ -1081,13 +1121,15 @@ class Builder {
   // units in order, each with its faces. (A child's own faces are its units'.) The level, and
   // with it the orientation search's starts, is g's, which no move changes.
   struct RegroupInputs {
-    std::vector<int32_t> ids;     // per child: its id, its unit count, then per unit its id,
-                                  // its face count and its faces
-    std::vector<uint64_t> axes;   // per child: its 9 axis components' bits
+    std::vector<int32_t> ids;    // per child: its id, its unit count, then per unit its id,
+                                 // its face count and its faces
+    std::vector<uint64_t> axes;  // per child: its 9 axis components' bits
     // kOmv: the bits of the layer's boxes under other nodes that may meet g's (context_for),
     // which a regrouping's scores depend on too.
     std::vector<uint64_t> context;
-    bool operator==(const RegroupInputs& o) const { return ids == o.ids && axes == o.axes && context == o.context; }
+    bool operator==(const RegroupInputs& o) const {
+      return ids == o.ids && axes == o.axes && context == o.context;
+    }
   };
   RegroupInputs regroup_inputs(const VariationalState& st, int32_t g) const {
     RegroupInputs in;
@@ -1171,7 +1213,9 @@ class Builder {
   }
 
   // Whether the time budget is spent; safe to ask from the parallel steps.
-  bool budget_gone(const VariationalState& st) { return st.budget_spent || splitters_.local().stopped(); }
+  bool budget_gone(const VariationalState& st) {
+    return st.budget_spent || splitters_.local().stopped();
+  }
 
   // f(0) ... f(n - 1): at once where the estimator may be called from several threads, else in
   // order on this thread.
@@ -1182,9 +1226,12 @@ class Builder {
       return;
     }
     // One node a task: nodes differ in size by orders of magnitude.
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1), [&](const tbb::blocked_range<size_t>& r) {
-      for (size_t i = r.begin(); i != r.end(); ++i) f(i);
-    }, tbb::simple_partitioner());
+    tbb::parallel_for(
+        tbb::blocked_range<size_t>(0, n, 1),
+        [&](const tbb::blocked_range<size_t>& r) {
+          for (size_t i = r.begin(); i != r.end(); ++i) f(i);
+        },
+        tbb::simple_partitioner());
   }
 
   const Mesh& mesh_;
@@ -1212,13 +1259,15 @@ class Builder {
 
 }  // namespace
 
-Tree build_variational(const Mesh& mesh, const VariationalOptions& options, const ObvEstimate& estimate,
-                       const VariationalState* resume, VariationalReport* report) {
+Tree build_variational(const Mesh& mesh, const VariationalOptions& options,
+                       const ObvEstimate& estimate, const VariationalState* resume,
+                       VariationalReport* report) {
   VOBB_ASSERT(options.depth >= 0 && options.arity >= 2, "depth >= 0 and arity >= 2");
   VOBB_ASSERT(!mesh.faces.empty(), "build_variational needs faces");
   VOBB_ASSERT(std::isfinite(options.margin) && options.margin >= 0, "margin finite and >= 0");
   VOBB_ASSERT(options.budget_check_seconds > 0, "budget_check_seconds > 0");
-  VOBB_ASSERT(options.objective == Objective::kObv || options.share, "the kOmv objective needs a share estimate");
+  VOBB_ASSERT(options.objective == Objective::kObv || options.share,
+              "the kOmv objective needs a share estimate");
   VariationalReport local_report;
   if (!report) report = &local_report;
   *report = VariationalReport{};

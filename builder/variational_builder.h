@@ -21,11 +21,11 @@
 #include <utility>
 #include <vector>
 
+#include "builder/variational_state.h"
 #include "common/mesh.h"
 #include "common/obb.h"
 #include "common/status.h"
 #include "common/tree.h"
-#include "builder/variational_state.h"
 
 namespace vobb {
 
@@ -47,27 +47,27 @@ enum class Objective {
 };
 
 struct VariationalProgress {
-  int level = 0;        // level of the children being made, or of the parents being merged
-  int sweep = 0;        // 0 in the top-down pass, then the merging sweep (1, 2, ...)
-  size_t node = 0;      // nodes done at that level
-  size_t nodes = 0;     // nodes to do at that level
-  int iteration = 0;    // Lloyd iteration within the node
-  double sum_obv = 0;   // the objective of the finished children at this level (estimated sum of
-                        // OBV, less their pairs' overlap under kOmv; of the boxes grown by the
-                        // margin, when there is one)
-  size_t estimates = 0; // boxes estimated so far
-  double done = 0;      // rough fraction of the top-down pass done, for a remaining-time guess
+  int level = 0;          // level of the children being made, or of the parents being merged
+  int sweep = 0;          // 0 in the top-down pass, then the merging sweep (1, 2, ...)
+  size_t node = 0;        // nodes done at that level
+  size_t nodes = 0;       // nodes to do at that level
+  int iteration = 0;      // Lloyd iteration within the node
+  double sum_obv = 0;     // the objective of the finished children at this level (estimated sum of
+                          // OBV, less their pairs' overlap under kOmv; of the boxes grown by the
+                          // margin, when there is one)
+  size_t estimates = 0;   // boxes estimated so far
+  double done = 0;        // rough fraction of the top-down pass done, for a remaining-time guess
   double sweep_done = 0;  // in a merging sweep: rough fraction of it done (each level re-groups
                           // about every face once, so levels weigh alike; within a level, by faces)
 };
 
 struct VariationalOptions {
-  int depth = 8;             // >= 0
-  int arity = 2;             // >= 2
-  int lloyd_iterations = 4;  // most partition + update rounds per node (and per adjustment)
-  bool optimise_axes = true; // ablation: false keeps the groups' covariance axes
-  bool adjust = false;       // the adjustment step (see above: measured to hurt, so off)
-  bool merge = true;         // ablation: the bottom-up merging sweeps
+  int depth = 8;              // >= 0
+  int arity = 2;              // >= 2
+  int lloyd_iterations = 4;   // most partition + update rounds per node (and per adjustment)
+  bool optimise_axes = true;  // ablation: false keeps the groups' covariance axes
+  bool adjust = false;        // the adjustment step (see above: measured to hurt, so off)
+  bool merge = true;          // ablation: the bottom-up merging sweeps
   int max_sweeps = 3;
   // What the search already knows is not worked out again: a regrouping whose inputs are those
   // with which it last found no move is not run (VariationalReport::regroups_skipped), and a
@@ -76,14 +76,14 @@ struct VariationalOptions {
   // ReusingWhatIsKnownChangesNothing), or for an estimator that is not a function of the box
   // alone (see ObvEstimate).
   bool reuse_known = true;
-  uint64_t seed = 1;         // the random starts of the orientation search
-  double margin = 0;         // collider margin, world units, finite and >= 0 (see above)
+  uint64_t seed = 1;  // the random starts of the orientation search
+  double margin = 0;  // collider margin, world units, finite and >= 0 (see above)
   Objective objective = Objective::kObv;
-  ShareEstimate share;       // required for kOmv, unused for kObv
+  ShareEstimate share;  // required for kOmv, unused for kObv
   // Whether `estimate` may be called from several threads at once (the CPU twin and the GL
   // estimator may: GL draws the calls waiting at once together). Then the nodes of a level are
-  // split, and the nodes of a sweep's level regrouped, in parallel (TBB, in the caller's arena); the
-  // tree is the same either way. Then out_of_time and progress are called from TBB's threads
+  // split, and the nodes of a sweep's level regrouped, in parallel (TBB, in the caller's arena);
+  // the tree is the same either way. Then out_of_time and progress are called from TBB's threads
   // too, and the builder's own arithmetic runs there: like the CPU twin's, it needs the
   // default floating-point environment (cpu_estimator.h).
   bool concurrent_estimates = false;
@@ -106,8 +106,8 @@ struct VariationalReport {
   size_t merges = 0;          // unit swaps or moves kept by the sweeps
   size_t adjustments = 0;     // adjusted splits kept
   size_t estimates = 0;       // boxes estimated
-  size_t reused = 0;          // boxes a search measured again, given the value it had (not estimated)
-  size_t overlaps = 0;        // shares estimated (kOmv)
+  size_t reused = 0;    // boxes a search measured again, given the value it had (not estimated)
+  size_t overlaps = 0;  // shares estimated (kOmv)
   // Regroupings of a sweep not run: their inputs were those with which they last found no
   // move (see build_variational), so they would find none again.
   size_t regroups_skipped = 0;
@@ -116,8 +116,9 @@ struct VariationalReport {
 // Precondition: the mesh is a solid. Fills every field of the tree but mesh_sha256. `resume`,
 // when given, is a state saved by the checkpoint callback of a build with the same mesh,
 // options and estimator; the build goes on from it.
-Tree build_variational(const Mesh& mesh, const VariationalOptions& options, const ObvEstimate& estimate,
-                       const VariationalState* resume = nullptr, VariationalReport* report = nullptr);
+Tree build_variational(const Mesh& mesh, const VariationalOptions& options,
+                       const ObvEstimate& estimate, const VariationalState* resume = nullptr,
+                       VariationalReport* report = nullptr);
 
 // The tight box of the faces' vertices along the given (orthonormal) axes, in double, without
 // the conservative padding of fit_obb: what the optimiser measures.

@@ -135,7 +135,8 @@ int sat_box_triangle_filter(const Collider& b, const Vec3* const p[3]) {
   auto axis = [&](const Vec3& L, const Vec3& La) {
     const double r = std::abs(u[0].dot(L)) + std::abs(u[1].dot(L)) + std::abs(u[2].dot(L));
     const double d0 = d[0].dot(L), d1 = d[1].dot(L), d2 = d[2].dot(L);
-    const double sep = std::max(std::min(std::min(d0, d1), d2) - r, -std::max(std::max(d0, d1), d2) - r);
+    const double sep =
+        std::max(std::min(std::min(d0, d1), d2) - r, -std::max(std::max(d0, d1), d2) - r);
     const double bound = 16 * kU * La.dot(mag);
     if (sep > bound) return true;
     if (!(sep <= -bound)) undecided = true;
@@ -258,7 +259,8 @@ PreparedBox prepare_box(const Obb& box) {
   p.box = box;
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j)
-      p.orth_error = std::max(p.orth_error, std::abs(box.axes[i].dot(box.axes[j]) - (i == j ? 1.0 : 0.0)));
+      p.orth_error =
+          std::max(p.orth_error, std::abs(box.axes[i].dot(box.axes[j]) - (i == j ? 1.0 : 0.0)));
   p.extent = box.center.norm();
   for (int k = 0; k < 3; ++k) p.extent += box.half[k] * box.axes[k].norm();
   p.half_norm = box.half.norm();
@@ -300,7 +302,8 @@ bool may_touch_box(const PreparedCollider& pc, const PreparedBox& pb) {
   const double scale = c.center.norm() + pb.extent + pc.extent;
   auto separated = [&](const Vec3& L) {
     double r = 0;
-    for (int k = 0; k < 3; ++k) r += b.half[k] * std::abs(b.axes[k].dot(L)) + c.half[k] * std::abs(c.axes[k].dot(L));
+    for (int k = 0; k < 3; ++k)
+      r += b.half[k] * std::abs(b.axes[k].dot(L)) + c.half[k] * std::abs(c.axes[k].dot(L));
     return std::abs(d.dot(L)) - r > 32 * kU * L.norm() * scale;
   };
   return !any_separating_axis(b, c, separated);

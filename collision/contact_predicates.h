@@ -42,9 +42,9 @@ struct Collider {
 // norm of the mesh (it bounds every triangle coordinate in the round-off margins).
 struct PreparedCollider {
   Collider c;
-  Aabb bounds;               // outward-rounded: holds the collider's solid
-  double sphere_slack = 0;   // sphere: touches_triangle's one-sided distance bound; box: 0
-  double extent = 0;         // radius, or sum_k half_k |axes_k|: bounds |x - centre| over the solid
+  Aabb bounds;              // outward-rounded: holds the collider's solid
+  double sphere_slack = 0;  // sphere: touches_triangle's one-sided distance bound; box: 0
+  double extent = 0;        // radius, or sum_k half_k |axes_k|: bounds |x - centre| over the solid
 };
 PreparedCollider prepare_collider(const Collider& c, double mesh_scale);
 

@@ -41,8 +41,8 @@ std::string collider_defect(const Collider& c) {
 }  // namespace
 
 Status write_query_stream(const QueryStream& stream, const std::string& path) {
-  std::string out = "{\"format\": \"vobb-queries\", \"version\": 1, \"mesh_sha256\": \"" + stream.mesh_sha256 +
-                    "\", \"colliders\": [";
+  std::string out = "{\"format\": \"vobb-queries\", \"version\": 1, \"mesh_sha256\": \"" +
+                    stream.mesh_sha256 + "\", \"colliders\": [";
   for (size_t i = 0; i < stream.colliders.size(); ++i) {
     const Collider& c = stream.colliders[i];
     out += i ? ",\n[" : "\n[";
@@ -87,8 +87,10 @@ Status read_query_stream(const std::string& path, QueryStream* stream) {
     return fail("not a vobb query file (\"format\" is not \"vobb-queries\")");
   if (!j.contains("version") || !j["version"].is_number_integer() || j["version"] != 1)
     return fail("unsupported version (expected 1)");
-  if (!j.contains("mesh_sha256") || !j["mesh_sha256"].is_string()) return fail("bad or missing 'mesh_sha256'");
-  if (!j.contains("colliders") || !j["colliders"].is_array()) return fail("bad or missing 'colliders'");
+  if (!j.contains("mesh_sha256") || !j["mesh_sha256"].is_string())
+    return fail("bad or missing 'mesh_sha256'");
+  if (!j.contains("colliders") || !j["colliders"].is_array())
+    return fail("bad or missing 'colliders'");
   const Json& list = j["colliders"];
   if (list.size() > kMaxRecordedQueries)
     return fail("more than " + std::to_string(kMaxRecordedQueries) + " colliders");
@@ -176,7 +178,8 @@ uint64_t QueryHitObjective::hits(const Obb& box) const {
 
 std::vector<double> QueryHitObjective::operator()(const std::vector<Obb>& boxes) const {
   std::vector<double> out(boxes.size());
-  tbb::parallel_for(size_t(0), boxes.size(), [&](size_t i) { out[i] = static_cast<double>(hits(boxes[i])); });
+  tbb::parallel_for(size_t(0), boxes.size(),
+                    [&](size_t i) { out[i] = static_cast<double>(hits(boxes[i])); });
   return out;
 }
 

@@ -31,11 +31,11 @@
 #include <string>
 #include <vector>
 
+#include "collision/contact_predicates.h"
 #include "common/bvh.h"
 #include "common/mesh.h"
 #include "common/obb.h"
 #include "common/status.h"
-#include "collision/contact_predicates.h"
 
 namespace vobb::collision {
 
@@ -48,7 +48,7 @@ constexpr size_t kMaxRecordedQueries = 5000000;
 constexpr uint64_t kMaxQueryFileBytes = uint64_t(1) << 31;
 
 struct QueryStream {
-  std::string mesh_sha256;            // the mesh whose frame the colliders are in
+  std::string mesh_sha256;  // the mesh whose frame the colliders are in
   std::vector<Collider> colliders;
 };
 
@@ -73,8 +73,8 @@ class QueryHitObjective {
 
  private:
   std::vector<PreparedCollider> colliders_;
-  AabbTree index_;             // over the colliders' bounds
-  double reach_ = 0;           // max over colliders of |centre| + extent, plus the mesh's scale
+  AabbTree index_;    // over the colliders' bounds
+  double reach_ = 0;  // max over colliders of |centre| + extent, plus the mesh's scale
 };
 
 }  // namespace vobb::collision

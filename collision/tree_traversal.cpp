@@ -6,7 +6,8 @@
 
 namespace vobb::collision {
 
-TreeTraversal::TreeTraversal(const Mesh& mesh, const Tree& tree) : mesh_(mesh), levels_(tree.depth + 1) {
+TreeTraversal::TreeTraversal(const Mesh& mesh, const Tree& tree)
+    : mesh_(mesh), levels_(tree.depth + 1) {
   nodes_.resize(tree.nodes.size());
   for (size_t i = 0; i < tree.nodes.size(); ++i) {
     const TreeNode& t = tree.nodes[i];
@@ -24,9 +25,11 @@ TreeTraversal::TreeTraversal(const Mesh& mesh, const Tree& tree) : mesh_(mesh), 
   }
 }
 
-void TreeTraversal::query(const PreparedCollider& c, std::vector<int32_t>* faces, QueryCounts* counts) const {
+void TreeTraversal::query(const PreparedCollider& c, std::vector<int32_t>* faces,
+                          QueryCounts* counts) const {
   faces->clear();
-  if (counts->box_tests_by_level.size() < static_cast<size_t>(levels_)) counts->box_tests_by_level.resize(levels_, 0);
+  if (counts->box_tests_by_level.size() < static_cast<size_t>(levels_))
+    counts->box_tests_by_level.resize(levels_, 0);
   stack_.assign(1, 0);
   while (!stack_.empty()) {
     const Node& n = nodes_[stack_.back()];
@@ -35,11 +38,13 @@ void TreeTraversal::query(const PreparedCollider& c, std::vector<int32_t>* faces
     ++counts->box_tests_by_level[n.level];
     if (!may_touch_box(c, n.box)) continue;
     // Children pushed in reverse so that they are visited in stored order (depth first).
-    for (int32_t k = n.num_children - 1; k >= 0; --k) stack_.push_back(children_[n.first_child + k]);
+    for (int32_t k = n.num_children - 1; k >= 0; --k)
+      stack_.push_back(children_[n.first_child + k]);
     for (int32_t k = 0; k < n.num_faces; ++k) {
       const int32_t f = faces_[n.first_face + k];
       ++counts->leaf_tests;
-      if (touches_triangle(c, mesh_.corner(f, 0), mesh_.corner(f, 1), mesh_.corner(f, 2))) faces->push_back(f);
+      if (touches_triangle(c, mesh_.corner(f, 0), mesh_.corner(f, 1), mesh_.corner(f, 2)))
+        faces->push_back(f);
     }
   }
   std::sort(faces->begin(), faces->end());
@@ -93,7 +98,8 @@ void BruteForce::touching(const PreparedCollider& c, std::vector<int32_t>* faces
     for (size_t k = 0; k < len; ++k) {
       if (!pass[k]) continue;
       const size_t f = start + k;
-      if (hi_[1][f] < lo[1] || lo_[1][f] > hi[1] || hi_[2][f] < lo[2] || lo_[2][f] > hi[2]) continue;
+      if (hi_[1][f] < lo[1] || lo_[1][f] > hi[1] || hi_[2][f] < lo[2] || lo_[2][f] > hi[2])
+        continue;
       if (touches_triangle(c, mesh_.corner(f, 0), mesh_.corner(f, 1), mesh_.corner(f, 2)))
         faces->push_back(static_cast<int32_t>(f));
     }

@@ -12,9 +12,9 @@
 #include <cstdint>
 #include <vector>
 
+#include "collision/contact_predicates.h"
 #include "common/mesh.h"
 #include "common/tree.h"
-#include "collision/contact_predicates.h"
 
 namespace vobb::collision {
 

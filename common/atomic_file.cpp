@@ -6,8 +6,8 @@
 #include <unistd.h>
 
 #include <atomic>
-#include <chrono>
 #include <cerrno>
+#include <chrono>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -47,7 +47,9 @@ bool is_temporary_name(const std::string& name) {
 }  // namespace
 
 Status write_file_atomic(const std::string& path, const std::string& content) {
-  auto fail = [&](const std::string& why) { return Status::error(path + ": cannot write: " + why); };
+  auto fail = [&](const std::string& why) {
+    return Status::error(path + ": cannot write: " + why);
+  };
   // Something that is not a regular file (a device such as /dev/null, a pipe), reached
   // directly or through links (/dev/stdout), is written to in place: it cannot be replaced,
   // and must not be. It is opened by the path given, as the kernel resolves it: a pipe's link
@@ -74,7 +76,8 @@ Status write_file_atomic(const std::string& path, const std::string& content) {
   std::string tmp;
   int fd = -1;
   for (int tries = 0; fd < 0 && tries < 64; ++tries) {
-    tmp = (dir / (".vobb-" + std::to_string(::getpid()) + "-" + std::to_string(counter++) + ".tmp")).string();
+    tmp = (dir / (".vobb-" + std::to_string(::getpid()) + "-" + std::to_string(counter++) + ".tmp"))
+              .string();
     fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
     if (fd < 0 && errno != EEXIST) break;
   }
@@ -137,7 +140,8 @@ size_t remove_stray_temporaries(const std::string& folder) {
 }
 
 Status check_folder_takes_files(const std::string& what, const std::string& dir) {
-  const std::filesystem::path probe = std::filesystem::path(dir) / (".vobb-" + std::to_string(::getpid()) + "-probe.tmp");
+  const std::filesystem::path probe =
+      std::filesystem::path(dir) / (".vobb-" + std::to_string(::getpid()) + "-probe.tmp");
   const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
   if (fd < 0) return Status::error(what + ": cannot write in " + dir + ": " + std::strerror(errno));
   ::close(fd);
@@ -151,7 +155,8 @@ Status make_checkpoint_folder(const std::string& what, const std::string& folder
   if (ec) return Status::error(folder + ": cannot make the checkpoint folder: " + ec.message());
   // A folder such as /sys/kernel exists and takes no file.
   if (Status s = check_folder_takes_files(what, folder); !s) return s;
-  remove_stray_temporaries(folder);  // a run killed while it wrote a checkpoint left its temporary file
+  remove_stray_temporaries(
+      folder);  // a run killed while it wrote a checkpoint left its temporary file
   return Status::ok();
 }
 

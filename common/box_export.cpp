@@ -46,7 +46,8 @@ Status export_boxes(const std::vector<Obb>& boxes, const std::vector<std::string
       }
     }
   } else {  // ply
-    s = "ply\nformat ascii 1.0\ncomment vobb boxes\nelement vertex " + std::to_string(8 * boxes.size()) +
+    s = "ply\nformat ascii 1.0\ncomment vobb boxes\nelement vertex " +
+        std::to_string(8 * boxes.size()) +
         "\nproperty double x\nproperty double y\nproperty double z\nelement face " +
         std::to_string(6 * boxes.size()) + "\nproperty list uchar int vertex_indices\nend_header\n";
     for (const Obb& box : boxes)
@@ -66,7 +67,8 @@ Status export_boxes(const std::vector<Obb>& boxes, const std::vector<std::string
 
 Status export_layer(const Tree& tree, int level, const std::string& path) {
   if (level < 0 || level > tree.depth)
-    return Status::error("level " + std::to_string(level) + " is outside [0, " + std::to_string(tree.depth) + "]");
+    return Status::error("level " + std::to_string(level) + " is outside [0, " +
+                         std::to_string(tree.depth) + "]");
   std::vector<Obb> boxes;
   std::vector<std::string> names;
   for (int32_t id : layer(tree, level)) {

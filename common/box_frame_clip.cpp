@@ -38,7 +38,8 @@ ColumnFilter::ColumnFilter(const Obb& box) {
 }
 
 Obb shortest_column(const Obb& box, const Aabb& bounds) {
-  static constexpr int kOrders[6][3] = {{0, 1, 2}, {1, 0, 2}, {1, 2, 0}, {2, 1, 0}, {2, 0, 1}, {0, 2, 1}};
+  static constexpr int kOrders[6][3] = {{0, 1, 2}, {1, 0, 2}, {1, 2, 0},
+                                        {2, 1, 0}, {2, 0, 1}, {0, 2, 1}};
   int best = 0;
   double best_reach = INFINITY;
   for (int o = 0; o < 6; ++o) {
@@ -46,7 +47,8 @@ Obb shortest_column(const Obb& box, const Aabb& bounds) {
     const Vec3 d = box.axes[i].cross(box.axes[j]);
     double reach = -INFINITY;  // how far the mesh's bounds reach beyond the box along d
     for (int corner = 0; corner < 8; ++corner) {
-      const Vec3 p((corner & 1) ? bounds.hi[0] : bounds.lo[0], (corner & 2) ? bounds.hi[1] : bounds.lo[1],
+      const Vec3 p((corner & 1) ? bounds.hi[0] : bounds.lo[0],
+                   (corner & 2) ? bounds.hi[1] : bounds.lo[1],
                    (corner & 4) ? bounds.hi[2] : bounds.lo[2]);
       reach = std::max(reach, (p - box.center).dot(d));
     }
@@ -75,7 +77,8 @@ Rational box_obv_rational(const Mesh& mesh, const AabbTree& faces, const Obb& bo
   };
   std::vector<Rational> terms;
   faces.visit_accepted(filter, [&](int32_t f) {
-    const Point<Rational> tri[3] = {to_t(mesh.faces[f][0]), to_t(mesh.faces[f][1]), to_t(mesh.faces[f][2])};
+    const Point<Rational> tri[3] = {to_t(mesh.faces[f][0]), to_t(mesh.faces[f][1]),
+                                    to_t(mesh.faces[f][2])};
     Rational t;
     if (face_term6(tri, R, &t) && sgn(t) != 0) terms.push_back(std::move(t));
   });

@@ -120,7 +120,8 @@ NT side_value(const Point<NT>& p, int axis, int side, const NT& b) {
 }
 
 template <class NT, class Decide>
-int side_sign(const Decide& decide, const Point<NT>& p, int axis, int side, int bound, const NT& R) {
+int side_sign(const Decide& decide, const Point<NT>& p, int axis, int side, int bound,
+              const NT& R) {
   return decide(p, axis, side, bound, side_value(p, axis, side, bound > 0 ? R : NT(-R)));
 }
 
@@ -134,8 +135,8 @@ NT cross2(const Point<NT>& a, const Point<NT>& b, const Point<NT>& c) {
 // cycle's orientation. Returns `in` itself when no vertex lies beyond (nothing to cut), else
 // `out` filled (n = 0 when fewer than 3 vertices remain).
 template <class NT, class Decide>
-const Polygon<NT>* clip(const Decide& decide, const Polygon<NT>* in, int axis, int side, int bound, const NT& R,
-                        Polygon<NT>* out) {
+const Polygon<NT>* clip(const Decide& decide, const Polygon<NT>* in, int axis, int side, int bound,
+                        const NT& R, Polygon<NT>* out) {
   const int n = in->n;
   if (n == 0) return in;
   int s[kMaxPolygon];
@@ -215,8 +216,8 @@ bool face_term6(const Point<NT> (&tri)[3], const NT& R, NT* term, const Decide& 
   } else if (all_mid) {
     mid = cur;
   } else {
-    top = clip(cur, 2, -1, -1, &top_buf);                              // z >= R
-    mid = clip(cur, 2, 1, 1, &mid_buf[0]);                             // z <= R
+    top = clip(cur, 2, -1, -1, &top_buf);                             // z >= R
+    mid = clip(cur, 2, 1, 1, &mid_buf[0]);                            // z <= R
     mid = clip(mid, 2, -1, 1, &mid_buf[mid == &mid_buf[0] ? 1 : 0]);  // z >= -R
   }
   NT sum(0);
@@ -267,9 +268,10 @@ class ColumnFilter {
       // The double sums' own rounding, relative 1e-9 of the magnitudes, and 2^-1060 absolute
       // where they are subnormal; then the frame's: w off by w_err per component over
       // sum |p - c| <= coords, and R by R_err.
-      const double pad = 1e-9 * (scale + rad + R_) + 0x1p-1060 * (1 + coords) + w_err_[k] * coords + R_err_;
+      const double pad =
+          1e-9 * (scale + rad + R_) + 0x1p-1060 * (1 + coords) + w_err_[k] * coords + R_err_;
       if (mid - rad > R_ + pad && k < 2) return false;  // beyond the +side
-      if (mid + rad < -R_ - pad) return false;           // beyond the -side (or below)
+      if (mid + rad < -R_ - pad) return false;          // beyond the -side (or below)
     }
     return true;
   }

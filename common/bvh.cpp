@@ -61,7 +61,8 @@ void AabbTree::build(int32_t node, int32_t begin, int32_t end, const std::vector
   build(left + 1, mid, end, centroids);
 }
 
-void AabbTree::for_each_overlap(const Aabb& query, const std::function<void(int32_t)>& visit) const {
+void AabbTree::for_each_overlap(const Aabb& query,
+                                const std::function<void(int32_t)>& visit) const {
   for_each_accepted([&](const Aabb& b) { return b.overlaps(query); }, visit);
 }
 

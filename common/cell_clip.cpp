@@ -9,7 +9,8 @@ std::vector<int> cap_cycle(const std::vector<int>& next, size_t edges) {
   int at = start;
   do {
     cap.push_back(at);
-    if (static_cast<size_t>(at) >= next.size() || next[at] < 0) throw InconsistentSides{};  // an open cycle
+    if (static_cast<size_t>(at) >= next.size() || next[at] < 0)
+      throw InconsistentSides{};  // an open cycle
     at = next[at];
     if (cap.size() > edges) throw InconsistentSides{};
   } while (at != start);

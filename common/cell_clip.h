@@ -49,8 +49,8 @@ std::vector<int> cap_cycle(const std::vector<int>& next, size_t edges);
 // once per edge that crosses the plane and returns the id of the crossing point it made (n and
 // upward). Vertex ids are those of the cell, then the cut points; compact_faces() renumbers.
 template <class Cut>
-std::vector<std::vector<int>> clipped_faces(const std::vector<std::vector<int>>& faces, const std::vector<int>& side,
-                                            int n, Cut&& cut) {
+std::vector<std::vector<int>> clipped_faces(const std::vector<std::vector<int>>& faces,
+                                            const std::vector<int>& side, int n, Cut&& cut) {
   std::vector<std::pair<long long, int>> made;  // edge (a, b), a < b -> its crossing point: few
   auto cut_point = [&](int a, int b) {
     const long long key = static_cast<long long>(std::min(a, b)) * (1LL << 31) + std::max(a, b);
@@ -139,20 +139,28 @@ std::array<Plane<NT>, 6> box_planes(const box_clip::Frame<NT>& f, int sigma) {
 template <class T>
 std::array<T, 3> to_direction(int d, const T& x, const T& y, const T& z) {
   switch (d) {
-    case 0: return {x, y, z};
-    case 1: return {y, x, T(-z)};
-    case 2: return {y, z, x};
-    case 3: return {z, y, T(-x)};
-    case 4: return {z, x, y};
-    default: return {x, z, T(-y)};
+    case 0:
+      return {x, y, z};
+    case 1:
+      return {y, x, T(-z)};
+    case 2:
+      return {y, z, x};
+    case 3:
+      return {z, y, T(-x)};
+    case 4:
+      return {z, x, y};
+    default:
+      return {x, z, T(-y)};
   }
 }
 
 // The column above `b` along direction d.
 inline Aabb column_of(Aabb b, int d) {
   static constexpr int kAxis[6] = {2, 2, 0, 0, 1, 1};
-  if (d % 2 == 0) b.hi[kAxis[d]] = INFINITY;
-  else b.lo[kAxis[d]] = -INFINITY;
+  if (d % 2 == 0)
+    b.hi[kAxis[d]] = INFINITY;
+  else
+    b.lo[kAxis[d]] = -INFINITY;
   return b;
 }
 
@@ -179,8 +187,10 @@ class Cell {
         cell.v_[c][i] = x;
       }
     for (const auto& q : kBoxQuads) {
-      if (orientation > 0) cell.faces_.push_back({q[0], q[1], q[2], q[3]});
-      else cell.faces_.push_back({q[3], q[2], q[1], q[0]});
+      if (orientation > 0)
+        cell.faces_.push_back({q[0], q[1], q[2], q[3]});
+      else
+        cell.faces_.push_back({q[3], q[2], q[1], q[0]});
     }
     return cell;
   }
@@ -189,7 +199,8 @@ class Cell {
   const std::vector<std::vector<int>>& faces() const { return faces_; }
 
   // Each vertex's side of h: -1 in, 0 on, +1 out; their values n . v - d in *value.
-  void sides(const Plane<NT>& h, std::vector<int>* side, std::vector<NT>* value, bool* any_pos, bool* any_neg) const {
+  void sides(const Plane<NT>& h, std::vector<int>* side, std::vector<NT>* value, bool* any_pos,
+             bool* any_neg) const {
     const size_t n = v_.size();
     side->resize(n);
     value->resize(n);
@@ -220,7 +231,8 @@ class Cell {
   }
 
   // The same, with the vertices' sides known (sides()).
-  Cell clipped_with(const std::vector<int>& side, const std::vector<NT>& value, bool any_pos, bool any_neg) const {
+  Cell clipped_with(const std::vector<int>& side, const std::vector<NT>& value, bool any_pos,
+                    bool any_neg) const {
     if (!any_pos) return *this;
     Cell out;
     out.snap = snap;
@@ -325,8 +337,10 @@ class ChordMap {
       for (size_t k = 0; k < f.size(); ++k) {
         const auto& a = v[f[k]];
         const auto& b = v[f[(k + 1) % f.size()]];
-        if (upper) facet.edges.push_back({a[0], a[1], b[0], b[1]});
-        else facet.edges.push_back({b[0], b[1], a[0], a[1]});
+        if (upper)
+          facet.edges.push_back({a[0], a[1], b[0], b[1]});
+        else
+          facet.edges.push_back({b[0], b[1], a[0], a[1]});
       }
       (upper ? top_ : bottom_).push_back(std::move(facet));
     }
@@ -347,10 +361,11 @@ class ChordMap {
       tri.p[k] = {q[k][0], q[k][1], q[k][2] - zb, t->z(q[k]) - zb};
     }
     Poly over, under, inside;
-    tri.clip([](const Pt& p) { return p.g - p.h; }, &over);    // g >= h
-    tri.clip([](const Pt& p) { return p.h - p.g; }, &under);   // g <= h
-    under.clip([](const Pt& p) { return p.g; }, &inside);      // and g >= 0
-    *term = over.integral([](const Pt& p) { return p.h; }) + inside.integral([](const Pt& p) { return p.g; });
+    tri.clip([](const Pt& p) { return p.g - p.h; }, &over);   // g >= h
+    tri.clip([](const Pt& p) { return p.h - p.g; }, &under);  // g <= h
+    under.clip([](const Pt& p) { return p.g; }, &inside);     // and g >= 0
+    *term = over.integral([](const Pt& p) { return p.h; }) +
+            inside.integral([](const Pt& p) { return p.g; });
     return true;
   }
 
@@ -374,7 +389,8 @@ class ChordMap {
         if (fa >= 0) out->p[out->n++] = a;
         if ((fa >= 0) != (fb >= 0)) {
           const double s = fa / (fa - fb);
-          out->p[out->n++] = {a.x + s * (b.x - a.x), a.y + s * (b.y - a.y), a.g + s * (b.g - a.g), a.h + s * (b.h - a.h)};
+          out->p[out->n++] = {a.x + s * (b.x - a.x), a.y + s * (b.y - a.y), a.g + s * (b.g - a.g),
+                              a.h + s * (b.h - a.h)};
         }
       }
       if (out->n < 3) out->n = 0;
@@ -415,7 +431,8 @@ class ChordMap {
 // double box that holds the exact cell. The direction and the faces are chosen from `reach`
 // alone, so every number type takes the same ones.
 template <class NT>
-NT outside_volume(const Mesh& mesh, const AabbTree& faces, const Cell<NT>& cell_xyz, const Aabb& reach) {
+NT outside_volume(const Mesh& mesh, const AabbTree& faces, const Cell<NT>& cell_xyz,
+                  const Aabb& reach) {
   if (cell_xyz.empty()) return NT(0);
   const NT vol = cell_xyz.volume();
   const Aabb& bounds = reach;
@@ -435,58 +452,65 @@ NT outside_volume(const Mesh& mesh, const AabbTree& faces, const Cell<NT>& cell_
   std::vector<int> side;
   std::vector<NT> value;
   const Aabb column = column_of(bounds, dir);
-  faces.visit_accepted([&](const Aabb& b) { return column.overlaps(b); }, [&](int32_t f) {
-    Vec3 q[3];
-    for (int k = 0; k < 3; ++k) {
-      const Vec3& p = mesh.corner(f, k);
-      const std::array<double, 3> m = to_direction(dir, p[0], p[1], p[2]);
-      q[k] = Vec3(m[0], m[1], m[2]);
-    }
-    const int sign = orient2d(q[0], q[1], q[2], 0, 1);  // the sign of the face normal's z, exactly
-    if (sign == 0) return;                              // a vertical face bounds no column
-    if constexpr (std::is_same_v<NT, double>) {
-      double term;
-      if (chords->prism_volume(q, &term)) {
-        inside += term;
-        return;
-      }
-    }
-    // The prism's 4 half-spaces: the 3 vertical sides through its edges, then below its plane.
-    Plane<NT> h[4];
-    for (int k = 0; k < 3; ++k) {
-      const Vec3& a = q[k];
-      const Vec3& b = q[(k + 1) % 3];
-      h[k].n[0] = NT(b[1]) - NT(a[1]);
-      h[k].n[1] = NT(a[0]) - NT(b[0]);
-      h[k].n[2] = NT(0);
-      if (sign < 0) h[k].n[0] = -h[k].n[0], h[k].n[1] = -h[k].n[1];
-      h[k].d = h[k].n[0] * NT(a[0]) + h[k].n[1] * NT(a[1]);
-    }
-    {
-      NT e1[3], e2[3];
-      for (int i = 0; i < 3; ++i) e1[i] = NT(q[1][i]) - NT(q[0][i]), e2[i] = NT(q[2][i]) - NT(q[0][i]);
-      const NT nrm[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
-      for (int i = 0; i < 3; ++i) h[3].n[i] = sign > 0 ? nrm[i] : NT(-nrm[i]);
-      h[3].d = h[3].n[0] * NT(q[0][0]) + h[3].n[1] * NT(q[0][1]) + h[3].n[2] * NT(q[0][2]);
-    }
-    const Plane<NT>* cutting[4];
-    int n_cutting = 0;
-    for (int k = 0; k < 4; ++k) {
-      bool any_pos, any_neg;
-      cell.sides(h[k], &side, &value, &any_pos, &any_neg);
-      if (!any_neg) return;  // beyond or on the plane: the prism adds no volume
-      if (any_pos) cutting[n_cutting++] = &h[k];
-    }
-    if (n_cutting == 0) {
-      whole += sign;
-      return;
-    }
-    Cell<NT> piece = cell.clipped(*cutting[0]);
-    for (int k = 1; k < n_cutting && !piece.empty(); ++k) piece = piece.clipped(*cutting[k]);
-    if (piece.empty()) return;
-    if (sign > 0) inside += piece.volume();
-    else inside -= piece.volume();
-  });
+  faces.visit_accepted(
+      [&](const Aabb& b) { return column.overlaps(b); },
+      [&](int32_t f) {
+        Vec3 q[3];
+        for (int k = 0; k < 3; ++k) {
+          const Vec3& p = mesh.corner(f, k);
+          const std::array<double, 3> m = to_direction(dir, p[0], p[1], p[2]);
+          q[k] = Vec3(m[0], m[1], m[2]);
+        }
+        const int sign =
+            orient2d(q[0], q[1], q[2], 0, 1);  // the sign of the face normal's z, exactly
+        if (sign == 0) return;                 // a vertical face bounds no column
+        if constexpr (std::is_same_v<NT, double>) {
+          double term;
+          if (chords->prism_volume(q, &term)) {
+            inside += term;
+            return;
+          }
+        }
+        // The prism's 4 half-spaces: the 3 vertical sides through its edges, then below its plane.
+        Plane<NT> h[4];
+        for (int k = 0; k < 3; ++k) {
+          const Vec3& a = q[k];
+          const Vec3& b = q[(k + 1) % 3];
+          h[k].n[0] = NT(b[1]) - NT(a[1]);
+          h[k].n[1] = NT(a[0]) - NT(b[0]);
+          h[k].n[2] = NT(0);
+          if (sign < 0) h[k].n[0] = -h[k].n[0], h[k].n[1] = -h[k].n[1];
+          h[k].d = h[k].n[0] * NT(a[0]) + h[k].n[1] * NT(a[1]);
+        }
+        {
+          NT e1[3], e2[3];
+          for (int i = 0; i < 3; ++i)
+            e1[i] = NT(q[1][i]) - NT(q[0][i]), e2[i] = NT(q[2][i]) - NT(q[0][i]);
+          const NT nrm[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                             e1[0] * e2[1] - e1[1] * e2[0]};
+          for (int i = 0; i < 3; ++i) h[3].n[i] = sign > 0 ? nrm[i] : NT(-nrm[i]);
+          h[3].d = h[3].n[0] * NT(q[0][0]) + h[3].n[1] * NT(q[0][1]) + h[3].n[2] * NT(q[0][2]);
+        }
+        const Plane<NT>* cutting[4];
+        int n_cutting = 0;
+        for (int k = 0; k < 4; ++k) {
+          bool any_pos, any_neg;
+          cell.sides(h[k], &side, &value, &any_pos, &any_neg);
+          if (!any_neg) return;  // beyond or on the plane: the prism adds no volume
+          if (any_pos) cutting[n_cutting++] = &h[k];
+        }
+        if (n_cutting == 0) {
+          whole += sign;
+          return;
+        }
+        Cell<NT> piece = cell.clipped(*cutting[0]);
+        for (int k = 1; k < n_cutting && !piece.empty(); ++k) piece = piece.clipped(*cutting[k]);
+        if (piece.empty()) return;
+        if (sign > 0)
+          inside += piece.volume();
+        else
+          inside -= piece.volume();
+      });
   if (whole != 0) inside += NT(static_cast<double>(whole)) * vol;
   return vol - inside;
 }
@@ -495,7 +519,8 @@ NT outside_volume(const Mesh& mesh, const AabbTree& faces, const Cell<NT>& cell_
 // part of what no earlier E covers that lies in E_i being a cell of S (the clipping path's
 // split, exact/clip_solver.cpp). Disjoint; empty where B is flat or meets none of them.
 template <class NT>
-std::vector<Cell<NT>> shared_cells(const Obb& box, const std::vector<Obb>& earlier, double snap = 0) {
+std::vector<Cell<NT>> shared_cells(const Obb& box, const std::vector<Obb>& earlier,
+                                   double snap = 0) {
   const box_clip::Frame<NT> fb = box_clip::make_frame<NT>(box);
   const int orientation = box_clip::ClipTraits<NT>::sign(fb.det);
   std::vector<Cell<NT>> shared;
@@ -550,8 +575,8 @@ Aabb reach_of(const Cell<NT>& cell) {
 // vol(S \ X) for S = B ∩ (E_0 ∪ ... ∪ E_{k-1}): what B shares with the earlier boxes, outside
 // the solid. With one earlier box, vol((B ∩ E_0) \ X).
 template <class NT>
-NT shared_outside_volume(const Mesh& mesh, const AabbTree& faces, const Obb& box, const std::vector<Obb>& earlier,
-                         double snap = 0) {
+NT shared_outside_volume(const Mesh& mesh, const AabbTree& faces, const Obb& box,
+                         const std::vector<Obb>& earlier, double snap = 0) {
   NT total(0);
   for (const Cell<NT>& cell : shared_cells<NT>(box, earlier, snap))
     total += outside_volume(mesh, faces, cell, reach_of(cell));

@@ -38,8 +38,8 @@ int orient3d_exact(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
 
 int orient2d_exact(const Vec3& a, const Vec3& b, const Vec3& c, int i, int j) {
   Rational ax(a[i]), ay(a[j]);
-  Rational det = (Rational(b[i]) - ax) * (Rational(c[j]) - ay) -
-                 (Rational(b[j]) - ay) * (Rational(c[i]) - ax);
+  Rational det =
+      (Rational(b[i]) - ax) * (Rational(c[j]) - ay) - (Rational(b[j]) - ay) * (Rational(c[i]) - ax);
   return sign_of(det);
 }
 
@@ -54,8 +54,8 @@ int orient3d(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
   const double perm = std::abs(ux) * (std::abs(vy * wz) + std::abs(vz * wy)) +
                       std::abs(uy) * (std::abs(vz * wx) + std::abs(vx * wz)) +
                       std::abs(uz) * (std::abs(vx * wy) + std::abs(vy * wx));
-  const double bound = kOrient3dBound * perm +
-                      kUnderflowSlack * (std::abs(ux) + std::abs(uy) + std::abs(uz) + 1.0);
+  const double bound =
+      kOrient3dBound * perm + kUnderflowSlack * (std::abs(ux) + std::abs(uy) + std::abs(uz) + 1.0);
   if (det > bound) return 1;
   if (-det > bound) return -1;
   return orient3d_exact(a, b, c, d);
@@ -102,7 +102,8 @@ Rational sum_pairwise(std::vector<Rational>& terms) {
 Rational exact_signed_volume(const Mesh& mesh, const std::vector<int32_t>& faces) {
   std::vector<Rational> terms;
   terms.reserve(faces.size());
-  for (int32_t f : faces) terms.push_back(triple(mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2)));
+  for (int32_t f : faces)
+    terms.push_back(triple(mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2)));
   Rational six_v = sum_pairwise(terms);
   return six_v / 6;
 }

@@ -2,9 +2,8 @@
 #pragma once
 
 #include <cstddef>
-#include <string>
-
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "common/sha256.h"
 
@@ -29,7 +28,8 @@ std::string json_checksum(Json j) {
 // (nlohmann's callback parser, the other way to cut depth, searches a container for
 // discarded values after each object in it: quadratic in an array of objects).
 template <class Json>
-bool parse_json_within(const std::string& text, int max_depth, Json* out, bool* too_deep = nullptr) {
+bool parse_json_within(const std::string& text, int max_depth, Json* out,
+                       bool* too_deep = nullptr) {
   struct DepthCheck : nlohmann::json_sax<Json> {
     int max_depth = 0, depth = 0;
     bool deep = false;
@@ -45,7 +45,9 @@ bool parse_json_within(const std::string& text, int max_depth, Json* out, bool* 
     bool boolean(bool) override { return true; }
     bool number_integer(typename Json::number_integer_t) override { return true; }
     bool number_unsigned(typename Json::number_unsigned_t) override { return true; }
-    bool number_float(typename Json::number_float_t, const typename Json::string_t&) override { return true; }
+    bool number_float(typename Json::number_float_t, const typename Json::string_t&) override {
+      return true;
+    }
     bool string(typename Json::string_t&) override { return true; }
     bool binary(typename Json::binary_t&) override { return true; }
     bool start_object(std::size_t) override { return open(); }
@@ -53,7 +55,9 @@ bool parse_json_within(const std::string& text, int max_depth, Json* out, bool* 
     bool end_object() override { return --depth, true; }
     bool start_array(std::size_t) override { return open(); }
     bool end_array() override { return --depth, true; }
-    bool parse_error(std::size_t, const std::string&, const nlohmann::detail::exception&) override { return false; }
+    bool parse_error(std::size_t, const std::string&, const nlohmann::detail::exception&) override {
+      return false;
+    }
   } check;
   check.max_depth = max_depth;
   const bool parsed = Json::sax_parse(text, &check);

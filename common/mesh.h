@@ -6,9 +6,9 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
-#include <limits>
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 

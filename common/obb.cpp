@@ -1,13 +1,14 @@
 #include "common/obb.h"
-#include "common/box_frame_clip.h"
-#include "common/solidity.h"
-#include "common/status.h"
-#include "common/text_util.h"
 
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <limits>
+
+#include "common/box_frame_clip.h"
+#include "common/solidity.h"
+#include "common/status.h"
+#include "common/text_util.h"
 
 namespace vobb {
 namespace {
@@ -15,7 +16,7 @@ constexpr double kEps = std::numeric_limits<double>::epsilon();
 // Below this, products in the containment filter may underflow (2^-1022 is the least normal;
 // the filter multiplies three such factors at most): such cases take the exact path.
 const double kFilterFloor = std::ldexp(1.0, -600);
-}
+}  // namespace
 
 double volume(const Obb& box) {
   const double det = box.axes[0].dot(box.axes[1].cross(box.axes[2]));
@@ -43,13 +44,14 @@ std::string box_defect(const Obb& b) {
     if (!a.allFinite()) return "non-finite box axes";
   if ((b.half.array() < 0).any()) return "negative half extent";
   // 1 / h may overflow in the box's frame (fast/cubemap.h).
-  if ((b.half.array() > 0 && b.half.array() < 0x1p-1022).any()) return "subnormal half extent (below 2^-1022)";
+  if ((b.half.array() > 0 && b.half.array() < 0x1p-1022).any())
+    return "subnormal half extent (below 2^-1022)";
   for (int i = 0; i < 3; ++i)
     for (int k = i; k < 3; ++k) {
       const double dev = std::abs(b.axes[i].dot(b.axes[k]) - (i == k ? 1.0 : 0.0));
       if (!(dev <= 1e-5))
-        return "axes are not orthonormal (a" + std::to_string(i) + " . a" + std::to_string(k) + " is off by " +
-               format_double(dev) + ")";
+        return "axes are not orthonormal (a" + std::to_string(i) + " . a" + std::to_string(k) +
+               " is off by " + format_double(dev) + ")";
     }
   // The same range as mesh coordinates (solidity.h), with room for a box around such a mesh.
   for (int j = 0; j < 3; ++j) {
@@ -88,7 +90,8 @@ double fit_slack(const Obb& box, double mesh_scale) {
   return 16.0 * kEps * scale;
 }
 
-Obb fit_obb(const Mesh& mesh, const std::vector<int32_t>& faces, const std::array<Vec3, 3>& in_axes) {
+Obb fit_obb(const Mesh& mesh, const std::vector<int32_t>& faces,
+            const std::array<Vec3, 3>& in_axes) {
   VOBB_ASSERT(!faces.empty(), "fit_obb needs at least one face");
   Obb box;
   box.axes = orthonormalize(in_axes);
@@ -155,8 +158,10 @@ void ExactBoxFrame::corner(int index, Rational out[3]) const {
   for (int i = 0; i < 3; ++i) {
     out[i] = c[i];
     for (int k = 0; k < 3; ++k) {
-      if ((index >> k) & 1) out[i] += u[k][i];
-      else out[i] -= u[k][i];
+      if ((index >> k) & 1)
+        out[i] += u[k][i];
+      else
+        out[i] -= u[k][i];
     }
   }
 }
@@ -185,7 +190,9 @@ bool ExactBoxContainment::contains_flat(const Vec3& p) const {
   for (int i = 0; i < 3; ++i) d[i] = Rational(p[i]) - frame_.c[i];
   // Explicit result type: Rational arithmetic builds expression templates that must not outlive
   // their operands.
-  auto dot = [](const Rational* a, const Rational* b) -> Rational { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; };
+  auto dot = [](const Rational* a, const Rational* b) -> Rational {
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+  };
   auto cross = [](const Rational* a, const Rational* b, Rational* out) {
     out[0] = a[1] * b[2] - a[2] * b[1];
     out[1] = a[2] * b[0] - a[0] * b[2];
@@ -232,8 +239,8 @@ bool ExactBoxContainment::contains(const Vec3& p) const {
       break;
     }
     const double err = 8.0 * kEps * mag + 2.0 * kEps * abs_det_d_;
-    if (std::abs(dot) + err < abs_det_d_) continue;          // surely inside slab k
-    if (std::abs(dot) - err > abs_det_d_) return false;      // surely outside
+    if (std::abs(dot) + err < abs_det_d_) continue;      // surely inside slab k
+    if (std::abs(dot) - err > abs_det_d_) return false;  // surely outside
     certain = false;
   }
   if (certain) return true;

@@ -18,12 +18,13 @@ namespace vobb {
 struct Obb {
   Vec3 center = Vec3::Zero();
   std::array<Vec3, 3> axes = {Vec3::UnitX(), Vec3::UnitY(), Vec3::UnitZ()};  // world coords
-  Vec3 half = Vec3::Zero();                                                    // >= 0
+  Vec3 half = Vec3::Zero();                                                  // >= 0
 };
 
 // A box with centre c and half extents `half` whose axes are the columns of the rotation by
 // `angle` radians about `axis` (nonzero; normalized here).
-Obb rotated_box(const Vec3& c, const Vec3& half, double angle = 0, const Vec3& axis = Vec3(1, 2, 3));
+Obb rotated_box(const Vec3& c, const Vec3& half, double angle = 0,
+                const Vec3& axis = Vec3(1, 2, 3));
 
 // Volume of the parallelepiped, 8 h0 h1 h2 |det[a0 a1 a2]|, in double.
 double volume(const Obb& box);

@@ -40,10 +40,12 @@ Status encode_png(const RgbaImage& image, std::string* out, const std::string& d
   out->clear();
   if (image.width < 1 || image.height < 1 ||
       image.rgba.size() != static_cast<size_t>(image.width) * image.height * 4)
-    return Status::error(display + ": cannot encode PNG: image is " + std::to_string(image.width) + "x" +
-                         std::to_string(image.height) + " with " + std::to_string(image.rgba.size()) + " bytes");
+    return Status::error(display + ": cannot encode PNG: image is " + std::to_string(image.width) +
+                         "x" + std::to_string(image.height) + " with " +
+                         std::to_string(image.rgba.size()) + " bytes");
   PngErrorSink sink;
-  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &sink, on_png_error, on_png_warning);
+  png_structp png =
+      png_create_write_struct(PNG_LIBPNG_VER_STRING, &sink, on_png_error, on_png_warning);
   if (png == nullptr) return Status::error(display + ": cannot encode PNG: out of memory");
   png_infop info = png_create_info_struct(png);
   // An opaque image is written as RGB: a quarter fewer bytes to compress, same pixels on
@@ -53,19 +55,22 @@ Status encode_png(const RgbaImage& image, std::string* out, const std::string& d
   std::vector<uint8_t> rgb;
   if (opaque) {
     rgb.reserve(image.rgba.size() / 4 * 3);
-    for (size_t i = 0; i < image.rgba.size(); i += 4) rgb.insert(rgb.end(), &image.rgba[i], &image.rgba[i] + 3);
+    for (size_t i = 0; i < image.rgba.size(); i += 4)
+      rgb.insert(rgb.end(), &image.rgba[i], &image.rgba[i] + 3);
   }
   const size_t channels = opaque ? 3 : 4;
   std::vector<png_const_bytep> rows(image.height);
   for (int y = 0; y < image.height; ++y)
-    rows[y] = opaque ? rgb.data() + static_cast<size_t>(y) * image.width * channels : image.pixel(0, y);
+    rows[y] =
+        opaque ? rgb.data() + static_cast<size_t>(y) * image.width * channels : image.pixel(0, y);
   if (info == nullptr || setjmp(png_jmpbuf(png))) {
     png_destroy_write_struct(&png, &info);
     out->clear();
     return Status::error(display + ": cannot encode PNG: " + sink.message);
   }
   png_set_write_fn(png, out, append_to_string, flush_nothing);
-  png_set_IHDR(png, info, image.width, image.height, 8, opaque ? PNG_COLOR_TYPE_RGB : PNG_COLOR_TYPE_RGBA, PNG_INTERLACE_NONE,
+  png_set_IHDR(png, info, image.width, image.height, 8,
+               opaque ? PNG_COLOR_TYPE_RGB : PNG_COLOR_TYPE_RGBA, PNG_INTERLACE_NONE,
                PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
   png_set_compression_level(png, 9);
   png_write_info(png, info);
@@ -90,7 +95,8 @@ Status read_png(const std::string& path, RgbaImage* image) {
   if (std::fread(signature, 1, 8, file.get()) != 8 || png_sig_cmp(signature, 0, 8) != 0)
     return Status::error(path + ": not a PNG file");
   PngErrorSink sink;
-  png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, &sink, on_png_error, on_png_warning);
+  png_structp png =
+      png_create_read_struct(PNG_LIBPNG_VER_STRING, &sink, on_png_error, on_png_warning);
   if (png == nullptr) return Status::error(path + ": cannot read PNG: out of memory");
   png_infop info = png_create_info_struct(png);
   RgbaImage result;
@@ -114,7 +120,8 @@ Status read_png(const std::string& path, RgbaImage* image) {
     png_error(png, "unexpected row size after expansion to RGBA");
   result.rgba.resize(static_cast<size_t>(result.width) * result.height * 4);
   rows.resize(result.height);
-  for (int y = 0; y < result.height; ++y) rows[y] = result.rgba.data() + static_cast<size_t>(y) * result.width * 4;
+  for (int y = 0; y < result.height; ++y)
+    rows[y] = result.rgba.data() + static_cast<size_t>(y) * result.width * 4;
   png_read_image(png, rows.data());
   png_read_end(png, nullptr);
   png_destroy_read_struct(&png, &info, nullptr);

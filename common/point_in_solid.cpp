@@ -19,8 +19,10 @@ Hit segment_vs_triangle(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3&
     // p in the triangle's plane: on the face if inside the triangle (coplanar 2D test).
     const Vec3 n = (b - a).cross(c - a);
     int i = 0, j = 1;
-    if (std::abs(n[0]) >= std::abs(n[1]) && std::abs(n[0]) >= std::abs(n[2])) i = 1, j = 2;
-    else if (std::abs(n[1]) >= std::abs(n[2])) i = 2, j = 0;
+    if (std::abs(n[0]) >= std::abs(n[1]) && std::abs(n[0]) >= std::abs(n[2]))
+      i = 1, j = 2;
+    else if (std::abs(n[1]) >= std::abs(n[2]))
+      i = 2, j = 0;
     const int s = orient2d(a, b, c, i, j);
     if (s == 0) {  // the double normal picked a degenerate projection: try the others
       for (int k = 0; k < 3 && s == 0; ++k) {
@@ -30,7 +32,8 @@ Hit segment_vs_triangle(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3&
       }
     }
     const int t = orient2d(a, b, c, i, j);
-    const int e0 = orient2d(a, b, p, i, j) * t, e1 = orient2d(b, c, p, i, j) * t, e2 = orient2d(c, a, p, i, j) * t;
+    const int e0 = orient2d(a, b, p, i, j) * t, e1 = orient2d(b, c, p, i, j) * t,
+              e2 = orient2d(c, a, p, i, j) * t;
     if (e0 >= 0 && e1 >= 0 && e2 >= 0) return Hit::kOnFace;
     return oq == 0 ? Hit::kDegenerate : Hit::kNone;  // a segment in the plane: retry
   }
@@ -47,8 +50,8 @@ Hit segment_vs_triangle(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3&
 // roundings of the slab parameters (each within a few u relative, i.e. a few u times that
 // scale in position); the parameter interval is widened by 2^-30 too.
 bool segment_may_meet(const Vec3& p, const Vec3& q, const Aabb& box) {
-  const double scale = std::max({p.cwiseAbs().maxCoeff(), q.cwiseAbs().maxCoeff(), box.lo.cwiseAbs().maxCoeff(),
-                                 box.hi.cwiseAbs().maxCoeff()});
+  const double scale = std::max({p.cwiseAbs().maxCoeff(), q.cwiseAbs().maxCoeff(),
+                                 box.lo.cwiseAbs().maxCoeff(), box.hi.cwiseAbs().maxCoeff()});
   const double pad = 0x1p-30 * scale;
   double t0 = 0, t1 = 1;
   for (int k = 0; k < 3; ++k) {
@@ -82,15 +85,24 @@ Location locate_point(const Mesh& mesh, const AabbTree& faces, const Vec3& p) {
     // same exact answer; a plane merely containing q or the segment no longer forces a retry
     // when its face is far away). The segment's own bounding box would accept most of the
     // mesh for a long diagonal segment; the slab test accepts only the boxes along it.
-    faces.for_each_accepted([&](const Aabb& box) { return segment_may_meet(p, q, box); }, [&](int32_t f) {
-      if (degenerate || on_face) return;
-      switch (segment_vs_triangle(p, q, mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2))) {
-        case Hit::kProper: ++crossings; break;
-        case Hit::kDegenerate: degenerate = true; break;
-        case Hit::kOnFace: on_face = true; break;
-        case Hit::kNone: break;
-      }
-    });
+    faces.for_each_accepted([&](const Aabb& box) { return segment_may_meet(p, q, box); },
+                            [&](int32_t f) {
+                              if (degenerate || on_face) return;
+                              switch (segment_vs_triangle(p, q, mesh.corner(f, 0),
+                                                          mesh.corner(f, 1), mesh.corner(f, 2))) {
+                                case Hit::kProper:
+                                  ++crossings;
+                                  break;
+                                case Hit::kDegenerate:
+                                  degenerate = true;
+                                  break;
+                                case Hit::kOnFace:
+                                  on_face = true;
+                                  break;
+                                case Hit::kNone:
+                                  break;
+                              }
+                            });
     if (on_face) return Location::kOnSurface;
     if (!degenerate) return crossings % 2 ? Location::kInside : Location::kOutside;
     dir = Vec3(dir[1] + 0.1234567, dir[2] - 0.3141593, dir[0] + 0.2718282).normalized();

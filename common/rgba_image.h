@@ -12,7 +12,9 @@ namespace vobb {
 struct RgbaImage {
   int width = 0, height = 0;
   std::vector<uint8_t> rgba;  // width * height * 4 bytes, row 0 is the top row
-  const uint8_t* pixel(int x, int y) const { return rgba.data() + (static_cast<size_t>(y) * width + x) * 4; }
+  const uint8_t* pixel(int x, int y) const {
+    return rgba.data() + (static_cast<size_t>(y) * width + x) * 4;
+  }
 };
 
 }  // namespace vobb

@@ -1,10 +1,9 @@
 #include "common/self_intersections.h"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <array>
 #include <cmath>
-
-#include <Eigen/Eigenvalues>
 
 #include "common/bvh.h"
 #include "common/exact_predicates.h"
@@ -244,9 +243,9 @@ bool triangles_may_meet(const Vec3* t, const Vec3* s, double S) {
 
 // A volume holding the faces below a tree node that follows their shape where a box cannot:
 // the points x with lo_k <= a_k . x <= hi_k for three axes a_k (the covariance axes of those
-// faces' vertices), a box [lo, hi] in slab coordinates y = A x (A has rows a_k). The faces of a fan around a vertex on a rim (a CAD cylinder's cap) are
-// long and thin, and each box of a few of them holds the rim faces of a whole arc; their slab
-// volumes are as thin as the faces.
+// faces' vertices), a box [lo, hi] in slab coordinates y = A x (A has rows a_k). The faces of a fan
+// around a vertex on a rim (a CAD cylinder's cap) are long and thin, and each box of a few of them
+// holds the rim faces of a whole arc; their slab volumes are as thin as the faces.
 //
 // Why a triangle T whose slab coordinates miss [lo, hi] misses the faces. Every point x of a
 // face below the node is a convex combination of their vertices v, so A x is the same
@@ -423,7 +422,7 @@ class FaceTree {
     const double inv = 1.0 / S;
     std::vector<Moments> moments(nodes.size());
     std::vector<int32_t> begin(nodes.size()), end(nodes.size());  // node's range of order()
-    for (size_t k = nodes.size(); k-- > 0;) {  // children before parents
+    for (size_t k = nodes.size(); k-- > 0;) {                     // children before parents
       const AabbTree::Node& n = nodes[k];
       Moments& m = moments[k];
       if (n.count > 0) {
@@ -476,7 +475,7 @@ class FaceTree {
       // Any axes are valid (see SlabBox); a failed or non-finite solve gets no slab volume.
       if (eigen.info() != Eigen::Success || !eigen.eigenvectors().allFinite()) continue;
       const Eigen::Matrix3d A = eigen.eigenvectors().transpose();  // rows a_k
-      Aabb slabs;  // [lo, hi]
+      Aabb slabs;                                                  // [lo, hi]
       for (int32_t i = begin[k]; i < end[k]; ++i)
         for (int32_t v : mesh.faces[face_at(i)]) slabs.extend(Vec3(A * mesh.vertices[v]));
       const double norm1 = A.cwiseAbs().rowwise().sum().maxCoeff();  // |A|_1
@@ -511,8 +510,7 @@ class FaceTree {
       const Extra& e = extra_[k];
       ++*steps;
       bool shares = false;
-      for (int32_t v : e.common)
-        shares |= v >= 0 && (v == skip[0] || v == skip[1] || v == skip[2]);
+      for (int32_t v : e.common) shares |= v >= 0 && (v == skip[0] || v == skip[1] || v == skip[2]);
       if (shares || e.last_face <= f || !accept(n.bounds)) continue;
       if (e.slab >= 0) {
         ++*steps;
@@ -533,8 +531,8 @@ class FaceTree {
  private:
   struct Extra {
     std::array<int32_t, 3> common = {-1, -1, -1};  // vertices every face below lists; -1 unused
-    int32_t last_face = -1;                         // the largest face index below
-    int32_t slab = -1;                              // index into slabs_, or -1 for none
+    int32_t last_face = -1;                        // the largest face index below
+    int32_t slab = -1;                             // index into slabs_, or -1 for none
   };
 
   static std::array<int32_t, 3> intersect(const std::array<int32_t, 3>& x,
@@ -549,8 +547,8 @@ class FaceTree {
 
   const std::vector<int32_t>& faces_;  // tree primitive i is faces_[i]
   AabbTree tree_;
-  std::vector<Extra> extra_;           // per node of tree_
-  std::vector<SlabBox> slabs_;         // the slab volumes of some nodes (Extra::slab)
+  std::vector<Extra> extra_;    // per node of tree_
+  std::vector<SlabBox> slabs_;  // the slab volumes of some nodes (Extra::slab)
 };
 
 }  // namespace
@@ -582,8 +580,8 @@ bool faces_intersect(const Mesh& mesh, size_t f, size_t g) {
     return orient2d(u, v, a, i, j) * orient2d(u, v, b, i, j) > 0;
   }
   const Vec3& u = t[fi[0]];
-  return triangles_meet_beyond_vertex(u, t[(fi[0] + 1) % 3], t[(fi[0] + 2) % 3],
-                                      s[(gi[0] + 1) % 3], s[(gi[0] + 2) % 3]);
+  return triangles_meet_beyond_vertex(u, t[(fi[0] + 1) % 3], t[(fi[0] + 2) % 3], s[(gi[0] + 1) % 3],
+                                      s[(gi[0] + 2) % 3]);
 }
 
 SelfIntersectionSearch find_self_intersections(const Mesh& mesh, const std::vector<char>& skip,
@@ -626,7 +624,8 @@ SelfIntersectionSearch find_self_intersections(const Mesh& mesh, const std::vect
           for (size_t y = x + 1; y < j; ++y) {
             const Face& F = mesh.faces[recs[x][2]];
             ++out.filter_steps;
-            if (shared_vertices(F, mesh.faces[recs[y][2]]) == 3 && F[0] + F[1] + F[2] - lo - hi < hi)
+            if (shared_vertices(F, mesh.faces[recs[y][2]]) == 3 &&
+                F[0] + F[1] + F[2] - lo - hi < hi)
               continue;  // the same face twice, and (lo, hi) is not its least edge
             decide(recs[x][2], recs[y][2]);
           }

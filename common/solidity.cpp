@@ -12,18 +12,30 @@ namespace vobb {
 
 const char* defect_name(Defect d) {
   switch (d) {
-    case Defect::kEmpty: return "empty";
-    case Defect::kNonFinite: return "non-finite";
-    case Defect::kHugeCoordinate: return "huge-coordinate";
-    case Defect::kTinyExtent: return "tiny-extent";
-    case Defect::kDegenerateFace: return "degenerate";
-    case Defect::kDuplicateFace: return "duplicate";
-    case Defect::kNotClosed: return "not-closed";
-    case Defect::kNonManifoldEdge: return "non-manifold";
-    case Defect::kNonManifoldVertex: return "non-manifold-vertex";
-    case Defect::kInconsistentOrientation: return "inconsistent-orientation";
-    case Defect::kSelfIntersection: return "self-intersecting";
-    case Defect::kInwardOriented: return "inward-oriented";
+    case Defect::kEmpty:
+      return "empty";
+    case Defect::kNonFinite:
+      return "non-finite";
+    case Defect::kHugeCoordinate:
+      return "huge-coordinate";
+    case Defect::kTinyExtent:
+      return "tiny-extent";
+    case Defect::kDegenerateFace:
+      return "degenerate";
+    case Defect::kDuplicateFace:
+      return "duplicate";
+    case Defect::kNotClosed:
+      return "not-closed";
+    case Defect::kNonManifoldEdge:
+      return "non-manifold";
+    case Defect::kNonManifoldVertex:
+      return "non-manifold-vertex";
+    case Defect::kInconsistentOrientation:
+      return "inconsistent-orientation";
+    case Defect::kSelfIntersection:
+      return "self-intersecting";
+    case Defect::kInwardOriented:
+      return "inward-oriented";
   }
   return "unknown";
 }
@@ -31,20 +43,29 @@ const char* defect_name(Defect d) {
 std::string DefectCount::describe() const {
   const std::string n = std::to_string(count);
   switch (defect) {
-    case Defect::kEmpty: return "empty: no faces";
-    case Defect::kNonFinite: return "non-finite coordinates (NaN or Inf): " + n + " vertices";
-    case Defect::kHugeCoordinate: return "coordinates beyond +-2^240 (about 1.8e72): " + n + " vertices";
-    case Defect::kTinyExtent: return "too small: the mesh spans less than 2^-240 (about 5.7e-73) on every axis";
-    case Defect::kDegenerateFace: return "degenerate faces (zero area): " + n + " faces";
-    case Defect::kDuplicateFace: return "duplicate faces (the same three vertices as another): " + n + " faces";
-    case Defect::kNotClosed: return "not closed: " + n + " border edges";
-    case Defect::kNonManifoldEdge: return "non-manifold: " + n + " edges shared by more than two faces";
+    case Defect::kEmpty:
+      return "empty: no faces";
+    case Defect::kNonFinite:
+      return "non-finite coordinates (NaN or Inf): " + n + " vertices";
+    case Defect::kHugeCoordinate:
+      return "coordinates beyond +-2^240 (about 1.8e72): " + n + " vertices";
+    case Defect::kTinyExtent:
+      return "too small: the mesh spans less than 2^-240 (about 5.7e-73) on every axis";
+    case Defect::kDegenerateFace:
+      return "degenerate faces (zero area): " + n + " faces";
+    case Defect::kDuplicateFace:
+      return "duplicate faces (the same three vertices as another): " + n + " faces";
+    case Defect::kNotClosed:
+      return "not closed: " + n + " border edges";
+    case Defect::kNonManifoldEdge:
+      return "non-manifold: " + n + " edges shared by more than two faces";
     case Defect::kNonManifoldVertex:
       return "non-manifold vertices: " + n + " vertices where separate fans of faces meet";
     case Defect::kInconsistentOrientation:
       return "inconsistent orientation (flipped faces): " + n + " edges";
     case Defect::kSelfIntersection:
-      return "self-intersecting: " + std::string(at_least ? "at least " : "") + n + " pairs of faces";
+      return "self-intersecting: " + std::string(at_least ? "at least " : "") + n +
+             " pairs of faces";
     case Defect::kInwardOriented:
       return "inward oriented: " + n + " shells face the wrong way";
   }
@@ -210,9 +231,12 @@ EdgeAnalysis analyse_edges(const Mesh& mesh, const std::vector<char>& degenerate
     }
     const size_t count = j - i;
     ++out.edges;
-    if (count == 1) ++out.border;
-    else if (count > 2) ++out.nonmanifold;
-    else if (recs[i].forward == recs[i + 1].forward) ++out.inconsistent;
+    if (count == 1)
+      ++out.border;
+    else if (count > 2)
+      ++out.nonmanifold;
+    else if (recs[i].forward == recs[i + 1].forward)
+      ++out.inconsistent;
     if (count == 2)
       for (int32_t v : {recs[i].lo, recs[i].hi})
         out.fans.unite(corner_of(recs[i].face, v), corner_of(recs[i + 1].face, v));
@@ -249,8 +273,10 @@ size_t pinched_vertices(const Mesh& mesh, const std::vector<char>& degenerate, D
     for (int k = 0; k < 3; ++k) {
       const int32_t v = mesh.faces[f][k];
       const int32_t root = fans->find(static_cast<int32_t>(3 * f + k));
-      if (fan_of[v] < 0) fan_of[v] = root;
-      else if (fan_of[v] != root) pinched[v] = 1;
+      if (fan_of[v] < 0)
+        fan_of[v] = root;
+      else if (fan_of[v] != root)
+        pinched[v] = 1;
     }
   }
   return static_cast<size_t>(std::count(pinched.begin(), pinched.end(), 1));
@@ -297,8 +323,10 @@ SolidityReport check_solidity(const Mesh& mesh) {
   // Finite coordinates first: every predicate below assumes them.
   size_t nonfinite = 0, huge = 0;
   for (const Vec3& v : mesh.vertices) {
-    if (!v.allFinite()) ++nonfinite;
-    else if (v.cwiseAbs().maxCoeff() > kMaxCoordinate) ++huge;
+    if (!v.allFinite())
+      ++nonfinite;
+    else if (v.cwiseAbs().maxCoeff() > kMaxCoordinate)
+      ++huge;
   }
 
   // Degenerate faces: a repeated index, or three collinear points (exactly).
@@ -326,7 +354,8 @@ SolidityReport check_solidity(const Mesh& mesh) {
   if (nonfinite == 0 && huge == 0) {
     Aabb bounds;
     for (const Vec3& v : mesh.vertices) bounds.extend(v);
-    if ((bounds.hi - bounds.lo).maxCoeff() < kMinExtent) r.defects.push_back({Defect::kTinyExtent, 1});
+    if ((bounds.hi - bounds.lo).maxCoeff() < kMinExtent)
+      r.defects.push_back({Defect::kTinyExtent, 1});
   }
   if (n_degenerate) r.defects.push_back({Defect::kDegenerateFace, n_degenerate});
   if (n_duplicate) r.defects.push_back({Defect::kDuplicateFace, n_duplicate});
@@ -343,7 +372,8 @@ SolidityReport check_solidity(const Mesh& mesh) {
   {
     std::vector<char> skip(nf, 0);
     for (size_t f = 0; f < nf; ++f) skip[f] = degenerate[f] || duplicate[f];
-    const SelfIntersectionSearch found = find_self_intersections(mesh, skip, kSelfIntersectionsCounted);
+    const SelfIntersectionSearch found =
+        find_self_intersections(mesh, skip, kSelfIntersectionsCounted);
     if (found.pairs) r.defects.push_back({Defect::kSelfIntersection, found.pairs, found.stopped});
   }
   if (!r.defects.empty()) return r;  // volume and nesting mean nothing on a broken surface

@@ -1,10 +1,10 @@
 // Solidity checks: is a Mesh a solid in the sense of DESIGN §1?
 //
-// A solid is closed, 2-manifold (at edges and at vertices), consistently and outward oriented, free of
-// self-intersections and of degenerate faces, with finite coordinates. Every geometric test
-// uses exact predicates (exact_predicates.h), so the verdict does not depend on rounding.
-// Nested shells are allowed (a solid with cavities) when each shell's orientation matches its
-// nesting depth: an outer boundary faces out, a cavity's boundary faces into the cavity.
+// A solid is closed, 2-manifold (at edges and at vertices), consistently and outward oriented, free
+// of self-intersections and of degenerate faces, with finite coordinates. Every geometric test uses
+// exact predicates (exact_predicates.h), so the verdict does not depend on rounding. Nested shells
+// are allowed (a solid with cavities) when each shell's orientation matches its nesting depth: an
+// outer boundary faces out, a cavity's boundary faces into the cavity.
 #pragma once
 
 #include <cstddef>
@@ -18,18 +18,18 @@
 namespace vobb {
 
 enum class Defect {
-  kEmpty,              // no faces
-  kNonFinite,          // NaN or Inf coordinates (count: vertices)
-  kHugeCoordinate,     // |coordinate| > kMaxCoordinate (count: vertices)
-  kTinyExtent,         // the vertices span less than kMinExtent on every axis (count: 1)
-  kDegenerateFace,     // repeated vertex or zero area (count: faces)
-  kDuplicateFace,      // the same three vertices as an earlier face, either way round (count: faces)
-  kNotClosed,          // border edges (count: edges)
-  kNonManifoldEdge,    // edges with more than two faces (count: edges)
-  kNonManifoldVertex,  // vertices whose faces form several fans, e.g. two cones tip to tip
+  kEmpty,            // no faces
+  kNonFinite,        // NaN or Inf coordinates (count: vertices)
+  kHugeCoordinate,   // |coordinate| > kMaxCoordinate (count: vertices)
+  kTinyExtent,       // the vertices span less than kMinExtent on every axis (count: 1)
+  kDegenerateFace,   // repeated vertex or zero area (count: faces)
+  kDuplicateFace,    // the same three vertices as an earlier face, either way round (count: faces)
+  kNotClosed,        // border edges (count: edges)
+  kNonManifoldEdge,  // edges with more than two faces (count: edges)
+  kNonManifoldVertex,        // vertices whose faces form several fans, e.g. two cones tip to tip
   kInconsistentOrientation,  // edges whose two faces run the same way (count: edges)
-  kSelfIntersection,   // pairs of faces that meet beyond their shared vertices (count: pairs)
-  kInwardOriented,     // shells whose orientation does not match their nesting (count: shells)
+  kSelfIntersection,         // pairs of faces that meet beyond their shared vertices (count: pairs)
+  kInwardOriented,  // shells whose orientation does not match their nesting (count: shells)
 };
 
 const char* defect_name(Defect d);
@@ -59,8 +59,8 @@ struct DefectCount {
 struct SolidityReport {
   size_t vertices = 0;
   size_t faces = 0;
-  size_t edges = 0;   // distinct undirected edges
-  size_t shells = 0;  // edge-connected components of faces
+  size_t edges = 0;                  // distinct undirected edges
+  size_t shells = 0;                 // edge-connected components of faces
   std::vector<DefectCount> defects;  // in the order the checks ran
   // The exact enclosed volume; meaningful only when `volume_known`.
   Rational volume;

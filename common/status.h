@@ -12,13 +12,12 @@
 #include <string>
 #include <utility>
 
-#define VOBB_ASSERT(cond, msg)                                                          \
-  do {                                                                                  \
-    if (!(cond)) {                                                                      \
-      std::fprintf(stderr, "%s:%d: assertion failed: %s: %s\n", __FILE__, __LINE__, #cond, \
-                   msg);                                                                \
-      std::abort();                                                                     \
-    }                                                                                   \
+#define VOBB_ASSERT(cond, msg)                                                                   \
+  do {                                                                                           \
+    if (!(cond)) {                                                                               \
+      std::fprintf(stderr, "%s:%d: assertion failed: %s: %s\n", __FILE__, __LINE__, #cond, msg); \
+      std::abort();                                                                              \
+    }                                                                                            \
   } while (0)
 
 namespace vobb {

@@ -15,10 +15,11 @@ std::string basename_of(const std::string& path) {
   return slash == std::string::npos ? path : path.substr(slash + 1);
 }
 
-Status check_regular_file(const std::string& path, const std::string& display, const std::string& what,
-                          uint64_t* size) {
+Status check_regular_file(const std::string& path, const std::string& display,
+                          const std::string& what, uint64_t* size) {
   struct stat st;
-  if (::stat(path.c_str(), &st) != 0) return Status::error(display + ": cannot open: " + std::strerror(errno));
+  if (::stat(path.c_str(), &st) != 0)
+    return Status::error(display + ": cannot open: " + std::strerror(errno));
   if (S_ISDIR(st.st_mode)) return Status::error(display + ": is a directory, not a " + what);
   if (!S_ISREG(st.st_mode)) return Status::error(display + ": not a regular file");
   *size = static_cast<uint64_t>(st.st_size);
@@ -30,8 +31,8 @@ bool path_absent(const std::string& path) {
   return ::stat(path.c_str(), &st) != 0 && (errno == ENOENT || errno == ENOTDIR);
 }
 
-Status read_regular_file(const std::string& path, const std::string& display, const std::string& what,
-                         std::string* content) {
+Status read_regular_file(const std::string& path, const std::string& display,
+                         const std::string& what, std::string* content) {
   uint64_t size = 0;
   const Status regular = check_regular_file(path, display, what, &size);
   if (!regular) return regular;
@@ -39,7 +40,8 @@ Status read_regular_file(const std::string& path, const std::string& display, co
   if (!in) return Status::error(display + ": cannot open: " + std::strerror(errno));
   content->resize(static_cast<size_t>(size));
   in.read(content->data(), static_cast<std::streamsize>(content->size()));
-  if (static_cast<size_t>(in.gcount()) != content->size()) return Status::error(display + ": read error");
+  if (static_cast<size_t>(in.gcount()) != content->size())
+    return Status::error(display + ": read error");
   return Status::ok();
 }
 

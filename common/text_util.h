@@ -18,8 +18,8 @@ std::string extension_of(const std::string& path);
 // refused before it is opened, since reading it would fail late, block forever or never end.
 // Failures are one line: "<display>: <reason>", where the reason is "cannot open:
 // <strerror>", "is a directory, not a <what>" or "not a regular file".
-Status check_regular_file(const std::string& path, const std::string& display, const std::string& what,
-                          uint64_t* size);
+Status check_regular_file(const std::string& path, const std::string& display,
+                          const std::string& what, uint64_t* size);
 
 // Whether nothing is at `path` (stat fails with ENOENT or ENOTDIR): a checkpoint not yet saved.
 // Anything else there, or a path that cannot be checked, is not absent, so that reading it
@@ -28,8 +28,8 @@ bool path_absent(const std::string& path);
 
 // Reads the whole of `path` into `content`, after check_regular_file; a short read is
 // "<display>: read error".
-Status read_regular_file(const std::string& path, const std::string& display, const std::string& what,
-                         std::string* content);
+Status read_regular_file(const std::string& path, const std::string& display,
+                         const std::string& what, std::string* content);
 
 // Appends the shortest decimal form that reads back as the same double (std::to_chars).
 void append_double(std::string* s, double v);

@@ -21,7 +21,8 @@ Status validate_tree(const Tree& tree, const std::string& display) {
     const TreeNode& node = tree.nodes[i];
     const std::string at = "node " + std::to_string(i) + ": ";
     if (node.id != i) return fail(at + "id " + std::to_string(node.id) + " out of order");
-    if (i == 0 && (node.parent != -1 || node.level != 0)) return fail("node 0 must be the root (parent -1, level 0)");
+    if (i == 0 && (node.parent != -1 || node.level != 0))
+      return fail("node 0 must be the root (parent -1, level 0)");
     if (i > 0) {
       if (node.parent < 0 || node.parent >= n || node.parent == i) return fail(at + "bad parent");
       const TreeNode& p = tree.nodes[node.parent];
@@ -29,10 +30,13 @@ Status validate_tree(const Tree& tree, const std::string& display) {
         return fail(at + "parent does not list it as a child");
       if (node.level != p.level + 1) return fail(at + "level is not its parent's plus one");
     }
-    if (static_cast<int>(node.children.size()) > tree.arity) return fail(at + "more children than the arity");
+    if (static_cast<int>(node.children.size()) > tree.arity)
+      return fail(at + "more children than the arity");
     for (int32_t c : node.children)
-      if (c <= 0 || c >= n || tree.nodes[c].parent != i) return fail(at + "bad child " + std::to_string(c));
-    if (!node.box.center.allFinite() || !node.box.half.allFinite() || (node.box.half.array() < 0).any())
+      if (c <= 0 || c >= n || tree.nodes[c].parent != i)
+        return fail(at + "bad child " + std::to_string(c));
+    if (!node.box.center.allFinite() || !node.box.half.allFinite() ||
+        (node.box.half.array() < 0).any())
       return fail(at + "box has non-finite or negative values");
     for (const Vec3& a : node.box.axes)
       if (!a.allFinite()) return fail(at + "box has non-finite axes");
@@ -42,7 +46,9 @@ Status validate_tree(const Tree& tree, const std::string& display) {
     if (node.is_leaf() && node.faces.empty()) return fail(at + "leaf without faces");
     max_level = std::max(max_level, node.level);
   }
-  if (max_level != tree.depth) return fail("depth " + std::to_string(tree.depth) + " but the deepest leaf is at level " + std::to_string(max_level));
+  if (max_level != tree.depth)
+    return fail("depth " + std::to_string(tree.depth) + " but the deepest leaf is at level " +
+                std::to_string(max_level));
   // Leaves partition the faces; inner faces are the union of the children's. The owners are
   // kept in a list of the faces listed, not an array of mesh_triangles entries, so a claimed
   // triangle count far beyond the faces listed costs no memory.
@@ -51,26 +57,34 @@ Status validate_tree(const Tree& tree, const std::string& display) {
     if (!node.is_leaf()) continue;
     for (int32_t f : node.faces) {
       if (f < 0 || static_cast<size_t>(f) >= tree.mesh_triangles)
-        return fail("node " + std::to_string(node.id) + ": face " + std::to_string(f) + " out of range");
+        return fail("node " + std::to_string(node.id) + ": face " + std::to_string(f) +
+                    " out of range");
       owner.push_back({f, node.id});
     }
   }
   std::sort(owner.begin(), owner.end());
   for (size_t i = 1; i < owner.size(); ++i)
-    if (owner[i].first == owner[i - 1].first) return fail("face " + std::to_string(owner[i].first) + " is in two leaves");
+    if (owner[i].first == owner[i - 1].first)
+      return fail("face " + std::to_string(owner[i].first) + " is in two leaves");
   for (const TreeNode& node : tree.nodes) {
     if (node.is_leaf()) continue;
     std::vector<int32_t> u;
-    for (int32_t c : node.children) u.insert(u.end(), tree.nodes[c].faces.begin(), tree.nodes[c].faces.end());
+    for (int32_t c : node.children)
+      u.insert(u.end(), tree.nodes[c].faces.begin(), tree.nodes[c].faces.end());
     std::sort(u.begin(), u.end());
-    if (u != node.faces) return fail("node " + std::to_string(node.id) + ": faces are not the union of its children's");
+    if (u != node.faces)
+      return fail("node " + std::to_string(node.id) +
+                  ": faces are not the union of its children's");
   }
   // Distinct and in range: they cover [0, mesh_triangles) exactly when there are that many.
   for (size_t f = 0; f < tree.mesh_triangles; ++f) {
     if (f == owner.size())
-      return fail("the leaves hold " + (f == 0 ? std::string("no faces") : "faces 0 to " + std::to_string(f - 1)) +
-                  ", but the tree says the mesh has " + std::to_string(tree.mesh_triangles) + " triangles");
-    if (owner[f].first != static_cast<int32_t>(f)) return fail("face " + std::to_string(f) + " is in no leaf");
+      return fail("the leaves hold " +
+                  (f == 0 ? std::string("no faces") : "faces 0 to " + std::to_string(f - 1)) +
+                  ", but the tree says the mesh has " + std::to_string(tree.mesh_triangles) +
+                  " triangles");
+    if (owner[f].first != static_cast<int32_t>(f))
+      return fail("face " + std::to_string(f) + " is in no leaf");
   }
   return Status::ok();
 }

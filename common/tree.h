@@ -27,9 +27,9 @@ struct TreeNode {
 };
 
 struct Tree {
-  std::string method;      // "obbtree", "variational", ...
-  int arity = 2;           // the most children a node may have
-  int depth = 0;           // the deepest leaf's level
+  std::string method;  // "obbtree", "variational", ...
+  int arity = 2;       // the most children a node may have
+  int depth = 0;       // the deepest leaf's level
   size_t mesh_triangles = 0;
   std::string mesh_sha256;  // see sha256.h
   std::vector<TreeNode> nodes;

@@ -35,8 +35,10 @@ bool get_vec(const Json& j, Vec3* out) {
 std::string get_box(const Json& j, Obb* b) {
   if (!j.is_object()) return "box is not an object";
   if (!j.contains("center") || !get_vec(j["center"], &b->center)) return "bad or missing 'center'";
-  if (!j.contains("half_extents") || !get_vec(j["half_extents"], &b->half)) return "bad or missing 'half_extents'";
-  if (!j.contains("axes") || !j["axes"].is_array() || j["axes"].size() != 3) return "bad or missing 'axes'";
+  if (!j.contains("half_extents") || !get_vec(j["half_extents"], &b->half))
+    return "bad or missing 'half_extents'";
+  if (!j.contains("axes") || !j["axes"].is_array() || j["axes"].size() != 3)
+    return "bad or missing 'axes'";
   for (int k = 0; k < 3; ++k)
     if (!get_vec(j["axes"][k], &b->axes[k])) return "bad or missing 'axes'";
   return box_defect(*b);
@@ -100,10 +102,14 @@ Status parse_tree(const std::string& text, const std::string& display, Tree* tre
   if (!j.is_object() || !j.contains("format") || j["format"] != "vobb-tree")
     return fail("not a vobb tree file (\"format\" is not \"vobb-tree\")");
   long long version, arity, depth, triangles;
-  if (!get_int(j, "version", &version) || version != 1) return fail("unsupported version (expected 1)");
-  if (!get_int(j, "arity", &arity) || arity < 2 || arity > 1 << 20) return fail("bad or missing 'arity'");
-  if (!get_int(j, "depth", &depth) || depth < 0 || depth > 1 << 20) return fail("bad or missing 'depth'");
-  if (!j.contains("mesh") || !j["mesh"].is_object() || !get_int(j["mesh"], "triangles", &triangles) || triangles < 0)
+  if (!get_int(j, "version", &version) || version != 1)
+    return fail("unsupported version (expected 1)");
+  if (!get_int(j, "arity", &arity) || arity < 2 || arity > 1 << 20)
+    return fail("bad or missing 'arity'");
+  if (!get_int(j, "depth", &depth) || depth < 0 || depth > 1 << 20)
+    return fail("bad or missing 'depth'");
+  if (!j.contains("mesh") || !j["mesh"].is_object() ||
+      !get_int(j["mesh"], "triangles", &triangles) || triangles < 0)
     return fail("bad or missing 'mesh.triangles'");
   if (triangles > INT32_MAX) return fail("too many triangles");
   Tree t;
@@ -132,14 +138,17 @@ Status parse_tree(const std::string& text, const std::string& display, Tree* tre
     long long id, parent, level;
     if (!get_int(jn, "id", &id) || !get_int(jn, "parent", &parent) || !get_int(jn, "level", &level))
       return fail(at + "bad or missing 'id', 'parent' or 'level'");
-    if (id != static_cast<long long>(i)) return fail(at + "id " + std::to_string(id) + " out of order");
-    if (parent < -1 || parent > INT32_MAX || level < 0 || level > INT32_MAX) return fail(at + "bad 'parent' or 'level'");
+    if (id != static_cast<long long>(i))
+      return fail(at + "id " + std::to_string(id) + " out of order");
+    if (parent < -1 || parent > INT32_MAX || level < 0 || level > INT32_MAX)
+      return fail(at + "bad 'parent' or 'level'");
     n.id = static_cast<int32_t>(id);
     n.parent = static_cast<int32_t>(parent);
     n.level = static_cast<int32_t>(level);
     const std::string bad = get_box(jn, &n.box);
     if (!bad.empty()) return fail(at + bad);
-    if (jn.contains("children") && !get_int_list(jn["children"], &n.children)) return fail(at + "bad 'children'");
+    if (jn.contains("children") && !get_int_list(jn["children"], &n.children))
+      return fail(at + "bad 'children'");
     if (jn.contains("faces")) {
       if (!get_int_list(jn["faces"], &n.faces)) return fail(at + "bad 'faces'");
       has_faces[i] = 1;
@@ -151,7 +160,8 @@ Status parse_tree(const std::string& text, const std::string& display, Tree* tre
     TreeNode& n = t.nodes[i];
     if (has_faces[i] || n.is_leaf()) continue;
     for (int32_t c : n.children) {
-      if (c <= i || c >= count) return fail("node " + std::to_string(i) + ": bad child " + std::to_string(c));
+      if (c <= i || c >= count)
+        return fail("node " + std::to_string(i) + ": bad child " + std::to_string(c));
       n.faces.insert(n.faces.end(), t.nodes[c].faces.begin(), t.nodes[c].faces.end());
     }
     std::sort(n.faces.begin(), n.faces.end());
@@ -190,7 +200,8 @@ Status read_boxes(const std::string& path, std::vector<Obb>* boxes) {
   Json j;
   bool too_deep = false;
   if (!parse_json_within(text, 8, &j, &too_deep))
-    return Status::error(display + (too_deep ? ": nested deeper than a box file can be" : ": not valid JSON"));
+    return Status::error(
+        display + (too_deep ? ": nested deeper than a box file can be" : ": not valid JSON"));
   if (!j.is_object() || !j.contains("boxes") || !j["boxes"].is_array())
     return Status::error(display + ": no \"boxes\" array");
   boxes->clear();

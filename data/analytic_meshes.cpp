@@ -16,8 +16,10 @@ void add_box_shell(Mesh* m, const Vec3& lo, const Vec3& hi, bool inward) {
   for (int i = 0; i < 8; ++i)
     m->vertices.emplace_back(i & 1 ? hi[0] : lo[0], i & 2 ? hi[1] : lo[1], i & 4 ? hi[2] : lo[2]);
   for (const auto& q : kBoxQuads) {
-    if (inward) add_quad(m, base + q[3], base + q[2], base + q[1], base + q[0]);
-    else add_quad(m, base + q[0], base + q[1], base + q[2], base + q[3]);
+    if (inward)
+      add_quad(m, base + q[3], base + q[2], base + q[1], base + q[0]);
+    else
+      add_quad(m, base + q[0], base + q[1], base + q[2], base + q[3]);
   }
 }
 
@@ -43,15 +45,18 @@ AnalyticMesh tetrahedron(double s) {
 
 AnalyticMesh octahedron(double r) {
   AnalyticMesh a{"octahedron", {}, 4 * cubed(r) / 3};
-  a.mesh.vertices = {Vec3(r, 0, 0), Vec3(-r, 0, 0), Vec3(0, r, 0), Vec3(0, -r, 0), Vec3(0, 0, r), Vec3(0, 0, -r)};
+  a.mesh.vertices = {Vec3(r, 0, 0),  Vec3(-r, 0, 0), Vec3(0, r, 0),
+                     Vec3(0, -r, 0), Vec3(0, 0, r),  Vec3(0, 0, -r)};
   // Each face (x, y, z) with signs: orient counter-clockwise seen from outside.
   for (int sx = 0; sx < 2; ++sx)
     for (int sy = 0; sy < 2; ++sy)
       for (int sz = 0; sz < 2; ++sz) {
         const int x = sx, y = 2 + sy, z = 4 + sz;  // vertex ids: +r first, then -r
         const bool flip = (sx + sy + sz) % 2 == 1;
-        if (flip) a.mesh.faces.push_back({x, z, y});
-        else a.mesh.faces.push_back({x, y, z});
+        if (flip)
+          a.mesh.faces.push_back({x, z, y});
+        else
+          a.mesh.faces.push_back({x, y, z});
       }
   return a;
 }
@@ -59,7 +64,8 @@ AnalyticMesh octahedron(double r) {
 AnalyticMesh polygonal_torus(double so, double si, double h) {
   const Rational so_q(so), si_q(si), h_q(h);
   AnalyticMesh a{"polygonal_torus", {}, 28 * (so_q * so_q - si_q * si_q) * h_q};
-  static const int kOct[8][2] = {{3, 1}, {1, 3}, {-1, 3}, {-3, 1}, {-3, -1}, {-1, -3}, {1, -3}, {3, -1}};
+  static const int kOct[8][2] = {{3, 1},   {1, 3},   {-1, 3}, {-3, 1},
+                                 {-3, -1}, {-1, -3}, {1, -3}, {3, -1}};
   // Vertex ids: outer bottom 0..7, inner bottom 8..15, outer top 16..23, inner top 24..31.
   for (int level = 0; level < 2; ++level)
     for (int ring = 0; ring < 2; ++ring) {

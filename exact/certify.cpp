@@ -7,18 +7,17 @@
 #include <algorithm>
 #include <atomic>
 #include <cctype>
-#include <exception>
-#include <limits>
 #include <chrono>
 #include <cmath>
-#include <functional>
 #include <cstdio>
+#include <exception>
+#include <functional>
+#include <limits>
+#include <map>
 #include <memory>
 #include <mutex>
-#include <map>
-#include <set>
-
 #include <nlohmann/json.hpp>
+#include <set>
 
 #include "common/atomic_file.h"
 #include "common/json_parse.h"
@@ -206,11 +205,11 @@ std::vector<char> resume_layers(CertifyRun& run, Certificate& cert) {
       if (options.checkpoint) run.done.layers.push_back(lc);
     }
   if (resume && !resume->layers.empty())
-    run.say(std::to_string(taken) + " of " + std::to_string(levels) +
-            " layers: from the checkpoint" +
-            (again > 0 ? "; " + std::to_string(again) +
-                             " saved layers do not match this run, certified again"
-                       : ""));
+    run.say(
+        std::to_string(taken) + " of " + std::to_string(levels) + " layers: from the checkpoint" +
+        (again > 0
+             ? "; " + std::to_string(again) + " saved layers do not match this run, certified again"
+             : ""));
   return resumed;
 }
 
@@ -228,8 +227,7 @@ const NefSolver& need_nef(CertifyRun& run, ThreadNef& thread_nef) {
     thread_nef.nef = std::make_unique<NefSolver>(run.mesh);
     thread_nef.build_seconds = seconds_since(tn);
     char buf[96];
-    std::snprintf(buf, sizeof buf,
-                  "Nef polyhedron of the mesh built in %.2f s (once per thread)",
+    std::snprintf(buf, sizeof buf, "Nef polyhedron of the mesh built in %.2f s (once per thread)",
                   thread_nef.build_seconds);
     run.say(buf);
   }
@@ -310,8 +308,7 @@ void sum_and_refine_terms(LayerWork& w) {
            terms[b].value.sup() - terms[b].value.inf();
   });
   for (size_t refined = 0; !w.rational_path && refined < widest.size() && !decides();) {
-    const size_t end =
-        std::min(widest.size(), refined + std::max<size_t>(16, widest.size() / 8));
+    const size_t end = std::min(widest.size(), refined + std::max<size_t>(16, widest.size() / 8));
     tbb::parallel_for(refined, end, [&](size_t k) {
       const size_t j = widest[k];
       terms[j] = filtered.overlap_term(boxes, j, earlier[j], MpInterval::kMaxPrec);
@@ -345,8 +342,8 @@ void decide_upper_bound(LayerWork& w) {
 bool round_nearest(LayerWork& w) {
   LayerCertificate& lc = w.lc;
   const bool rational_path = w.rational_path;
-  auto round = [&](const MpInterval& enclosure, const std::function<Rational()>& exact,
-                   double* out, std::string* by) {
+  auto round = [&](const MpInterval& enclosure, const std::function<Rational()>& exact, double* out,
+                   std::string* by) {
     if (!rational_path && enclosure.nearest(out)) {
       *by = "filter";
       return;
@@ -355,11 +352,14 @@ bool round_nearest(LayerWork& w) {
     *out = to_double_nearest(exact());
     *by = "exact";
   };
-  round(lc.omv_enclosure, [&] { return lc.omv; }, &lc.omv_nearest, &lc.omv_rounded_by);
-  round(lc.sum_obv_enclosure, [&] { return lc.sum_obv; }, &lc.sum_obv_nearest,
-        &lc.sum_obv_rounded_by);
-  round(lc.overlap_enclosure, [&] { return lc.overlap(); }, &lc.overlap_nearest,
-        &lc.overlap_rounded_by);
+  round(
+      lc.omv_enclosure, [&] { return lc.omv; }, &lc.omv_nearest, &lc.omv_rounded_by);
+  round(
+      lc.sum_obv_enclosure, [&] { return lc.sum_obv; }, &lc.sum_obv_nearest,
+      &lc.sum_obv_rounded_by);
+  round(
+      lc.overlap_enclosure, [&] { return lc.overlap(); }, &lc.overlap_nearest,
+      &lc.overlap_rounded_by);
   return !rational_path && (lc.omv_rounded_by == "exact" || lc.sum_obv_rounded_by == "exact" ||
                             lc.overlap_rounded_by == "exact");
 }
@@ -376,9 +376,9 @@ std::string layer_line(const LayerCertificate& lc, int depth, bool rounded_exact
                 "layer %d/%d: %zu boxes (%zu overlapping), OMV %.17g, sum OBV %.17g%s; in 256 "
                 "bits: %zu OBV, %zu overlap terms; in rationals: %zu OBV, %zu overlap terms%s, "
                 "%.2f s",
-                lc.level, depth, lc.boxes, lc.overlapping_boxes, lc.omv_nearest,
-                lc.sum_obv_nearest, disagree.c_str(), lc.refined_obv, lc.refined_overlap,
-                lc.exact_obv, lc.exact_overlap, rounded_exactly ? ", rounding" : "", lc.seconds);
+                lc.level, depth, lc.boxes, lc.overlapping_boxes, lc.omv_nearest, lc.sum_obv_nearest,
+                disagree.c_str(), lc.refined_obv, lc.refined_overlap, lc.exact_obv,
+                lc.exact_overlap, rounded_exactly ? ", rounding" : "", lc.seconds);
   return buf;
 }
 
@@ -487,8 +487,7 @@ void certify_layers(CertifyRun& run, Certificate& cert, const std::vector<char>&
                   "layers on %d threads, not %d: a Nef polyhedron of this mesh takes about "
                   "%.2f GB, and %.2f GB is available",
                   workers, std::min(todo, concurrency),
-                  kNefBytesPerFace * static_cast<double>(mesh.faces.size()) / 1e9,
-                  available / 1e9);
+                  kNefBytesPerFace * static_cast<double>(mesh.faces.size()) / 1e9, available / 1e9);
     run.say(buf);
   }
   tbb::task_group group;
@@ -577,10 +576,12 @@ Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& op
   return cert;
 }
 
-int layer_workers(int layers, int concurrency, bool uses_nef, size_t faces, double available_bytes) {
+int layer_workers(int layers, int concurrency, bool uses_nef, size_t faces,
+                  double available_bytes) {
   int workers = std::min(layers, concurrency);
   if (uses_nef) {
-    const double fit = std::floor(available_bytes / (kNefBytesPerFace * static_cast<double>(std::max<size_t>(faces, 1))));
+    const double fit = std::floor(
+        available_bytes / (kNefBytesPerFace * static_cast<double>(std::max<size_t>(faces, 1))));
     if (fit < workers) workers = static_cast<int>(fit);
   }
   return std::max(1, workers);
@@ -613,7 +614,8 @@ bool parse_rational(const nlohmann::json& v, Rational* out) {
   auto whole = [](const std::string& digits, mpz_class* z, bool sign_ok) {
     if (digits.empty()) return false;
     for (size_t i = 0; i < digits.size(); ++i)
-      if (!(std::isdigit(static_cast<unsigned char>(digits[i])) || (sign_ok && i == 0 && digits[i] == '-' && digits.size() > 1)))
+      if (!(std::isdigit(static_cast<unsigned char>(digits[i])) ||
+            (sign_ok && i == 0 && digits[i] == '-' && digits.size() > 1)))
         return false;
     return z->set_str(digits, 10) == 0;
   };
@@ -637,7 +639,8 @@ bool parse_interval(const nlohmann::json& v, MpInterval* out) {
 }
 
 nlohmann::json enclosed_to_json(const Enclosed& e) {
-  nlohmann::json j = {{"enclosure", interval_to_json(e.value)}, {"exact", e.exact}, {"bits", e.bits}};
+  nlohmann::json j = {
+      {"enclosure", interval_to_json(e.value)}, {"exact", e.exact}, {"bits", e.bits}};
   if (e.exact || sgn(e.q) != 0) j["rational"] = e.q.get_str();
   return j;
 }
@@ -679,55 +682,69 @@ nlohmann::json layer_to_json(const LayerCertificate& l) {
 // *text gets the file's bytes.
 // `fingerprint` null: the file is checked as a file (JSON, format, fields, checksum), not as
 // this certification's.
-Status read_checkpoint_file(const std::string& path, const char* format, const std::set<std::string>& known,
-                            const std::string* fingerprint, nlohmann::json* j, std::string* text) {
+Status read_checkpoint_file(const std::string& path, const char* format,
+                            const std::set<std::string>& known, const std::string* fingerprint,
+                            nlohmann::json* j, std::string* text) {
   const Status read = read_regular_file(path, path, "checkpoint file", text);
   if (!read) return read;
-  auto bad = [&](const std::string& why) { return Status::error(path + ": damaged certify checkpoint: " + why); };
+  auto bad = [&](const std::string& why) {
+    return Status::error(path + ": damaged certify checkpoint: " + why);
+  };
   // The deepest values are at depth 2 (layers.json: file, layers, a layer); 8 leaves room.
   bool too_deep = false;
   if (!parse_json_within(*text, 8, j, &too_deep) || !j->is_object())
     return bad(too_deep ? "nested deeper than a checkpoint can be" : "not JSON");
   // Types first: value() throws on a field of another type ("format": 5).
-  const bool format_ok = j->contains("format") && (*j)["format"].is_string() && (*j)["format"].get<std::string>() == format;
+  const bool format_ok = j->contains("format") && (*j)["format"].is_string() &&
+                         (*j)["format"].get<std::string>() == format;
   const bool has_version = j->contains("version") && (*j)["version"].is_number_integer();
   if (!format_ok || !has_version) return bad("not a vobb certify checkpoint");
   const int64_t version = (*j)["version"].get<int64_t>();
   if (version == 1)
-    return Status::error(path + ": a certify checkpoint of an older vobb (format 1, rationals only); this one "
-                         "keeps enclosures: remove the folder or use another --checkpoint");
+    return Status::error(
+        path +
+        ": a certify checkpoint of an older vobb (format 1, rationals only); this one "
+        "keeps enclosures: remove the folder or use another --checkpoint");
   if (version != kFileVersion) return bad("not a vobb certify checkpoint");
   for (const auto& item : j->items())
     if (!known.count(item.key())) return bad("unknown field '" + item.key().substr(0, 40) + "'");
-  if (!j->contains("sha256") || !(*j)["sha256"].is_string() || (*j)["sha256"].get<std::string>() != json_checksum(*j))
+  if (!j->contains("sha256") || !(*j)["sha256"].is_string() ||
+      (*j)["sha256"].get<std::string>() != json_checksum(*j))
     return bad("checksum does not match the contents");
   if (!j->contains("fingerprint") || !(*j)["fingerprint"].is_string()) return bad("no fingerprint");
   if (fingerprint == nullptr) return Status::ok();
   if ((*j)["fingerprint"].get<std::string>() != *fingerprint)
-    return Status::error(path + ": checkpoint of another certification (mesh, tree, path or certify version differ); "
-                         "use another --checkpoint folder or remove it");
+    return Status::error(
+        path +
+        ": checkpoint of another certification (mesh, tree, path or certify version differ); "
+        "use another --checkpoint folder or remove it");
   return Status::ok();
 }
 
 const std::set<std::string> kObvFields = {"format", "version", "fingerprint", "obv", "sha256"};
-const std::set<std::string> kLayersFields = {"format", "version", "fingerprint", "obv_sha256", "layers", "sha256"};
+const std::set<std::string> kLayersFields = {"format",     "version", "fingerprint",
+                                             "obv_sha256", "layers",  "sha256"};
 
 // Both files of a checkpoint, each checked as read_checkpoint_file checks it. An absent file
 // leaves its JSON null; layers.json without obv.json is damage.
-Status read_checkpoint_files(const std::string& obv_file, const std::string& layers_file, const std::string* fingerprint,
-                             nlohmann::json* obv, nlohmann::json* layers) {
+Status read_checkpoint_files(const std::string& obv_file, const std::string& layers_file,
+                             const std::string* fingerprint, nlohmann::json* obv,
+                             nlohmann::json* layers) {
   *obv = nlohmann::json();
   *layers = nlohmann::json();
   const bool has_obv = !path_absent(obv_file), has_layers = !path_absent(layers_file);
   if (has_layers && !has_obv)
-    return Status::error(layers_file + ": damaged certify checkpoint: layers without the boxes' OBV (" + obv_file + ")");
+    return Status::error(layers_file +
+                         ": damaged certify checkpoint: layers without the boxes' OBV (" +
+                         obv_file + ")");
   std::string text;
   if (has_obv) {
     Status s = read_checkpoint_file(obv_file, kObvFormat, kObvFields, fingerprint, obv, &text);
     if (!s) return s;
   }
   if (has_layers) {
-    Status s = read_checkpoint_file(layers_file, kLayersFormat, kLayersFields, fingerprint, layers, &text);
+    Status s =
+        read_checkpoint_file(layers_file, kLayersFormat, kLayersFields, fingerprint, layers, &text);
     if (!s) return s;
   }
   return Status::ok();
@@ -736,7 +753,8 @@ Status read_checkpoint_files(const std::string& obv_file, const std::string& lay
 // Whether layers.json (read, not null) names obv.json (read) by its checksum: it was written
 // after that obv.json, not another.
 bool layers_name_obv(const nlohmann::json& obv, const nlohmann::json& layers) {
-  return layers.contains("obv_sha256") && layers["obv_sha256"].is_string() && layers["obv_sha256"] == obv["sha256"];
+  return layers.contains("obv_sha256") && layers["obv_sha256"].is_string() &&
+         layers["obv_sha256"] == obv["sha256"];
 }
 constexpr const char* kLayersOfAnotherObv = "its layers belong to another obv.json";
 
@@ -793,12 +811,31 @@ Status parse_layer_values(const nlohmann::json& jl, const Tree& tree,
   auto bad = [&](const std::string& why) { return damaged(file, why); };
   LayerCertificate& l = *out;
   // Every field must be one the writer puts there.
-  static const std::set<std::string> kLayerFields{
-      "level", "boxes", "overlapping_boxes", "omv_path", "omv_enclosure", "sum_obv_enclosure",
-      "overlap_enclosure", "omv_nearest", "sum_obv_nearest", "overlap_nearest",
-      "omv_rounded_by", "sum_obv_rounded_by", "overlap_rounded_by", "upper_bound", "bound_by",
-      "exact_obv", "exact_overlap", "refined_obv", "refined_overlap", "rational", "seconds",
-      "omv", "sum_obv", "paths_agree", "omv_clip"};
+  static const std::set<std::string> kLayerFields{"level",
+                                                  "boxes",
+                                                  "overlapping_boxes",
+                                                  "omv_path",
+                                                  "omv_enclosure",
+                                                  "sum_obv_enclosure",
+                                                  "overlap_enclosure",
+                                                  "omv_nearest",
+                                                  "sum_obv_nearest",
+                                                  "overlap_nearest",
+                                                  "omv_rounded_by",
+                                                  "sum_obv_rounded_by",
+                                                  "overlap_rounded_by",
+                                                  "upper_bound",
+                                                  "bound_by",
+                                                  "exact_obv",
+                                                  "exact_overlap",
+                                                  "refined_obv",
+                                                  "refined_overlap",
+                                                  "rational",
+                                                  "seconds",
+                                                  "omv",
+                                                  "sum_obv",
+                                                  "paths_agree",
+                                                  "omv_clip"};
   for (const auto& item : jl.items())
     if (!kLayerFields.count(item.key()))
       return bad(at + "unknown field '" + item.key().substr(0, 40) + "'");
@@ -878,11 +915,11 @@ Status parse_layer_path(const nlohmann::json& jl, const std::string& file, const
 // Whether what a layer (read as `l` from `jl`) says follows from its own values, as certify
 // makes them: its OMV's enclosure from its path, its bound, its nearest doubles, and a second
 // path's OMV only on path both.
-Status check_layer_follows(const nlohmann::json& jl, const std::string& file,
-                           const std::string& at, const LayerCertificate& l) {
+Status check_layer_follows(const nlohmann::json& jl, const std::string& file, const std::string& at,
+                           const LayerCertificate& l) {
   auto bad = [&](const std::string& why) { return damaged(file, why); };
-  if (l.omv_path == "none" && (!same_enclosure(l.omv_enclosure, l.sum_obv_enclosure) ||
-                               (l.rational && l.omv != l.sum_obv)))
+  if (l.omv_path == "none" &&
+      (!same_enclosure(l.omv_enclosure, l.sum_obv_enclosure) || (l.rational && l.omv != l.sum_obv)))
     return bad(at + "path none, but OMV is not the sum of OBV");
   if ((l.omv_path == "filtered" || l.omv_path == "both") &&
       !same_enclosure(l.omv_enclosure, l.sum_obv_enclosure - l.overlap_enclosure))
@@ -890,12 +927,11 @@ Status check_layer_follows(const nlohmann::json& jl, const std::string& file,
   if ((l.omv_path == "nef" || l.omv_path == "clip") &&
       (!l.rational || !l.omv_enclosure.contains(l.omv)))
     return bad(at + "a rational path's OMV lies outside its enclosure");
-  const bool bound_ok =
-      l.bound_by == "exact"
-          ? (l.rational ? l.upper_bound == (l.sum_obv >= l.omv)
-                        : l.omv_path == "none" && l.upper_bound)
-          : (l.upper_bound ? l.overlap_enclosure.lo_rational() >= 0
-                           : l.overlap_enclosure.hi_rational() < 0);
+  const bool bound_ok = l.bound_by == "exact"
+                            ? (l.rational ? l.upper_bound == (l.sum_obv >= l.omv)
+                                          : l.omv_path == "none" && l.upper_bound)
+                            : (l.upper_bound ? l.overlap_enclosure.lo_rational() >= 0
+                                             : l.overlap_enclosure.hi_rational() < 0);
   if (!bound_ok) return bad(at + "its bound does not follow from its values");
   auto rounding_ok = [&](const MpInterval& e, const std::function<Rational()>& q, double d,
                          const std::string& by) {
@@ -903,11 +939,14 @@ Status check_layer_follows(const nlohmann::json& jl, const std::string& file,
     if (by == "filter") return e.nearest(&f) && f == d;
     return l.rational && to_double_nearest(q()) == d;
   };
-  if (!rounding_ok(l.omv_enclosure, [&] { return l.omv; }, l.omv_nearest, l.omv_rounded_by) ||
-      !rounding_ok(l.sum_obv_enclosure, [&] { return l.sum_obv; }, l.sum_obv_nearest,
-                   l.sum_obv_rounded_by) ||
-      !rounding_ok(l.overlap_enclosure, [&] { return l.overlap(); }, l.overlap_nearest,
-                   l.overlap_rounded_by))
+  if (!rounding_ok(
+          l.omv_enclosure, [&] { return l.omv; }, l.omv_nearest, l.omv_rounded_by) ||
+      !rounding_ok(
+          l.sum_obv_enclosure, [&] { return l.sum_obv; }, l.sum_obv_nearest,
+          l.sum_obv_rounded_by) ||
+      !rounding_ok(
+          l.overlap_enclosure, [&] { return l.overlap(); }, l.overlap_nearest,
+          l.overlap_rounded_by))
     return bad(at + "a double is not its value rounded");
   if (l.omv_path != "both" && (jl.contains("paths_agree") || jl.contains("omv_clip")))
     return bad(at + "a second path's OMV on a layer of path " + l.omv_path);
@@ -923,8 +962,7 @@ Status parse_layer(const nlohmann::json& jl, const Tree& tree, const std::vector
   LayerCertificate& l = *out;
   if (!jl.is_object()) return bad("a layer is not an object");
   const nlohmann::json& level = jl.at("level");
-  if (!level.is_number_integer() || level.get<int64_t>() < 0 ||
-      level.get<int64_t>() > tree.depth)
+  if (!level.is_number_integer() || level.get<int64_t>() < 0 || level.get<int64_t>() > tree.depth)
     return bad("a layer's level is not an integer in 0.." + std::to_string(tree.depth));
   l.level = static_cast<int>(level.get<int64_t>());
   const std::string at = "layer " + std::to_string(l.level) + ": ";

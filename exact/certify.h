@@ -39,13 +39,14 @@ struct LayerCertificate {
   MpInterval omv_enclosure, sum_obv_enclosure, overlap_enclosure;
   // The doubles nearest to the exact values (ties to even), and how each was obtained.
   double omv_nearest = 0, sum_obv_nearest = 0, overlap_nearest = 0;
-  std::string omv_rounded_by = "filter", sum_obv_rounded_by = "filter", overlap_rounded_by = "filter";
-  bool upper_bound = true;            // sum OBV >= OMV, decided
-  std::string bound_by = "filter";    // "exact": rationals, or no overlapping boxes (equality)
-  size_t exact_obv = 0;               // boxes whose OBV the filter sent to rationals
-  size_t exact_overlap = 0;           // boxes whose overlap term the filter sent to rationals
-  size_t refined_obv = 0;             // boxes whose OBV needed 256 bits (a sign undecided in 128)
-  size_t refined_overlap = 0;         // boxes whose overlap term needed 256 bits (a rounding or sign)
+  std::string omv_rounded_by = "filter", sum_obv_rounded_by = "filter",
+              overlap_rounded_by = "filter";
+  bool upper_bound = true;          // sum OBV >= OMV, decided
+  std::string bound_by = "filter";  // "exact": rationals, or no overlapping boxes (equality)
+  size_t exact_obv = 0;             // boxes whose OBV the filter sent to rationals
+  size_t exact_overlap = 0;         // boxes whose overlap term the filter sent to rationals
+  size_t refined_obv = 0;           // boxes whose OBV needed 256 bits (a sign undecided in 128)
+  size_t refined_overlap = 0;       // boxes whose overlap term needed 256 bits (a rounding or sign)
   // The exact rationals, where computed (`rational`): with --rational, on a rational path, or
   // where a rounding needed them.
   bool rational = false;
@@ -53,11 +54,11 @@ struct LayerCertificate {
   Rational sum_obv;
   Rational overlap() const { return sum_obv - omv; }
   bool upper_bound_holds() const { return upper_bound; }
-  std::string omv_path;        // "filtered", "clip", "nef", "none" (no overlaps), "both"
+  std::string omv_path;  // "filtered", "clip", "nef", "none" (no overlaps), "both"
   // kBoth: Nef's OMV == clipping's, and inside the filter's enclosure; kAuto with `rational`:
   // Nef's OMV inside the filter's enclosure. Otherwise true.
   bool paths_agree = true;
-  Rational omv_clip;           // kBoth only: clipping's OMV (omv holds Nef's, the arbiter's)
+  Rational omv_clip;  // kBoth only: clipping's OMV (omv holds Nef's, the arbiter's)
   // This layer's own work: its sums, overlap bounds and union. Not the boxes' OBV (computed
   // first, for all layers at once) nor the building of a Nef(X).
   double seconds = 0.0;
@@ -79,8 +80,8 @@ struct Certificate {
 // What a certification has finished, for a checkpoint: the boxes' OBV once all are computed,
 // and each finished layer (in the order they finished).
 struct CertifyState {
-  std::vector<Enclosed> obv;              // per node id; empty until all are computed
-  std::vector<LayerCertificate> layers;   // finished layers
+  std::vector<Enclosed> obv;             // per node id; empty until all are computed
+  std::vector<LayerCertificate> layers;  // finished layers
 };
 
 struct CertifyOptions {

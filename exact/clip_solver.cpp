@@ -7,7 +7,7 @@
 namespace vobb::exact {
 
 struct ClipSolver::Prism {
-  int sign = 0;  // sign of the face normal's z: +1 the solid lies below, -1 above
+  int sign = 0;                // sign of the face normal's z: +1 the solid lies below, -1 above
   std::array<HalfSpace, 4> h;  // three vertical sides, then "below the face's plane"
 };
 
@@ -60,7 +60,9 @@ ClipSolver::ClipSolver(const Mesh& mesh) : mesh_(mesh), faces_(AabbTree::over_fa
 
 ClipSolver::~ClipSolver() = default;
 
-Rational ClipSolver::obv(const Obb& box) const { return box_clip::box_obv_rational(mesh_, faces_, box); }
+Rational ClipSolver::obv(const Obb& box) const {
+  return box_clip::box_obv_rational(mesh_, faces_, box);
+}
 
 Rational ClipSolver::inside_volume(const ConvexCell& cell) const {
   if (cell.empty()) return Rational(0);
@@ -111,7 +113,8 @@ std::vector<char> ClipSolver::may_overlap(const std::vector<Obb>& boxes) const {
   return out;
 }
 
-std::vector<std::vector<int32_t>> ClipSolver::earlier_neighbours(const std::vector<Obb>& boxes) const {
+std::vector<std::vector<int32_t>> ClipSolver::earlier_neighbours(
+    const std::vector<Obb>& boxes) const {
   const size_t n = boxes.size();
   std::vector<Aabb> bounds(n);
   for (size_t j = 0; j < n; ++j) bounds[j] = ConvexCell::from_box(boxes[j]).bounds();
@@ -162,9 +165,11 @@ std::vector<ConvexCell> ClipSolver::shared_cells(const std::vector<Obb>& boxes, 
   return shared;
 }
 
-Rational ClipSolver::overlap_term(const std::vector<Obb>& boxes, size_t j, const std::vector<int32_t>& earlier) const {
+Rational ClipSolver::overlap_term(const std::vector<Obb>& boxes, size_t j,
+                                  const std::vector<int32_t>& earlier) const {
   std::vector<Rational> terms;
-  for (const ConvexCell& c : shared_cells(boxes, j, earlier)) terms.push_back(c.volume() - inside_volume(c));
+  for (const ConvexCell& c : shared_cells(boxes, j, earlier))
+    terms.push_back(c.volume() - inside_volume(c));
   return sum_pairwise(terms);
 }
 

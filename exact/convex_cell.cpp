@@ -61,7 +61,8 @@ Side ConvexCell::classify(const HalfSpace& h) const {
   for (const Vec3& p : vd_) {
     const double a = h.nd[0] * p[0], b = h.nd[1] * p[1], c = h.nd[2] * p[2];
     const double v = a + b + c - h.dd;
-    const double err = 16 * kEps * (std::abs(a) + std::abs(b) + std::abs(c) + std::abs(h.dd)) + kTiny +
+    const double err = 16 * kEps * (std::abs(a) + std::abs(b) + std::abs(c) + std::abs(h.dd)) +
+                       kTiny +
                        kSubnormal * (n_sum + std::abs(p[0]) + std::abs(p[1]) + std::abs(p[2]) + 1);
     if (!(v < -err)) all_in = false;  // surely inside needs v surely below 0
     if (!(v > err)) all_out = false;
@@ -105,8 +106,10 @@ ConvexCell ConvexCell::from_box(const Obb& box) {
   cell.v_.resize(8);
   for (int c = 0; c < 8; ++c) f.corner(c, cell.v_[c].x);
   for (const auto& q : kBoxQuads) {
-    if (orientation > 0) cell.faces_.push_back({q[0], q[1], q[2], q[3]});
-    else cell.faces_.push_back({q[3], q[2], q[1], q[0]});  // left-handed axes mirror the box
+    if (orientation > 0)
+      cell.faces_.push_back({q[0], q[1], q[2], q[3]});
+    else
+      cell.faces_.push_back({q[3], q[2], q[1], q[0]});  // left-handed axes mirror the box
   }
   cell.refresh_shadow();
   return cell;

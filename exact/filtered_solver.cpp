@@ -87,7 +87,8 @@ class Plane {
     } else {
       NT e1[3], e2[3];
       for (int i = 0; i < 3; ++i) e1[i] = NT(b[i]) - NT(a[i]), e2[i] = NT(c[i]) - NT(a[i]);
-      const NT nrm[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+      const NT nrm[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                         e1[0] * e2[1] - e1[1] * e2[0]};
       for (int i = 0; i < 3; ++i) nn[i] = sign_ > 0 ? nrm[i] : NT(-nrm[i]);
       *dd = nn[0] * NT(a[0]) + nn[1] * NT(a[1]) + nn[2] * NT(a[2]);
     }
@@ -131,8 +132,10 @@ class MpCell {
       cell.refresh(c);
     }
     for (const auto& q : kBoxQuads) {
-      if (orientation > 0) cell.faces_.push_back({q[0], q[1], q[2], q[3]});
-      else cell.faces_.push_back({q[3], q[2], q[1], q[0]});
+      if (orientation > 0)
+        cell.faces_.push_back({q[0], q[1], q[2], q[3]});
+      else
+        cell.faces_.push_back({q[3], q[2], q[1], q[0]});
     }
     return cell;
   }
@@ -160,8 +163,10 @@ class MpCell {
       Fast::Protector upward;
       for (size_t i = 0; i < n; ++i) {
         const Fast x = h.n[0] * fv_[i][0] + h.n[1] * fv_[i][1] + h.n[2] * fv_[i][2] - h.d;
-        if (x.inf() > 0) s->side[i] = 1;
-        else if (x.sup() < 0) s->side[i] = -1;
+        if (x.inf() > 0)
+          s->side[i] = 1;
+        else if (x.sup() < 0)
+          s->side[i] = -1;
       }
     }
     s->any_pos = s->any_neg = false;
@@ -301,7 +306,8 @@ Enclosed in_tiers(mpfr_prec_t bits, bool collapse, At&& at, Exact&& exact) {
 
 }  // namespace
 
-FilteredSolver::FilteredSolver(const Mesh& mesh) : mesh_(mesh), faces_(AabbTree::over_faces(mesh)), clip_(mesh) {}
+FilteredSolver::FilteredSolver(const Mesh& mesh)
+    : mesh_(mesh), faces_(AabbTree::over_faces(mesh)), clip_(mesh) {}
 
 Enclosed FilteredSolver::obv(const Obb& box, mpfr_prec_t bits) const {
   // Relabelled so that its column leaves the mesh soonest: the same solid, fewer faces.
@@ -312,121 +318,135 @@ Enclosed FilteredSolver::obv(const Obb& box, mpfr_prec_t bits) const {
     out.exact = true;  // no volume: 0, exactly
     return out;
   }
-  return in_tiers(bits, collapse_, [&] {
-    const box_clip::Frame<Mp> frame = box_clip::make_frame<Mp>(labelled);
-    const Mp R = abs(frame.det);
-    if (R.sign() == 0) return Mp(0);  // no volume
-    Mp sum(0);
-    std::unordered_map<int32_t, box_clip::Point<Mp>> tmap;  // faces share vertices
-    auto to_t = [&](int32_t v) -> const box_clip::Point<Mp>& {
-      auto it = tmap.find(v);
-      if (it != tmap.end()) return it->second;
-      return tmap.emplace(v, box_clip::to_frame(frame, mesh_.vertices[v])).first->second;
-    };
-    faces_.visit_accepted(filter, [&](int32_t f) {
-      const Face& face = mesh_.faces[f];
-      const box_clip::Point<Mp> tri[3] = {to_t(face[0]), to_t(face[1]), to_t(face[2])};
-      Mp term;
-      if (box_clip::face_term6(tri, R, &term)) sum += term;
-    });
-    return box_clip::obv_from_sum6(sum, R);
-  }, [&] { return clip_.obv(box); });
+  return in_tiers(
+      bits, collapse_,
+      [&] {
+        const box_clip::Frame<Mp> frame = box_clip::make_frame<Mp>(labelled);
+        const Mp R = abs(frame.det);
+        if (R.sign() == 0) return Mp(0);  // no volume
+        Mp sum(0);
+        std::unordered_map<int32_t, box_clip::Point<Mp>> tmap;  // faces share vertices
+        auto to_t = [&](int32_t v) -> const box_clip::Point<Mp>& {
+          auto it = tmap.find(v);
+          if (it != tmap.end()) return it->second;
+          return tmap.emplace(v, box_clip::to_frame(frame, mesh_.vertices[v])).first->second;
+        };
+        faces_.visit_accepted(filter, [&](int32_t f) {
+          const Face& face = mesh_.faces[f];
+          const box_clip::Point<Mp> tri[3] = {to_t(face[0]), to_t(face[1]), to_t(face[2])};
+          Mp term;
+          if (box_clip::face_term6(tri, R, &term)) sum += term;
+        });
+        return box_clip::obv_from_sum6(sum, R);
+      },
+      [&] { return clip_.obv(box); });
 }
 
-Enclosed FilteredSolver::overlap_term(const std::vector<Obb>& boxes, size_t j, const std::vector<int32_t>& earlier,
-                                      mpfr_prec_t bits) const {
+Enclosed FilteredSolver::overlap_term(const std::vector<Obb>& boxes, size_t j,
+                                      const std::vector<int32_t>& earlier, mpfr_prec_t bits) const {
   if (earlier.empty()) return Enclosed();  // [0, 0]: nothing earlier can meet box j
-  return in_tiers(bits, collapse_, [&] {
-    const box_clip::Frame<Mp> fj = box_clip::make_frame<Mp>(boxes[j]);
-    const int orientation = fj.det.sign();
-    if (orientation == 0) return Mp(0);  // a flat box: nothing inside it
-    // Split box j against each earlier box: `pieces` is what none covers so far; each piece's
-    // part inside box i is a cell of S_j (ClipSolver::shared_cells, step for step).
-    std::vector<MpCell> shared, pieces{MpCell::from_box(fj, orientation)};
-    Sides sides;
-    for (int32_t i : earlier) {
-      const box_clip::Frame<Mp> fi = box_clip::make_frame<Mp>(boxes[i]);
-      const int sigma = fi.det.sign();
-      if (sigma == 0) continue;
-      const std::array<Plane, 6> hs = box_planes(fi, sigma);
-      std::vector<MpCell> next;
-      for (MpCell& p : pieces) {
-        MpCell rest = std::move(p);
-        for (const Plane& h : hs) {
-          rest.sides(h, &sides);
-          if (!sides.any_pos) continue;  // nothing of `rest` lies beyond this face
-          if (!sides.any_neg) {          // all of it beyond or on the plane: it stays whole
-            next.push_back(std::move(rest));
-            rest = MpCell();
-            break;
+  return in_tiers(
+      bits, collapse_,
+      [&] {
+        const box_clip::Frame<Mp> fj = box_clip::make_frame<Mp>(boxes[j]);
+        const int orientation = fj.det.sign();
+        if (orientation == 0) return Mp(0);  // a flat box: nothing inside it
+        // Split box j against each earlier box: `pieces` is what none covers so far; each piece's
+        // part inside box i is a cell of S_j (ClipSolver::shared_cells, step for step).
+        std::vector<MpCell> shared, pieces{MpCell::from_box(fj, orientation)};
+        Sides sides;
+        for (int32_t i : earlier) {
+          const box_clip::Frame<Mp> fi = box_clip::make_frame<Mp>(boxes[i]);
+          const int sigma = fi.det.sign();
+          if (sigma == 0) continue;
+          const std::array<Plane, 6> hs = box_planes(fi, sigma);
+          std::vector<MpCell> next;
+          for (MpCell& p : pieces) {
+            MpCell rest = std::move(p);
+            for (const Plane& h : hs) {
+              rest.sides(h, &sides);
+              if (!sides.any_pos) continue;  // nothing of `rest` lies beyond this face
+              if (!sides.any_neg) {          // all of it beyond or on the plane: it stays whole
+                next.push_back(std::move(rest));
+                rest = MpCell();
+                break;
+              }
+              MpCell beyond = rest.clipped(h.complement());
+              if (!beyond.empty()) next.push_back(std::move(beyond));
+              rest = rest.clipped_with(h, &sides);
+              if (rest.empty()) break;
+            }
+            if (!rest.empty()) shared.push_back(std::move(rest));
           }
-          MpCell beyond = rest.clipped(h.complement());
-          if (!beyond.empty()) next.push_back(std::move(beyond));
-          rest = rest.clipped_with(h, &sides);
-          if (rest.empty()) break;
+          pieces = std::move(next);
+          if (pieces.empty()) break;
         }
-        if (!rest.empty()) shared.push_back(std::move(rest));
-      }
-      pieces = std::move(next);
-      if (pieces.empty()) break;
-    }
-    Mp total(0);
-    for (const MpCell& cell_xyz : shared) {
-      const Mp vol = cell_xyz.volume();
-      // vol(cell ∩ X) = sum over faces of sign * vol(cell ∩ prism), ClipSolver::inside_volume,
-      // along the direction whose column holds the fewest faces.
-      const Aabb bounds = cell_xyz.bounds();
-      int dir = 0;
-      size_t fewest = SIZE_MAX;
-      for (int d = 0; d < 6; ++d) {
-        size_t n = 0;
-        const Aabb column = column_of(bounds, d);
-        faces_.visit_accepted([&](const Aabb& b) { return column.overlaps(b); }, [&](int32_t) { ++n; });
-        if (n < fewest) fewest = n, dir = d;
-      }
-      const MpCell cell = cell_xyz.mapped(dir);
-      Mp inside(0);
-      long whole = 0;
-      const Aabb column = column_of(bounds, dir);
-      faces_.visit_accepted([&](const Aabb& b) { return column.overlaps(b); }, [&](int32_t f) {
-        Vec3 mapped[3];
-        for (int k = 0; k < 3; ++k) {
-          const Vec3& p = mesh_.corner(f, k);
-          const std::array<double, 3> q = to_direction(dir, p[0], p[1], p[2]);
-          mapped[k] = Vec3(q[0], q[1], q[2]);
+        Mp total(0);
+        for (const MpCell& cell_xyz : shared) {
+          const Mp vol = cell_xyz.volume();
+          // vol(cell ∩ X) = sum over faces of sign * vol(cell ∩ prism), ClipSolver::inside_volume,
+          // along the direction whose column holds the fewest faces.
+          const Aabb bounds = cell_xyz.bounds();
+          int dir = 0;
+          size_t fewest = SIZE_MAX;
+          for (int d = 0; d < 6; ++d) {
+            size_t n = 0;
+            const Aabb column = column_of(bounds, d);
+            faces_.visit_accepted([&](const Aabb& b) { return column.overlaps(b); },
+                                  [&](int32_t) { ++n; });
+            if (n < fewest) fewest = n, dir = d;
+          }
+          const MpCell cell = cell_xyz.mapped(dir);
+          Mp inside(0);
+          long whole = 0;
+          const Aabb column = column_of(bounds, dir);
+          faces_.visit_accepted([&](const Aabb& b) { return column.overlaps(b); },
+                                [&](int32_t f) {
+                                  Vec3 mapped[3];
+                                  for (int k = 0; k < 3; ++k) {
+                                    const Vec3& p = mesh_.corner(f, k);
+                                    const std::array<double, 3> q =
+                                        to_direction(dir, p[0], p[1], p[2]);
+                                    mapped[k] = Vec3(q[0], q[1], q[2]);
+                                  }
+                                  const Vec3 &a = mapped[0], &b = mapped[1], &c = mapped[2];
+                                  const int sign = orient2d(
+                                      a, b, c, 0, 1);  // the sign of the face normal's z, exactly
+                                  if (sign == 0) return;  // a vertical face bounds no column
+                                  const Vec3* corner[3] = {&a, &b, &c};
+                                  // The prism's 4 half-spaces (3 vertical sides, then below the
+                                  // face): which miss the cell, which hold it, which cut it; the
+                                  // double intervals decide most of it.
+                                  Plane h[4];
+                                  {
+                                    Fast::Protector upward;
+                                    for (int k = 0; k < 4; ++k)
+                                      h[k] = Plane::prism(corner, k, sign);
+                                  }
+                                  const Plane* cutting[4];
+                                  int n_cutting = 0;
+                                  for (int k = 0; k < 4; ++k) {
+                                    cell.sides(h[k], &sides);
+                                    if (!sides.any_neg)
+                                      return;  // beyond or on the plane: the prism adds no volume
+                                    if (sides.any_pos) cutting[n_cutting++] = &h[k];
+                                  }
+                                  if (n_cutting == 0) {
+                                    whole += sign;
+                                    return;
+                                  }
+                                  MpCell piece = cell.clipped(*cutting[0]);
+                                  for (int k = 1; k < n_cutting && !piece.empty(); ++k)
+                                    piece = piece.clipped(*cutting[k]);
+                                  if (piece.empty()) return;
+                                  inside += sign > 0 ? piece.volume() : -piece.volume();
+                                });
+          if (whole != 0) inside += Mp(static_cast<double>(whole)) * vol;
+          total += vol - inside;
         }
-        const Vec3 &a = mapped[0], &b = mapped[1], &c = mapped[2];
-        const int sign = orient2d(a, b, c, 0, 1);  // the sign of the face normal's z, exactly
-        if (sign == 0) return;                     // a vertical face bounds no column
-        const Vec3* corner[3] = {&a, &b, &c};
-        // The prism's 4 half-spaces (3 vertical sides, then below the face): which miss the
-        // cell, which hold it, which cut it; the double intervals decide most of it.
-        Plane h[4];
-        {
-          Fast::Protector upward;
-          for (int k = 0; k < 4; ++k) h[k] = Plane::prism(corner, k, sign);
-        }
-        const Plane* cutting[4];
-        int n_cutting = 0;
-        for (int k = 0; k < 4; ++k) {
-          cell.sides(h[k], &sides);
-          if (!sides.any_neg) return;  // beyond or on the plane: the prism adds no volume
-          if (sides.any_pos) cutting[n_cutting++] = &h[k];
-        }
-        if (n_cutting == 0) {
-          whole += sign;
-          return;
-        }
-        MpCell piece = cell.clipped(*cutting[0]);
-        for (int k = 1; k < n_cutting && !piece.empty(); ++k) piece = piece.clipped(*cutting[k]);
-        if (piece.empty()) return;
-        inside += sign > 0 ? piece.volume() : -piece.volume();
-      });
-      if (whole != 0) inside += Mp(static_cast<double>(whole)) * vol;
-      total += vol - inside;
-    }
-    return total;
-  }, [&] { return clip_.overlap_term(boxes, j, earlier); });
+        return total;
+      },
+      [&] { return clip_.overlap_term(boxes, j, earlier); });
 }
 
 }  // namespace exact

@@ -43,7 +43,8 @@ class FilteredSolver {
   Enclosed obv(const Obb& box, mpfr_prec_t bits = MpInterval::kPrec) const;
   // Box j's share of the overlap term of `boxes`, with `earlier` its earlier_neighbours entry;
   // [0, 0] exactly when that is empty.
-  Enclosed overlap_term(const std::vector<Obb>& boxes, size_t j, const std::vector<int32_t>& earlier,
+  Enclosed overlap_term(const std::vector<Obb>& boxes, size_t j,
+                        const std::vector<int32_t>& earlier,
                         mpfr_prec_t bits = MpInterval::kPrec) const;
   const ClipSolver& rational() const { return clip_; }
 

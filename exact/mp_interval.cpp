@@ -45,8 +45,10 @@ MpInterval::MpInterval(const MpInterval& o) {
   const size_t bytes = mpfr_custom_get_size(bits);
   std::memcpy(lo_limbs_, o.lo_limbs_, bytes);
   std::memcpy(hi_limbs_, o.hi_limbs_, bytes);
-  mpfr_custom_init_set(lo_, mpfr_custom_get_kind(o.lo_), mpfr_custom_get_exp(o.lo_), bits, lo_limbs_);
-  mpfr_custom_init_set(hi_, mpfr_custom_get_kind(o.hi_), mpfr_custom_get_exp(o.hi_), bits, hi_limbs_);
+  mpfr_custom_init_set(lo_, mpfr_custom_get_kind(o.lo_), mpfr_custom_get_exp(o.lo_), bits,
+                       lo_limbs_);
+  mpfr_custom_init_set(hi_, mpfr_custom_get_kind(o.hi_), mpfr_custom_get_exp(o.hi_), bits,
+                       hi_limbs_);
 }
 
 MpInterval& MpInterval::operator=(const MpInterval& o) {
@@ -89,16 +91,24 @@ MpInterval operator*(const MpInterval& x, const MpInterval& y) {
     mpfr_mul(r.hi_, hi1, hi2, MPFR_RNDU);
   };
   if (mpfr_sgn(a) >= 0) {
-    if (mpfr_sgn(c) >= 0) set(a, c, b, d);
-    else if (mpfr_sgn(d) <= 0) set(b, c, a, d);
-    else set(b, c, b, d);
+    if (mpfr_sgn(c) >= 0)
+      set(a, c, b, d);
+    else if (mpfr_sgn(d) <= 0)
+      set(b, c, a, d);
+    else
+      set(b, c, b, d);
   } else if (mpfr_sgn(b) <= 0) {
-    if (mpfr_sgn(c) >= 0) set(a, d, b, c);
-    else if (mpfr_sgn(d) <= 0) set(b, d, a, c);
-    else set(a, d, a, c);
+    if (mpfr_sgn(c) >= 0)
+      set(a, d, b, c);
+    else if (mpfr_sgn(d) <= 0)
+      set(b, d, a, c);
+    else
+      set(a, d, a, c);
   } else {  // a < 0 < b
-    if (mpfr_sgn(c) >= 0) set(a, d, b, d);
-    else if (mpfr_sgn(d) <= 0) set(b, c, a, c);
+    if (mpfr_sgn(c) >= 0)
+      set(a, d, b, d);
+    else if (mpfr_sgn(d) <= 0)
+      set(b, c, a, c);
     else {
       MpInterval s;
       mpfr_mul(r.lo_, a, d, MPFR_RNDD);
@@ -120,13 +130,19 @@ MpInterval operator/(const MpInterval& x, const MpInterval& y) {
     mpfr_div(r.hi_, hi1, hi2, MPFR_RNDU);
   };
   if (mpfr_sgn(c) > 0) {
-    if (mpfr_sgn(a) >= 0) set(a, d, b, c);
-    else if (mpfr_sgn(b) <= 0) set(a, c, b, d);
-    else set(a, c, b, c);
+    if (mpfr_sgn(a) >= 0)
+      set(a, d, b, c);
+    else if (mpfr_sgn(b) <= 0)
+      set(a, c, b, d);
+    else
+      set(a, c, b, c);
   } else if (mpfr_sgn(d) < 0) {
-    if (mpfr_sgn(a) >= 0) set(b, d, a, c);
-    else if (mpfr_sgn(b) <= 0) set(b, c, a, d);
-    else set(b, d, a, d);
+    if (mpfr_sgn(a) >= 0)
+      set(b, d, a, c);
+    else if (mpfr_sgn(b) <= 0)
+      set(b, c, a, d);
+    else
+      set(b, d, a, d);
   } else {
     throw Undecided{};
   }
@@ -171,7 +187,9 @@ Rational MpInterval::hi_rational() const {
   return q;
 }
 
-bool MpInterval::contains(const Rational& q) const { return lo_rational() <= q && q <= hi_rational(); }
+bool MpInterval::contains(const Rational& q) const {
+  return lo_rational() <= q && q <= hi_rational();
+}
 
 void MpInterval::to_text(std::string* lo, std::string* hi) const {
   char* s = nullptr;
@@ -189,8 +207,10 @@ bool MpInterval::from_text(const std::string& lo, const std::string& hi, MpInter
   char* end = nullptr;
   // Base 16 with the 0x prefix, as %Ra writes; a number of up to 128 bits reads exactly (an
   // inexact read is a number this class did not write: refused).
-  if (lo.empty() || mpfr_strtofr(r.lo_, lo.c_str(), &end, 16, MPFR_RNDD) != 0 || *end != '\0') return false;
-  if (hi.empty() || mpfr_strtofr(r.hi_, hi.c_str(), &end, 16, MPFR_RNDU) != 0 || *end != '\0') return false;
+  if (lo.empty() || mpfr_strtofr(r.lo_, lo.c_str(), &end, 16, MPFR_RNDD) != 0 || *end != '\0')
+    return false;
+  if (hi.empty() || mpfr_strtofr(r.hi_, hi.c_str(), &end, 16, MPFR_RNDU) != 0 || *end != '\0')
+    return false;
   if (!mpfr_number_p(r.lo_) || !mpfr_number_p(r.hi_) || mpfr_greater_p(r.lo_, r.hi_)) return false;
   *out = r;
   return true;

@@ -1,7 +1,8 @@
 // vobb::exact::MpInterval — a closed interval of binary floating-point numbers (MPFR) of 128
-// bits, or 256 within a Precision scope, every operation rounded outward. Whatever values lie in the operands, the exact result of the
-// same operation on them lies in the result: a chain of operations encloses the exact value of
-// the same expression in rationals. Holds its significands inline: no allocation.
+// bits, or 256 within a Precision scope, every operation rounded outward. Whatever values lie in
+// the operands, the exact result of the same operation on them lies in the result: a chain of
+// operations encloses the exact value of the same expression in rationals. Holds its significands
+// inline: no allocation.
 //
 // It is certify's filter (exact/filtered_solver.h): 128 bits tell apart boxes whose faces
 // touch mesh vertices (1e-17 apart in relative terms) and leave a sum's enclosure within one
@@ -11,8 +12,9 @@
 #pragma once
 
 #include <gmp.h>
-#include <string>
 #include <mpfr.h>
+
+#include <string>
 
 #include "common/exact_predicates.h"
 
@@ -41,9 +43,9 @@ class MpInterval {
   mpfr_prec_t bits() const { return mpfr_get_prec(lo_); }
 
   MpInterval() { init(); }  // [0, 0]
-  MpInterval(double x);  // NOLINT: exact (a double fits in 128 bits)
+  MpInterval(double x);     // NOLINT: exact (a double fits in 128 bits)
   MpInterval(int x) : MpInterval(static_cast<double>(x)) {}  // NOLINT
-  explicit MpInterval(const Rational& q);  // the two 128-bit numbers around q
+  explicit MpInterval(const Rational& q);                    // the two 128-bit numbers around q
   MpInterval(const MpInterval& o);
   MpInterval& operator=(const MpInterval& o);
 

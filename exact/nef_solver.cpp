@@ -34,7 +34,8 @@ Rational to_rational(const Kernel::FT& x) {
   return CGAL::exact(x);
 }
 
-Nef nef_from_soup(const std::vector<Point>& points, const std::vector<std::vector<std::size_t>>& polys) {
+Nef nef_from_soup(const std::vector<Point>& points,
+                  const std::vector<std::vector<std::size_t>>& polys) {
   Polyhedron poly;
   CGAL::Polygon_mesh_processing::polygon_soup_to_polygon_mesh(points, polys, poly);
   return Nef(poly);
@@ -53,8 +54,10 @@ Nef nef_box(const Obb& box) {
   }
   std::vector<std::vector<std::size_t>> quads;
   for (const auto& q : kBoxQuads) {
-    if (sgn(det) > 0) quads.push_back({std::size_t(q[0]), std::size_t(q[1]), std::size_t(q[2]), std::size_t(q[3])});
-    else quads.push_back({std::size_t(q[3]), std::size_t(q[2]), std::size_t(q[1]), std::size_t(q[0])});
+    if (sgn(det) > 0)
+      quads.push_back({std::size_t(q[0]), std::size_t(q[1]), std::size_t(q[2]), std::size_t(q[3])});
+    else
+      quads.push_back({std::size_t(q[3]), std::size_t(q[2]), std::size_t(q[1]), std::size_t(q[0])});
   }
   return nef_from_soup(pts, quads);
 }
@@ -120,7 +123,8 @@ NefSolver::NefSolver(const Mesh& mesh) : impl_(std::make_unique<Impl>()) {
       for (int k = 0; k < 3; ++k) {
         const int32_t v = mesh.faces[f][k];
         auto [it, inserted] = index.emplace(v, pts.size());
-        if (inserted) pts.emplace_back(mesh.vertices[v][0], mesh.vertices[v][1], mesh.vertices[v][2]);
+        if (inserted)
+          pts.emplace_back(mesh.vertices[v][0], mesh.vertices[v][1], mesh.vertices[v][2]);
         t.push_back(it->second);
       }
       tris.push_back(std::move(t));

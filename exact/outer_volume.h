@@ -8,10 +8,10 @@
 //  - ClipSolver (path b): everything rests on the signed prism decomposition of X along a
 //    direction d: 1_X = sum_T sign(n_T . -d) 1[prism of T swept along d], so for a convex C,
 //    vol(C ∩ X) = sum_T sign vol(C ∩ prism_T). OBV works in the box's own frame, where most
-//    faces are closed forms (common/box_frame_clip.h, shared with fast/). OMV = sum OBV - sum vol(S \ X) over convex cells
-//    S that split each box's part inside earlier boxes (half-space splits, disjoint within one
-//    box; d = -z there, each prism a convex clip). Only faces whose column meets a cell are
-//    visited; a layer whose boxes overlap nothing does no union work.
+//    faces are closed forms (common/box_frame_clip.h, shared with fast/). OMV = sum OBV - sum vol(S
+//    \ X) over convex cells S that split each box's part inside earlier boxes (half-space splits,
+//    disjoint within one box; d = -z there, each prism a convex clip). Only faces whose column
+//    meets a cell are visited; a layer whose boxes overlap nothing does no union work.
 //  - NefSolver (path a): CGAL Nef polyhedra, (U_j O_j) - X, then the volume.
 // Precondition for both: the mesh is a solid (check_solidity passed). Neither creates a GL
 // context nor reads a file.
@@ -54,7 +54,8 @@ class ClipSolver {
   std::vector<ConvexCell> shared_cells(const std::vector<Obb>& boxes, size_t j,
                                        const std::vector<int32_t>& earlier) const;
   // vol(S_j \ X): box j's share of the overlap term, over those cells.
-  Rational overlap_term(const std::vector<Obb>& boxes, size_t j, const std::vector<int32_t>& earlier) const;
+  Rational overlap_term(const std::vector<Obb>& boxes, size_t j,
+                        const std::vector<int32_t>& earlier) const;
 
  private:
   struct Prism;

@@ -18,7 +18,8 @@ std::vector<double> CpuObvEstimator::estimate(const std::vector<Obb>& boxes, int
   // order of operations as alone: the same doubles for any number of threads.
   std::vector<double> out(boxes.size());
   std::vector<size_t> used(boxes.size());
-  tbb::parallel_for(size_t{0}, boxes.size(), [&](size_t i) { out[i] = estimate_one(boxes[i], m, &used[i]); });
+  tbb::parallel_for(size_t{0}, boxes.size(),
+                    [&](size_t i) { out[i] = estimate_one(boxes[i], m, &used[i]); });
   size_t total = 0;
   for (size_t u : used) total += u;
   faces_used_ = total;
@@ -47,8 +48,8 @@ double CpuObvEstimator::estimate(const Obb& box, int m) const {
 // condition fails just outside it; so the guess decides only how many columns are tested,
 // never whether a hit is missed. The runs are intersected over k. Each search stays within the
 // row: a wrong guess costs tests (a few per column at worst), never a hit.
-void candidate_runs(const double* row, const double* eb, const double* inv_eb, const double* tie, int j0, int j1,
-                    int m, TexelRun* runs, int guess_shift) {
+void candidate_runs(const double* row, const double* eb, const double* inv_eb, const double* tie,
+                    int j0, int j1, int m, TexelRun* runs, int guess_shift) {
   for (int side = 0; side < 2; ++side) {
     const double sigma = side == 0 ? 1.0 : -1.0;
     TexelRun& r = runs[side];
@@ -137,7 +138,8 @@ double CpuObvEstimator::estimate_one(const Obb& box, int m, size_t* faces_used) 
   planner_.plan(box, m, &plan);
   *faces_used = plan.tris.size();
   const double value = evaluate_plan(plan, m);
-  if (plan.tris.capacity() * sizeof(LocalTriangle) + plan.spans.capacity() * sizeof(TexelSpan) > kPlanKeepBytes)
+  if (plan.tris.capacity() * sizeof(LocalTriangle) + plan.spans.capacity() * sizeof(TexelSpan) >
+      kPlanKeepBytes)
     plan = BoxPlan{};
   return value;
 }

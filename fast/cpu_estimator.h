@@ -64,8 +64,8 @@ double sum_texel_hits(const BoxPlan& plan, int m, int skip_from_width = kSkipFro
 struct TexelRun {
   int lo, hi;
 };
-void candidate_runs(const double* row, const double* eb, const double* inv_eb, const double* tie, int j0, int j1,
-                    int m, TexelRun* runs, int guess_shift = 0);
+void candidate_runs(const double* row, const double* eb, const double* inv_eb, const double* tie,
+                    int j0, int j1, int m, TexelRun* runs, int guess_shift = 0);
 
 // The CPU twin's estimate from a plan: 0 for a flat plan, else
 // scale * (constant + 4 / (3 m^2) * sum_texel_hits). The GL estimator evaluates the plans that

@@ -21,17 +21,19 @@
 namespace vobb {
 
 struct BoxFrame {
-  Eigen::Matrix3d to_local = Eigen::Matrix3d::Zero();  // [h0 a0, h1 a1, h2 a2]^-1, rounded (as diag(1 / h) [a0 a1 a2]^-1)
+  Eigen::Matrix3d to_local =
+      Eigen::Matrix3d::Zero();  // [h0 a0, h1 a1, h2 a2]^-1, rounded (as diag(1 / h) [a0 a1 a2]^-1)
   Vec3 center = Vec3::Zero();
-  double volume_scale = 0;   // |det[h0 a0, h1 a1, h2 a2]|: local volume 1 is this much world volume
-  bool mirrored = false;     // det < 0: local orientation flips face signs
+  double volume_scale = 0;  // |det[h0 a0, h1 a1, h2 a2]|: local volume 1 is this much world volume
+  bool mirrored = false;    // det < 0: local orientation flips face signs
   Vec3 local(const Vec3& p) const { return to_local * (p - center); }
   // A bound on |local(p) - t|, axis by axis, where t is p's exact coordinates in the box as
   // stored (the parallelepiped c + sum t_k h_k a_k with the axes' doubles taken exactly): the
   // rounding of the inverse, of p - c and of the product (box_frame derives it). Infinite
   // where the frame is too ill-conditioned to bound.
   Vec3 local_error(const Vec3& p) const;
-  double inverse_error = 0;  // alpha of box_frame: h_k |t_k - (to_local (p - c))_k| <= alpha |p - c|_inf
+  double inverse_error =
+      0;  // alpha of box_frame: h_k |t_k - (to_local (p - c))_k| <= alpha |p - c|_inf
   Vec3 half = Vec3::Ones();  // the box's half extents
   bool valid = true;         // false: axes double cannot invert, or a subnormal half extent
 };

@@ -77,8 +77,8 @@ double range_bound(const Obb& box, double estimate) {
 
 CubemapBounds cubemap_bounds(const BoxPlanner& planner, const Obb& box, int m) {
   const BoxPlan plan = planner.plan(box, m);
-  return {resolution_bound(plan, m), gl_deviation_bound(plan, m), cpu_rounding_bound(plan, m), roundoff_term(box),
-          plan.unresolved};
+  return {resolution_bound(plan, m), gl_deviation_bound(plan, m), cpu_rounding_bound(plan, m),
+          roundoff_term(box), plan.unresolved};
 }
 
 double cubemap_bound(const BoxPlanner& planner, bool gl, const Obb& box, int m, bool* unresolved) {

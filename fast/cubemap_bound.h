@@ -51,7 +51,8 @@ CubemapBounds cubemap_bounds(const BoxPlanner& planner, const Obb& box, int m);
 // The bound for one backend's estimate (rigorous() for GL, cpu_rigorous() for the CPU twin),
 // computing only the round-off part that backend needs; `unresolved`: the plan could not hold
 // the box (BoxPlan::unresolved).
-double cubemap_bound(const BoxPlanner& planner, bool gl, const Obb& box, int m, bool* unresolved = nullptr);
+double cubemap_bound(const BoxPlanner& planner, bool gl, const Obb& box, int m,
+                     bool* unresolved = nullptr);
 
 // A bound on |estimate - exact OBV| from the OBV's range alone: the exact OBV lies in [0, V*],
 // V* = 8 h0 h1 h2 |det[a0 a1 a2]| the parallelepiped's exact volume, so |E - OBV| <=

@@ -50,8 +50,12 @@ EGLContext make_context(EGLDisplay display, std::string* why) {
       return EGL_NO_CONTEXT;
     }
   }
-  const EGLint ctx_attribs[] = {EGL_CONTEXT_MAJOR_VERSION, 4, EGL_CONTEXT_MINOR_VERSION, 3,
-                                EGL_CONTEXT_OPENGL_PROFILE_MASK, EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT,
+  const EGLint ctx_attribs[] = {EGL_CONTEXT_MAJOR_VERSION,
+                                4,
+                                EGL_CONTEXT_MINOR_VERSION,
+                                3,
+                                EGL_CONTEXT_OPENGL_PROFILE_MASK,
+                                EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT,
                                 EGL_NONE};
   EGLContext ctx = eglCreateContext(display, config, EGL_NO_CONTEXT, ctx_attribs);
   if (ctx == EGL_NO_CONTEXT) {
@@ -77,11 +81,12 @@ Status GlContext::create(std::unique_ptr<GlContext>* out, bool device_only) {
     return Status::error("no OpenGL context: disabled by VOBB_GL=off");
   const char* only = std::getenv("VOBB_EGL_PLATFORM");
   const bool try_device = only == nullptr || std::strcmp(only, "device") == 0;
-  const bool try_surfaceless = !device_only && (only == nullptr || std::strcmp(only, "surfaceless") == 0);
+  const bool try_surfaceless =
+      !device_only && (only == nullptr || std::strcmp(only, "surfaceless") == 0);
 
   const char* client = eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
-  auto get_platform_display =
-      reinterpret_cast<PFNEGLGETPLATFORMDISPLAYEXTPROC>(eglGetProcAddress("eglGetPlatformDisplayEXT"));
+  auto get_platform_display = reinterpret_cast<PFNEGLGETPLATFORMDISPLAYEXTPROC>(
+      eglGetProcAddress("eglGetPlatformDisplayEXT"));
   if (client == nullptr || get_platform_display == nullptr)
     return Status::error("no OpenGL context: EGL has no platform displays (EGL_EXT_platform_base)");
 
@@ -91,15 +96,19 @@ Status GlContext::create(std::unique_ptr<GlContext>* out, bool device_only) {
   EGLContext ctx = EGL_NO_CONTEXT;
 
   if (try_device && has_extension(client, "EGL_EXT_platform_device")) {
-    auto query_devices = reinterpret_cast<PFNEGLQUERYDEVICESEXTPROC>(eglGetProcAddress("eglQueryDevicesEXT"));
-    auto query_device_string =
-        reinterpret_cast<PFNEGLQUERYDEVICESTRINGEXTPROC>(eglGetProcAddress("eglQueryDeviceStringEXT"));
+    auto query_devices =
+        reinterpret_cast<PFNEGLQUERYDEVICESEXTPROC>(eglGetProcAddress("eglQueryDevicesEXT"));
+    auto query_device_string = reinterpret_cast<PFNEGLQUERYDEVICESTRINGEXTPROC>(
+        eglGetProcAddress("eglQueryDeviceStringEXT"));
     EGLint n = 0;
-    if (query_devices != nullptr && query_device_string != nullptr && query_devices(0, nullptr, &n) && n > 0) {
+    if (query_devices != nullptr && query_device_string != nullptr &&
+        query_devices(0, nullptr, &n) && n > 0) {
       std::vector<EGLDeviceEXT> devices(n);
       query_devices(n, devices.data(), &n);
       for (EGLint i = 0; i < n && ctx == EGL_NO_CONTEXT; ++i) {
-        if (has_extension(query_device_string(devices[i], EGL_EXTENSIONS), "EGL_MESA_device_software")) continue;
+        if (has_extension(query_device_string(devices[i], EGL_EXTENSIONS),
+                          "EGL_MESA_device_software"))
+          continue;
         display = get_platform_display(EGL_PLATFORM_DEVICE_EXT, devices[i], nullptr);
         if (display == EGL_NO_DISPLAY) continue;
         ctx = make_context(display, &why);
@@ -107,7 +116,8 @@ Status GlContext::create(std::unique_ptr<GlContext>* out, bool device_only) {
       }
     }
   }
-  if (ctx == EGL_NO_CONTEXT && try_surfaceless && has_extension(client, "EGL_MESA_platform_surfaceless")) {
+  if (ctx == EGL_NO_CONTEXT && try_surfaceless &&
+      has_extension(client, "EGL_MESA_platform_surfaceless")) {
     display = get_platform_display(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
     if (display != EGL_NO_DISPLAY) {
       ctx = make_context(display, &why);
@@ -140,9 +150,12 @@ void GlContext::make_current() const {
   VOBB_ASSERT(false, why.c_str());
 }
 
-void GlContext::release() const { eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT); }
+void GlContext::release() const {
+  eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
+}
 
-unsigned gl_program(std::initializer_list<std::pair<unsigned, const char*>> stages, std::string* log) {
+unsigned gl_program(std::initializer_list<std::pair<unsigned, const char*>> stages,
+                    std::string* log) {
   auto one_line = [](std::string text) {
     for (char& c : text)
       if (c == '\n' || c == '\r') c = ' ';

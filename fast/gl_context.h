@@ -59,6 +59,7 @@ class GlContext {
 // {GL_FRAGMENT_SHADER, fs}}, in the current context: compiles each stage, links, and deletes the
 // shaders whatever the outcome. 0 on failure, with the compiler's or linker's log on one line
 // in `log`.
-unsigned gl_program(std::initializer_list<std::pair<unsigned, const char*>> stages, std::string* log);
+unsigned gl_program(std::initializer_list<std::pair<unsigned, const char*>> stages,
+                    std::string* log);
 
 }  // namespace vobb

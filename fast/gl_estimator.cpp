@@ -2,6 +2,8 @@
 
 #define GL_GLEXT_PROTOTYPES 1
 #include <GL/glcorearb.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <array>
@@ -12,9 +14,6 @@
 #include <exception>
 #include <mutex>
 #include <thread>
-
-#include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 
 #include "fast/cpu_estimator.h"
 #include "fast/cubemap.h"
@@ -35,16 +34,17 @@ static_assert(sizeof(SpanRecord) == 84, "SpanRecord is read with a fixed stride"
 
 // One box of a window, planned on a worker thread: what the packing on the GL thread needs.
 struct PlannedBox {
-  BoxPlan plan;                      // vectors keep their capacity from window to window
-  std::vector<SpanRecord> records;   // meta[0..1] relative to the box's tile (0, 0)
+  BoxPlan plan;                     // vectors keep their capacity from window to window
+  std::vector<SpanRecord> records;  // meta[0..1] relative to the box's tile (0, 0)
   std::vector<std::array<float, 13>> tri_data;
-  bool fallback = false;             // evaluated in double by the CPU twin's code
-  double value = 0;                  // the box's whole OBV when nothing goes to the GPU
+  bool fallback = false;  // evaluated in double by the CPU twin's code
+  double value = 0;       // the box's whole OBV when nothing goes to the GPU
 };
 
 // The heap memory a slot keeps for its next box.
 size_t held_bytes(const PlannedBox& p) {
-  return p.plan.tris.capacity() * sizeof(LocalTriangle) + p.plan.spans.capacity() * sizeof(TexelSpan) +
+  return p.plan.tris.capacity() * sizeof(LocalTriangle) +
+         p.plan.spans.capacity() * sizeof(TexelSpan) +
          p.tri_data.capacity() * sizeof(p.tri_data[0]) + p.records.capacity() * sizeof(SpanRecord);
 }
 
@@ -55,7 +55,7 @@ void plan_box(const BoxPlanner& planner, const Obb& box, int m, PlannedBox* p) {
   p->records.clear();
   p->fallback = false;
   p->value = 0;
-  if (plan.flat) return;  // OBV 0
+  if (plan.flat) return;               // OBV 0
   if (!gl_evaluates_in_float(plan)) {  // the CPU twin's expression, in double (header)
     p->fallback = true;
     p->value = evaluate_plan(plan, m);
@@ -175,7 +175,8 @@ GlObvEstimator::~GlObvEstimator() {
   gl_->drawer.join();  // it deletes the GL objects on its way out
 }
 
-Status GlObvEstimator::create(const Mesh& mesh, std::unique_ptr<GlObvEstimator>* out, bool device_only) {
+Status GlObvEstimator::create(const Mesh& mesh, std::unique_ptr<GlObvEstimator>* out,
+                              bool device_only) {
   out->reset();
   std::unique_ptr<GlObvEstimator> e(new GlObvEstimator(mesh));
   Status s = GlContext::create(&e->context_, device_only);
@@ -183,7 +184,8 @@ Status GlObvEstimator::create(const Mesh& mesh, std::unique_ptr<GlObvEstimator>*
   Gl& g = *e->gl_;
   std::string log;
   g.spans_program = gl_program({{GL_VERTEX_SHADER, shaders::kShader_texel_spans_vert},
-                                {GL_FRAGMENT_SHADER, shaders::kShader_texel_spans_frag}}, &log);
+                                {GL_FRAGMENT_SHADER, shaders::kShader_texel_spans_frag}},
+                               &log);
   if (!g.spans_program) return Status::error("GL estimator: texel_spans shaders: " + log);
   g.reduce_program = gl_program({{GL_COMPUTE_SHADER, shaders::kShader_reduce_tiles_comp}}, &log);
   if (!g.reduce_program) return Status::error("GL estimator: reduce_tiles shader: " + log);
@@ -196,9 +198,11 @@ Status GlObvEstimator::create(const Mesh& mesh, std::unique_ptr<GlObvEstimator>*
   glVertexAttribIPointer(0, 4, GL_INT, stride, reinterpret_cast<void*>(offsetof(SpanRecord, span)));
   glVertexAttribIPointer(1, 4, GL_INT, stride, reinterpret_cast<void*>(offsetof(SpanRecord, meta)));
   for (int k = 0; k < 3; ++k)
-    glVertexAttribPointer(2 + k, 3, GL_FLOAT, GL_FALSE, stride,
-                          reinterpret_cast<void*>(offsetof(SpanRecord, edge) + k * 3 * sizeof(float)));
-  glVertexAttribPointer(5, 4, GL_FLOAT, GL_FALSE, stride, reinterpret_cast<void*>(offsetof(SpanRecord, plane)));
+    glVertexAttribPointer(
+        2 + k, 3, GL_FLOAT, GL_FALSE, stride,
+        reinterpret_cast<void*>(offsetof(SpanRecord, edge) + k * 3 * sizeof(float)));
+  glVertexAttribPointer(5, 4, GL_FLOAT, GL_FALSE, stride,
+                        reinterpret_cast<void*>(offsetof(SpanRecord, plane)));
   for (GLuint a = 0; a < 6; ++a) {
     glEnableVertexAttribArray(a);
     glVertexAttribDivisor(a, 1);
@@ -206,7 +210,8 @@ Status GlObvEstimator::create(const Mesh& mesh, std::unique_ptr<GlObvEstimator>*
   glGenBuffers(1, &g.sums);
   glGenFramebuffers(1, &g.fbo);
   glGetIntegerv(GL_MAX_TEXTURE_SIZE, &g.max_texture);
-  if (glGetError() != GL_NO_ERROR) return Status::error("GL estimator: OpenGL error while setting up");
+  if (glGetError() != GL_NO_ERROR)
+    return Status::error("GL estimator: OpenGL error while setting up");
   e->context_->release();  // bound by the drawing thread from now on
   GlObvEstimator* self = e.get();
   g.drawer = std::thread([self] { self->drawing_loop(); });
@@ -216,7 +221,9 @@ Status GlObvEstimator::create(const Mesh& mesh, std::unique_ptr<GlObvEstimator>*
 
 int GlObvEstimator::max_m() const { return gl_->max_texture / 3; }
 
-double GlObvEstimator::estimate(const Obb& box, int m) { return estimate(std::vector<Obb>{box}, m)[0]; }
+double GlObvEstimator::estimate(const Obb& box, int m) {
+  return estimate(std::vector<Obb>{box}, m)[0];
+}
 
 std::vector<double> GlObvEstimator::estimate(const std::vector<Obb>& boxes, int m) {
   VOBB_ASSERT(m >= 1 && m <= max_m(), "GL cubemap resolution within 1..max_m()");
@@ -256,13 +263,15 @@ std::vector<double> GlObvEstimator::estimate(const std::vector<Obb>& boxes, int 
       const PlannedBox& p = slots[b - w0];
       out[b] = p.value;  // the whole answer unless the box is drawn
       if (p.fallback) ++cpu_fallbacks_;
-      if (p.records.empty()) continue;  // flat, evaluated in double, or no span covers a texel centre
+      if (p.records.empty())
+        continue;  // flat, evaluated in double, or no span covers a texel centre
       r.records.insert(r.records.end(), p.records.begin(), p.records.end());
       r.ends.push_back(r.records.size());
       r.scale.push_back(p.plan.frame.volume_scale);
       r.constant.push_back(p.plan.constant);
       r.out.push_back(&out[b]);
-      if (!batching_ || static_cast<int>(r.out.size()) == capacity || r.records.size() >= kMaxRecords) {
+      if (!batching_ || static_cast<int>(r.out.size()) == capacity ||
+          r.records.size() >= kMaxRecords) {
         draw(&r);
         r.clear();
         r.m = m;
@@ -324,7 +333,8 @@ void GlObvEstimator::drawing_loop() {
     g.changed.wait(lock, [&g] { return g.stop || (!g.queue.empty() && !g.held); });
     if (g.queue.empty()) break;  // stop, and every request drawn
     const int m = g.queue.front()->m;
-    auto same_m = std::stable_partition(g.queue.begin(), g.queue.end(), [m](const Request* q) { return q->m == m; });
+    auto same_m = std::stable_partition(g.queue.begin(), g.queue.end(),
+                                        [m](const Request* q) { return q->m == m; });
     const std::vector<Request*> round(g.queue.begin(), same_m);
     g.queue.erase(g.queue.begin(), same_m);
     lock.unlock();
@@ -367,7 +377,8 @@ void GlObvEstimator::draw_round(const std::vector<Request*>& round) {
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
     glBindFramebuffer(GL_FRAMEBUFFER, g.fbo);
     glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, g.atlas, 0);
-    VOBB_ASSERT(glCheckFramebufferStatus(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE, "R32F atlas is renderable");
+    VOBB_ASSERT(glCheckFramebufferStatus(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE,
+                "R32F atlas is renderable");
     g.atlas_m = m;
   }
   const AtlasLayout& a = g.atlas_layout;
@@ -382,7 +393,8 @@ void GlObvEstimator::draw_round(const std::vector<Request*>& round) {
       const int tile = static_cast<int>(g.batch_out.size());
       const int tile_x = tile % a.tiles_per_row * 3 * m, tile_y = tile / a.tiles_per_row * 2 * m;
       const size_t first = g.batch_records.size();
-      g.batch_records.insert(g.batch_records.end(), q->records.begin() + (b == 0 ? 0 : q->ends[b - 1]),
+      g.batch_records.insert(g.batch_records.end(),
+                             q->records.begin() + (b == 0 ? 0 : q->ends[b - 1]),
                              q->records.begin() + q->ends[b]);
       for (size_t i = first; i < g.batch_records.size(); ++i) {
         g.batch_records[i].meta[0] += tile_x;
@@ -391,7 +403,8 @@ void GlObvEstimator::draw_round(const std::vector<Request*>& round) {
       g.batch_out.push_back(q->out[b]);
       g.batch_scale.push_back(q->scale[b]);
       g.batch_constant.push_back(q->constant[b]);
-      if (!batching_ || static_cast<int>(g.batch_out.size()) == a.capacity || g.batch_records.size() >= kMaxRecords)
+      if (!batching_ || static_cast<int>(g.batch_out.size()) == a.capacity ||
+          g.batch_records.size() >= kMaxRecords)
         flush(m);
     }
   if (!g.batch_out.empty()) flush(m);
@@ -404,7 +417,8 @@ void GlObvEstimator::flush(int m) {
   glBindFramebuffer(GL_FRAMEBUFFER, g.fbo);
   glViewport(0, 0, g.atlas_layout.width, g.atlas_layout.height);
   glEnable(GL_SCISSOR_TEST);
-  glScissor(0, 0, n < g.atlas_layout.tiles_per_row ? n * 3 * m : g.atlas_layout.width, rows * 2 * m);
+  glScissor(0, 0, n < g.atlas_layout.tiles_per_row ? n * 3 * m : g.atlas_layout.width,
+            rows * 2 * m);
   const GLfloat zero[4] = {0, 0, 0, 0};
   glClearBufferfv(GL_COLOR, 0, zero);
   glDisable(GL_SCISSOR_TEST);
@@ -415,12 +429,13 @@ void GlObvEstimator::flush(int m) {
   glDisable(GL_CULL_FACE);
 
   glUseProgram(g.spans_program);
-  glUniform2f(glGetUniformLocation(g.spans_program, "u_atlas_size"), static_cast<float>(g.atlas_layout.width),
-              static_cast<float>(g.atlas_layout.height));
+  glUniform2f(glGetUniformLocation(g.spans_program, "u_atlas_size"),
+              static_cast<float>(g.atlas_layout.width), static_cast<float>(g.atlas_layout.height));
   glUniform1i(glGetUniformLocation(g.spans_program, "u_m"), m);
   glBindVertexArray(g.vao);
   glBindBuffer(GL_ARRAY_BUFFER, g.records);
-  glBufferData(GL_ARRAY_BUFFER, g.batch_records.size() * sizeof(SpanRecord), g.batch_records.data(), GL_STREAM_DRAW);
+  glBufferData(GL_ARRAY_BUFFER, g.batch_records.size() * sizeof(SpanRecord), g.batch_records.data(),
+               GL_STREAM_DRAW);
   glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, static_cast<GLsizei>(g.batch_records.size()));
   glDisable(GL_BLEND);
 
@@ -430,7 +445,8 @@ void GlObvEstimator::flush(int m) {
   glBindTexture(GL_TEXTURE_2D, g.atlas);
   glUniform1i(glGetUniformLocation(g.reduce_program, "u_atlas"), 0);
   glUniform1i(glGetUniformLocation(g.reduce_program, "u_m"), m);
-  glUniform1i(glGetUniformLocation(g.reduce_program, "u_tiles_per_row"), g.atlas_layout.tiles_per_row);
+  glUniform1i(glGetUniformLocation(g.reduce_program, "u_tiles_per_row"),
+              g.atlas_layout.tiles_per_row);
   glBindBuffer(GL_SHADER_STORAGE_BUFFER, g.sums);
   glBufferData(GL_SHADER_STORAGE_BUFFER, n * sizeof(float), nullptr, GL_STREAM_READ);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, g.sums);
@@ -443,7 +459,8 @@ void GlObvEstimator::flush(int m) {
 
   const double texel_weight = 4.0 / (3.0 * m * m);
   for (int t = 0; t < n; ++t)
-    *g.batch_out[t] = g.batch_scale[t] * (g.batch_constant[t] + texel_weight * static_cast<double>(sums[t]));
+    *g.batch_out[t] =
+        g.batch_scale[t] * (g.batch_constant[t] + texel_weight * static_cast<double>(sums[t]));
   g.batch_records.clear();
   g.batch_out.clear();
   g.batch_scale.clear();

@@ -11,11 +11,11 @@
 // parallel). Each plans its boxes on its own thread and gathers their span records into
 // requests of up to an atlas of boxes (or 64 MiB of records); the estimator's own drawing
 // thread draws the requests waiting at that moment together, holding the context only while
-// it draws (the only one of the estimator's threads that binds it after create()). A box's value does not depend on which tile it gets
-// or what else shares its batch (its spans are blended in their order within its own tile,
-// and its tile is summed alone), so the values are a function of the box alone, as
-// ObvEstimate requires, whatever the number of threads.
-// Shaders: shaders/texel_spans.{vert,frag}, shaders/reduce_tiles.comp, embedded at build time.
+// it draws (the only one of the estimator's threads that binds it after create()). A box's value
+// does not depend on which tile it gets or what else shares its batch (its spans are blended in
+// their order within its own tile, and its tile is summed alone), so the values are a function of
+// the box alone, as ObvEstimate requires, whatever the number of threads. Shaders:
+// shaders/texel_spans.{vert,frag}, shaders/reduce_tiles.comp, embedded at build time.
 //
 // Agreement with the CPU twin: gl_deviation_bound() bounds |GL - CPU| for one box from the
 // float arithmetic of the shaders (derivation in gl_estimator.cpp); the test suite checks it.
@@ -36,8 +36,8 @@
 #include "common/mesh.h"
 #include "common/obb.h"
 #include "common/status.h"
-#include "fast/gl_context.h"
 #include "fast/cubemap_bound.h"
+#include "fast/gl_context.h"
 #include "fast/texel_plan.h"
 
 namespace vobb {
@@ -47,7 +47,8 @@ class GlObvEstimator {
   // Makes the GL context and compiles the shaders; on failure `out` stays empty and the Status
   // says why in one line. Keeps a reference to `mesh`. `device_only`: only on a GPU (see
   // GlContext::create).
-  static Status create(const Mesh& mesh, std::unique_ptr<GlObvEstimator>* out, bool device_only = false);
+  static Status create(const Mesh& mesh, std::unique_ptr<GlObvEstimator>* out,
+                       bool device_only = false);
   ~GlObvEstimator();
 
   // OBV estimate of each box at resolution m, 1 <= m <= max_m(), in world volume units. May be
@@ -71,7 +72,9 @@ class GlObvEstimator {
   // estimate() calls.
   const GlContext& context() const { return *context_; }
   size_t round_trips() const { return round_trips_; }  // since construction
-  size_t cpu_fallbacks() const { return cpu_fallbacks_; }  // boxes evaluated in double, since construction
+  size_t cpu_fallbacks() const {
+    return cpu_fallbacks_;
+  }  // boxes evaluated in double, since construction
   // Rounds of the drawing thread that held the boxes of more than one call (calls from several
   // threads at once).
   size_t shared_round_trips() const { return shared_round_trips_; }

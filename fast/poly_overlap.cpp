@@ -21,7 +21,8 @@ std::vector<Obb> meeting(const Obb& box, const std::vector<Obb>& earlier) {
 
 }  // namespace
 
-PolyOverlapSolver::PolyOverlapSolver(const Mesh& mesh) : mesh_(mesh), faces_(AabbTree::over_faces(mesh)) {}
+PolyOverlapSolver::PolyOverlapSolver(const Mesh& mesh)
+    : mesh_(mesh), faces_(AabbTree::over_faces(mesh)) {}
 
 bool PolyOverlapSolver::apart(const Obb& a, const Obb& b) {
   const Vec3 d = b.center - a.center;
@@ -91,7 +92,8 @@ double PolyOverlapSolver::estimate(const Obb& box, const std::vector<Obb>& earli
 
 std::vector<double> PolyOverlapSolver::estimate(const std::vector<ShareQuery>& queries) const {
   std::vector<double> out(queries.size());
-  tbb::parallel_for(size_t{0}, queries.size(), [&](size_t i) { out[i] = estimate(queries[i].box, queries[i].earlier); });
+  tbb::parallel_for(size_t{0}, queries.size(),
+                    [&](size_t i) { out[i] = estimate(queries[i].box, queries[i].earlier); });
   return out;
 }
 

@@ -34,9 +34,9 @@
 namespace vobb {
 
 struct PolyOverlap {
-  double lo = 0, hi = 0;   // lo <= the exact value <= hi
-  double estimate = 0;     // the midpoint of [lo, hi] (the nearest double when exact)
-  bool exact = false;      // computed in rationals: the intervals could not decide a sign
+  double lo = 0, hi = 0;  // lo <= the exact value <= hi
+  double estimate = 0;    // the midpoint of [lo, hi] (the nearest double when exact)
+  bool exact = false;     // computed in rationals: the intervals could not decide a sign
 };
 
 class PolyOverlapSolver {

@@ -1,8 +1,8 @@
 #include "fast/poly_solver.h"
 
+#include <CGAL/Interval_nt.h>
 #include <tbb/parallel_for.h>
 
-#include <CGAL/Interval_nt.h>
 #include <cmath>
 #include <optional>
 
@@ -65,7 +65,8 @@ class ExactBox {
 // arithmetic stays in intervals, which then enclose the exact values.
 struct ExactVertexSigns {
   ExactBox* exact;
-  int operator()(const Point<Interval>& p, int axis, int side, int bound, const Interval& val) const {
+  int operator()(const Point<Interval>& p, int axis, int side, int bound,
+                 const Interval& val) const {
     int s;
     return decided_sign(val, &s) ? s : undecided(p, axis, side, bound);
   }
@@ -89,11 +90,17 @@ PolyObv exact_result(const Rational& q, int32_t faces, std::string why) {
 
 PolyObvSolver::PolyObvSolver(const Mesh& mesh) : mesh_(mesh), faces_(AabbTree::over_faces(mesh)) {}
 
-PolyObv PolyObvSolver::evaluate(const Obb& box) const { return evaluate_as(box_clip::shortest_column(box, faces_.bounds())); }
+PolyObv PolyObvSolver::evaluate(const Obb& box) const {
+  return evaluate_as(box_clip::shortest_column(box, faces_.bounds()));
+}
 
-double PolyObvSolver::estimate(const Obb& box) const { return estimate_as(box_clip::shortest_column(box, faces_.bounds())); }
+double PolyObvSolver::estimate(const Obb& box) const {
+  return estimate_as(box_clip::shortest_column(box, faces_.bounds()));
+}
 
-Rational PolyObvSolver::exact(const Obb& box) const { return box_clip::box_obv_rational(mesh_, faces_, box); }
+Rational PolyObvSolver::exact(const Obb& box) const {
+  return box_clip::box_obv_rational(mesh_, faces_, box);
+}
 
 PolyObv PolyObvSolver::evaluate_as(const Obb& box) const {
   const ColumnFilter filter(box);
@@ -142,12 +149,14 @@ PolyObv PolyObvSolver::evaluate_as(const Obb& box) const {
     }
     sum += term;
   });
-  if (!range_ok) return exact_result(exact(box), visited, "coordinates beyond the intervals' safe range");
+  if (!range_ok)
+    return exact_result(exact(box), visited, "coordinates beyond the intervals' safe range");
   const Interval obv = box_clip::obv_from_sum6(sum, R);
   const double vol = volume(box);
   if (!CGAL::is_finite(obv) || !(obv.sup() - obv.inf() <= kMaxRelativeWidth * vol))
-    return exact_result(exact(box), visited, "an ill-conditioned box: the interval is wider than " +
-                                                 std::to_string(kMaxRelativeWidth) + " of its volume");
+    return exact_result(exact(box), visited,
+                        "an ill-conditioned box: the interval is wider than " +
+                            std::to_string(kMaxRelativeWidth) + " of its volume");
   PolyObv r;
   // The exact OBV lies in [0, vol(B)] too; vol(B)'s double is not an enclosure, so only 0 clips.
   r.lo = std::max(obv.inf(), 0.0);

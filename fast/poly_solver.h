@@ -36,12 +36,12 @@ namespace vobb {
 
 // How one box's OBV was enclosed.
 struct PolyObv {
-  double lo = 0, hi = 0;  // lo <= exact OBV <= hi, both finite
-  double estimate = 0;    // the midpoint of [lo, hi] (the nearest double when exact)
-  int32_t faces = 0;         // faces visited (their column met the box's, by the filter)
-  int32_t exact_signs = 0;   // signs at mesh vertices the intervals could not decide: rationals
-  int32_t exact_faces = 0;   // faces with such a sign at a clipped point: the face in rationals
-  bool exact_box = false;    // the whole box in rationals; `why` says what the intervals lacked
+  double lo = 0, hi = 0;    // lo <= exact OBV <= hi, both finite
+  double estimate = 0;      // the midpoint of [lo, hi] (the nearest double when exact)
+  int32_t faces = 0;        // faces visited (their column met the box's, by the filter)
+  int32_t exact_signs = 0;  // signs at mesh vertices the intervals could not decide: rationals
+  int32_t exact_faces = 0;  // faces with such a sign at a clipped point: the face in rationals
+  bool exact_box = false;   // the whole box in rationals; `why` says what the intervals lacked
   std::string why;
 };
 

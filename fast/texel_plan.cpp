@@ -48,14 +48,15 @@ BoxFrame box_frame(const Obb& box) {
       row += std::abs(e(i, j)) + 2 * (gamma4 + 2 * u) * size(i, j);
       p_row += std::abs(box.half[i] * f.to_local(i, j));
     }
-    for (int j = 0; j < 3; ++j) row += 0x1p-1074 * std::abs(f.to_local(i, j)) * 3;  // underflow of M~
+    for (int j = 0; j < 3; ++j)
+      row += 0x1p-1074 * std::abs(f.to_local(i, j)) * 3;  // underflow of M~
     eps = std::max(eps, row);
     p_norm = std::max(p_norm, p_row);
   }
   eps *= 2;
   p_norm *= 1 + 8 * u;
   f.inverse_error = eps < 0.5 && std::isfinite(p_norm) ? p_norm * eps / (1 - eps)
-                                                        : std::numeric_limits<double>::infinity();
+                                                       : std::numeric_limits<double>::infinity();
   return f;
 }
 
@@ -64,7 +65,8 @@ Vec3 BoxFrame::local_error(const Vec3& p) const {
   const Vec3 w = (p - center).cwiseAbs() * (1 + u);  // |p - c| bounds |fl(p - c)| within u
   const Vec3 rounding = (to_local.cwiseAbs() * w) * (2 * gamma4);
   Vec3 out;
-  for (int k = 0; k < 3; ++k) out[k] = inverse_error * w.maxCoeff() / std::abs(half[k]) * (1 + 4 * u) + rounding[k];
+  for (int k = 0; k < 3; ++k)
+    out[k] = inverse_error * w.maxCoeff() / std::abs(half[k]) * (1 + 4 * u) + rounding[k];
   return out;
 }
 
@@ -129,7 +131,8 @@ int clip(const Vec3* in, int n, Vec3* out, const Plane& plane) {
 // ones (BoxFrame::local_error); the clipping planes and the projected bounds are widened for
 // it, so that the spans cover the exact face too.
 // Derivation: docs/derivations.md, "Texel spans".
-bool texel_span(const LocalTriangle& t, int face, int m, bool no_far_clip, double slack, TexelSpan* span) {
+bool texel_span(const LocalTriangle& t, int face, int m, bool no_far_clip, double slack,
+                TexelSpan* span) {
   const int k = face / 2, a = (k + 1) % 3, b = (k + 2) % 3;
   const double s = face % 2 == 0 ? 1.0 : -1.0;
   const double g = 2 * slack;
@@ -157,7 +160,8 @@ bool texel_span(const LocalTriangle& t, int face, int m, bool no_far_clip, doubl
       break;
     }
     zeta_min = std::min(zeta_min, zeta);
-    const double u = std::clamp(poly[c][1] / zeta, -1.0, 1.0), v = std::clamp(poly[c][2] / zeta, -1.0, 1.0);
+    const double u = std::clamp(poly[c][1] / zeta, -1.0, 1.0),
+                 v = std::clamp(poly[c][2] / zeta, -1.0, 1.0);
     ulo = std::min(ulo, u);
     uhi = std::max(uhi, u);
     vlo = std::min(vlo, v);
@@ -178,7 +182,9 @@ bool texel_span(const LocalTriangle& t, int face, int m, bool no_far_clip, doubl
   }
   constexpr double kDelta = 1e-8;  // see below
   // Cells: texel i covers u in [-1 + 2i/m, -1 + 2(i+1)/m]; widened by delta like the centres.
-  auto cell = [&](double x) { return std::clamp(static_cast<int>(std::floor((x + 1) * m / 2)), 0, m - 1); };
+  auto cell = [&](double x) {
+    return std::clamp(static_cast<int>(std::floor((x + 1) * m / 2)), 0, m - 1);
+  };
   span->ci0 = cell(ulo - kDelta);
   span->ci1 = cell(uhi + kDelta);
   span->cj0 = cell(vlo - kDelta);
@@ -187,20 +193,26 @@ bool texel_span(const LocalTriangle& t, int face, int m, bool no_far_clip, doubl
   // A texel ray that hits the face inside the cone passes through the clipped polygon, so its
   // (u, v) lies in the projected bounds up to the projection's relative error, below 1e-9
   // (above): delta = 1e-8 keeps every such texel. A face that covers no texel centre gets none.
-  auto lo = [&](double x) { return std::max(0, static_cast<int>(std::ceil(((x - kDelta + 1) * m - 1) / 2))); };
-  auto hi = [&](double x) { return std::min(m - 1, static_cast<int>(std::floor(((x + kDelta + 1) * m - 1) / 2))); };
+  auto lo = [&](double x) {
+    return std::max(0, static_cast<int>(std::ceil(((x - kDelta + 1) * m - 1) / 2)));
+  };
+  auto hi = [&](double x) {
+    return std::min(m - 1, static_cast<int>(std::floor(((x + kDelta + 1) * m - 1) / 2)));
+  };
   span->i0 = lo(ulo);
   span->i1 = hi(uhi);
   span->j0 = lo(vlo);
   span->j1 = hi(vhi);
-  if (span->i0 > span->i1 || span->j0 > span->j1) span->i0 = 1, span->i1 = 0;  // no centre: draw nothing
+  if (span->i0 > span->i1 || span->j0 > span->j1)
+    span->i0 = 1, span->i1 = 0;  // no centre: draw nothing
   return true;
 }
 
 }  // namespace
 
 double resolution_bound(const BoxPlan& plan, int m) {
-  if (plan.unresolved) return plan.frame.volume_scale * 4.0;  // half the box: the OBV is in [0, vol]
+  if (plan.unresolved)
+    return plan.frame.volume_scale * 4.0;  // half the box: the OBV is in [0, vol]
   if (plan.flat || plan.spans.empty()) return 0.0;
   std::vector<char> touched(6 * static_cast<size_t>(m) * m, 0);
   size_t count = 0, pairs = 0, near_pairs = 0;
@@ -220,8 +232,8 @@ double resolution_bound(const BoxPlan& plan, int m) {
   // hits the plan may get wrong, and 3e-6 per other pair for the depths of the plan's planes
   // (face_near_centre).
   const double off_by = plan.centre_near_surface ? 2.0 : 1.0;
-  const double pyramids = static_cast<double>(count) * off_by + 2.0 * static_cast<double>(near_pairs) +
-                          3e-6 * static_cast<double>(pairs);
+  const double pyramids = static_cast<double>(count) * off_by +
+                          2.0 * static_cast<double>(near_pairs) + 3e-6 * static_cast<double>(pairs);
   return plan.frame.volume_scale * 4.0 / (3.0 * m * m) * pyramids;
 }
 
@@ -269,17 +281,20 @@ PlanRounding analyse_plan_rounding(const BoxPlan& plan, int m, const RoundingMod
     // a scaled plane below `tiny` may give a zeta that underflows to 0.
     const bool plane_underflows = std::abs(t.plane * fn) < model.tiny;
     double fe[3];  // the power-of-two scale of each edge cross (the shader's)
-    for (int e = 0; e < 3; ++e) fe[e] = pow2_normalizer(t.edge_cross[e][0], t.edge_cross[e][1], t.edge_cross[e][2]);
+    for (int e = 0; e < 3; ++e)
+      fe[e] = pow2_normalizer(t.edge_cross[e][0], t.edge_cross[e][1], t.edge_cross[e][2]);
     // The reference's edge tests use E* (exact), the evaluation edge_cross (E* rounded in
     // double): |d* . (E - E*)| <= gamma_2 || |p| x |q| ||_1, plus underflow (see edge_tie), in
     // the scaled units of `dot` below. Negligible against float's own error except at exact
     // ties, which it turns into uncertain pairs.
     double tie_term[3];
     for (int e = 0; e < 3; ++e)
-      tie_term[e] = (2.01 * 0x1p-53 * abs_cross(t.p[e], t.p[(e + 1) % 3]).sum() + 0x1p-1070) * fe[e] * (1 + 1e-12);
+      tie_term[e] = (2.01 * 0x1p-53 * abs_cross(t.p[e], t.p[(e + 1) % 3]).sum() + 0x1p-1070) *
+                    fe[e] * (1 + 1e-12);
     for (int i = span.i0; i <= span.i1; ++i) {
       for (int j = span.j0; j <= span.j1; ++j) {
-        const Texel x{span.face, i, j, m, cubemap_direction(span.face, texel_center(i, m), texel_center(j, m))};
+        const Texel x{span.face, i, j, m,
+                      cubemap_direction(span.face, texel_center(i, m), texel_center(j, m))};
         const Vec3& d = x.d;
         // Edge tests: definite sides must agree; any uncertain one makes the pair uncertain.
         int definite = 0;
@@ -294,7 +309,8 @@ PlanRounding analyse_plan_rounding(const BoxPlan& plan, int m, const RoundingMod
             const double dot = d.dot(E) * fe[e];
             const double err = 8 * u * (std::abs(E[a]) + std::abs(E[b])) * fe[e] +
                                5 * u * d.cwiseAbs().dot(E.cwiseAbs()) * fe[e] +
-                               (model.scaled_inputs ? model.tiny : model.tiny * fe[e]) + tie_term[e];
+                               (model.scaled_inputs ? model.tiny : model.tiny * fe[e]) +
+                               tie_term[e];
             if (std::abs(dot) <= err) {
               unsure = true;
               continue;
@@ -302,8 +318,10 @@ PlanRounding analyse_plan_rounding(const BoxPlan& plan, int m, const RoundingMod
             side = dot > 0 ? 1 : -1;
           }
           if (miss) break;
-          if (definite == 0) definite = side;
-          else if (side != definite) miss = true;
+          if (definite == 0)
+            definite = side;
+          else if (side != definite)
+            miss = true;
         }
         if (miss) continue;
         const size_t texel = (static_cast<size_t>(span.face) * m + i) * m + j;
@@ -314,7 +332,8 @@ PlanRounding analyse_plan_rounding(const BoxPlan& plan, int m, const RoundingMod
         }
         const double nd = t.normal.dot(d);
         const double r = (8 * u * (std::abs(t.normal[a]) + std::abs(t.normal[b])) +
-                          5 * u * d.cwiseAbs().dot(t.normal.cwiseAbs())) / std::abs(nd);
+                          5 * u * d.cwiseAbs().dot(t.normal.cwiseAbs())) /
+                         std::abs(nd);
         if (!(r < 0.5)) {
           out.uncertain += 1;
           add_term(texel);
@@ -348,12 +367,14 @@ PlanRounding analyse_plan_rounding(const BoxPlan& plan, int m, const RoundingMod
 double cpu_rounding_bound(const BoxPlan& plan, int m) {
   if (plan.flat) return 0.0;
   constexpr double u = 0x1p-53;
-  const PlanRounding r = analyse_plan_rounding(plan, m, RoundingModel{u, 3 * 0x1p-1074, false, true});
+  const PlanRounding r =
+      analyse_plan_rounding(plan, m, RoundingModel{u, 3 * 0x1p-1074, false, true});
   const double n = r.pairs + 6;
   const double gamma = n * u / (1 - n * u);
   const double texel_weight = 4.0 / (3.0 * m * m);
   const double magnitude = std::abs(plan.constant) + texel_weight * (r.sum_abs + 2 * r.uncertain);
-  return plan.frame.volume_scale * (texel_weight * (r.value_errors + 2 * r.uncertain) + gamma * magnitude);
+  return plan.frame.volume_scale *
+         (texel_weight * (r.value_errors + 2 * r.uncertain) + gamma * magnitude);
 }
 
 namespace {
@@ -428,8 +449,8 @@ void consider_face(const Mesh& mesh, int32_t f, int m, bool no_far_clip, bool cu
   // planes (2^905) and the error terms built from them stay finite, and their error bound
   // must be finite. (Culling is sound with overflowed coordinates: an infinite coordinate
   // stands for one beyond 2^1024 box units, and an infinite error keeps the face.)
-  const double far = std::max({t.p[0].cwiseAbs().maxCoeff(), t.p[1].cwiseAbs().maxCoeff(),
-                               t.p[2].cwiseAbs().maxCoeff()});
+  const double far = std::max(
+      {t.p[0].cwiseAbs().maxCoeff(), t.p[1].cwiseAbs().maxCoeff(), t.p[2].cwiseAbs().maxCoeff()});
   if (!(far <= 0x1p300) || !(slack < HUGE_VAL)) {
     plan.unresolved = true;
     return;

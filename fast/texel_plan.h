@@ -73,7 +73,8 @@ struct BoxPlan {
   double constant = 0;     // local-volume constant of the formula above
   std::vector<LocalTriangle> tris;
   std::vector<TexelSpan> spans;
-  bool flat = false;  // zero volume, or a scale that underflows (texel_plan.cpp): OBV 0, nothing to draw
+  bool flat =
+      false;  // zero volume, or a scale that underflows (texel_plan.cpp): OBV 0, nothing to draw
   // A face may pass within the frame's rounding of the centre (texel_plan.cpp): the exact
   // class of the centre and the plan's faces may disagree there, so a texel the faces cover
   // may be off by two pyramids instead of one (resolution_bound).
@@ -114,8 +115,8 @@ inline int cpu_edge_side(const LocalTriangle& t, int k, const Texel& x) {
 // each computed as a 3-term dot product in any order (what edge_tie and the rounding analysis
 // allow). The edge tests are exact (cpu_edge_side), so around every vertex and edge each ray
 // is claimed by the faces an exact ray cast would claim; the depth is in double.
-inline bool texel_hit_dots(const LocalTriangle& t, const Texel& x, const double* e, double nd, bool far_count,
-                           double* value) {
+inline bool texel_hit_dots(const LocalTriangle& t, const Texel& x, const double* e, double nd,
+                           bool far_count, double* value) {
   const bool clear01 = std::abs(e[0]) > t.edge_tie[0] && std::abs(e[1]) > t.edge_tie[1];
   if (__builtin_expect(clear01, 1)) {
     if ((e[0] > 0) != (e[1] > 0)) return false;  // the usual miss, decided by two edges
@@ -125,8 +126,10 @@ inline bool texel_hit_dots(const LocalTriangle& t, const Texel& x, const double*
     for (int k = 0; k < 3; ++k) {
       const int sk = edge_side_of_dot(t, k, e[k], x);
       if (sk == 0) return false;
-      if (k == 0) side = sk;
-      else if (sk != side) return false;
+      if (k == 0)
+        side = sk;
+      else if (sk != side)
+        return false;
     }
   }
   if (nd == 0) return false;  // the ray runs in the face's plane
@@ -144,7 +147,8 @@ inline bool texel_hit_dots(const LocalTriangle& t, const Texel& x, const double*
 
 // The same for one texel, computing the dots.
 inline bool texel_hit(const LocalTriangle& t, const Texel& x, bool far_count, double* value) {
-  const double e[3] = {x.d.dot(t.edge_cross[0]), x.d.dot(t.edge_cross[1]), x.d.dot(t.edge_cross[2])};
+  const double e[3] = {x.d.dot(t.edge_cross[0]), x.d.dot(t.edge_cross[1]),
+                       x.d.dot(t.edge_cross[2])};
   return texel_hit_dots(t, x, e, t.normal.dot(x.d), far_count, value);
 }
 

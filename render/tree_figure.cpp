@@ -25,9 +25,9 @@ GLuint program(const char* vert, const char* frag, std::string* log) {
 // current for the whole call).
 struct GlObjects {
   GLuint mesh_program = 0, fill_program = 0, lines_program = 0;
-  GLuint vaos[3] = {0, 0, 0};     // mesh, fill, lines
-  GLuint buffers[3] = {0, 0, 0};  // likewise
-  GLuint fbos[2] = {0, 0};        // multisampled, resolved
+  GLuint vaos[3] = {0, 0, 0};           // mesh, fill, lines
+  GLuint buffers[3] = {0, 0, 0};        // likewise
+  GLuint fbos[2] = {0, 0};              // multisampled, resolved
   GLuint renderbuffers[3] = {0, 0, 0};  // multisampled colour and depth, resolved colour
   ~GlObjects() {
     glDeleteProgram(mesh_program);
@@ -54,12 +54,18 @@ GLenum drain_errors() {
 
 std::string gl_error_name(GLenum e) {
   switch (e) {
-    case GL_INVALID_ENUM: return "GL_INVALID_ENUM";
-    case GL_INVALID_VALUE: return "GL_INVALID_VALUE";
-    case GL_INVALID_OPERATION: return "GL_INVALID_OPERATION";
-    case GL_INVALID_FRAMEBUFFER_OPERATION: return "GL_INVALID_FRAMEBUFFER_OPERATION";
-    case GL_OUT_OF_MEMORY: return "GL_OUT_OF_MEMORY";
-    default: return "GL error " + std::to_string(e);
+    case GL_INVALID_ENUM:
+      return "GL_INVALID_ENUM";
+    case GL_INVALID_VALUE:
+      return "GL_INVALID_VALUE";
+    case GL_INVALID_OPERATION:
+      return "GL_INVALID_OPERATION";
+    case GL_INVALID_FRAMEBUFFER_OPERATION:
+      return "GL_INVALID_FRAMEBUFFER_OPERATION";
+    case GL_OUT_OF_MEMORY:
+      return "GL_OUT_OF_MEMORY";
+    default:
+      return "GL error " + std::to_string(e);
   }
 }
 
@@ -83,10 +89,11 @@ ViewFrame view_frame(const FigureOptions& o) {
 // the panel less a margin of `margin_px` on each side.
 struct Camera {
   std::array<float, 16> view_proj{};  // column-major, applied to q
-  Vec3 light;                          // unit, towards the light
+  Vec3 light;                         // unit, towards the light
 };
 
-Camera make_camera(const ViewFrame& f, const Vec3& lo, const Vec3& hi, double margin_px, int panel_px) {
+Camera make_camera(const ViewFrame& f, const Vec3& lo, const Vec3& hi, double margin_px,
+                   int panel_px) {
   // lo, hi: the extent of x.q and y.q over the drawn points (components 0 and 1).
   Camera cam;
   const double half = std::max(hi[0] - lo[0], hi[1] - lo[1]) / 2;
@@ -202,7 +209,8 @@ Status check_figure_arguments(const Mesh& mesh, const std::vector<FigureRow>& ro
       return figure_error("level " + std::to_string(l) + " is outside 0.." +
                           std::to_string(kMaxLevel));
   const Vec3 view = options.view, up = options.up;
-  if (!view.allFinite() || !up.allFinite() || view.norm() == 0 || up.cross(view).norm() <= 1e-6 * up.norm() * view.norm())
+  if (!view.allFinite() || !up.allFinite() || view.norm() == 0 ||
+      up.cross(view).norm() <= 1e-6 * up.norm() * view.norm())
     return figure_error("the view direction is zero or parallel to up");
   return Status::ok();
 }
@@ -240,7 +248,8 @@ Status frame_figure(const Mesh& mesh, const std::vector<FigureRow>& rows,
     for (int l : levels) {
       layers[r].push_back(layer(*rows[r].tree, l));
       for (int32_t id : layers[r].back())
-        for (const Vec3& c : corners(rows[r].tree->nodes[id].box)) radius = std::max(radius, (c - centre).norm());
+        for (const Vec3& c : corners(rows[r].tree->nodes[id].box))
+          radius = std::max(radius, (c - centre).norm());
     }
   if (!(radius > 0) || !std::isfinite(radius))
     return figure_error("the mesh and boxes have no extent");
@@ -282,8 +291,8 @@ std::vector<float> mesh_vertex_data(const Mesh& mesh, const FigureScene& scene) 
     for (int k = 0; k < 3; ++k) {
       float q[3];
       to_unit(scene, mesh.corner(f, k), q);
-      mesh_data.insert(mesh_data.end(), {q[0], q[1], q[2], static_cast<float>(n[0]), static_cast<float>(n[1]),
-                                         static_cast<float>(n[2])});
+      mesh_data.insert(mesh_data.end(), {q[0], q[1], q[2], static_cast<float>(n[0]),
+                                         static_cast<float>(n[1]), static_cast<float>(n[2])});
     }
   }
   return mesh_data;
@@ -400,22 +409,28 @@ void upload_vertex_data(const std::vector<float>& mesh_data, const BoxGeometry& 
   glBindBuffer(GL_ARRAY_BUFFER, g->buffers[0]);
   glBufferData(GL_ARRAY_BUFFER, mesh_data.size() * sizeof(float), mesh_data.data(), GL_STATIC_DRAW);
   glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), nullptr);
-  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), reinterpret_cast<void*>(3 * sizeof(float)));
+  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float),
+                        reinterpret_cast<void*>(3 * sizeof(float)));
   glEnableVertexAttribArray(0);
   glEnableVertexAttribArray(1);
   glBindVertexArray(g->vaos[1]);
   glBindBuffer(GL_ARRAY_BUFFER, g->buffers[1]);
   glBufferData(GL_ARRAY_BUFFER, fill.size() * sizeof(FillVertex), fill.data(), GL_STATIC_DRAW);
-  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(FillVertex), reinterpret_cast<void*>(offsetof(FillVertex, pos)));
-  glVertexAttribPointer(1, 4, GL_FLOAT, GL_FALSE, sizeof(FillVertex), reinterpret_cast<void*>(offsetof(FillVertex, color)));
+  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(FillVertex),
+                        reinterpret_cast<void*>(offsetof(FillVertex, pos)));
+  glVertexAttribPointer(1, 4, GL_FLOAT, GL_FALSE, sizeof(FillVertex),
+                        reinterpret_cast<void*>(offsetof(FillVertex, color)));
   glEnableVertexAttribArray(0);
   glEnableVertexAttribArray(1);
   glBindVertexArray(g->vaos[2]);
   glBindBuffer(GL_ARRAY_BUFFER, g->buffers[2]);
   glBufferData(GL_ARRAY_BUFFER, edges.size() * sizeof(EdgeInstance), edges.data(), GL_STATIC_DRAW);
-  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(EdgeInstance), reinterpret_cast<void*>(offsetof(EdgeInstance, p0)));
-  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, sizeof(EdgeInstance), reinterpret_cast<void*>(offsetof(EdgeInstance, p1)));
-  glVertexAttribPointer(2, 4, GL_FLOAT, GL_FALSE, sizeof(EdgeInstance), reinterpret_cast<void*>(offsetof(EdgeInstance, color)));
+  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(EdgeInstance),
+                        reinterpret_cast<void*>(offsetof(EdgeInstance, p0)));
+  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, sizeof(EdgeInstance),
+                        reinterpret_cast<void*>(offsetof(EdgeInstance, p1)));
+  glVertexAttribPointer(2, 4, GL_FLOAT, GL_FALSE, sizeof(EdgeInstance),
+                        reinterpret_cast<void*>(offsetof(EdgeInstance, color)));
   for (GLuint a = 0; a < 3; ++a) {
     glEnableVertexAttribArray(a);
     glVertexAttribDivisor(a, 1);
@@ -425,16 +440,19 @@ void upload_vertex_data(const std::vector<float>& mesh_data, const BoxGeometry& 
 // Sets the programs' uniforms: the camera, the light and the edges' width and depth bias.
 void set_uniforms(const GlObjects& g, const Camera& cam, const FigureOptions& options) {
   glUseProgram(g.mesh_program);
-  glUniformMatrix4fv(glGetUniformLocation(g.mesh_program, "u_view_proj"), 1, GL_FALSE, cam.view_proj.data());
+  glUniformMatrix4fv(glGetUniformLocation(g.mesh_program, "u_view_proj"), 1, GL_FALSE,
+                     cam.view_proj.data());
   glUniform3f(glGetUniformLocation(g.mesh_program, "u_light"), static_cast<float>(cam.light[0]),
               static_cast<float>(cam.light[1]), static_cast<float>(cam.light[2]));
   glUniform3f(glGetUniformLocation(g.mesh_program, "u_albedo"), 0.80f, 0.80f, 0.78f);
   glUseProgram(g.fill_program);
-  glUniformMatrix4fv(glGetUniformLocation(g.fill_program, "u_view_proj"), 1, GL_FALSE, cam.view_proj.data());
+  glUniformMatrix4fv(glGetUniformLocation(g.fill_program, "u_view_proj"), 1, GL_FALSE,
+                     cam.view_proj.data());
   glUseProgram(g.lines_program);
-  glUniformMatrix4fv(glGetUniformLocation(g.lines_program, "u_view_proj"), 1, GL_FALSE, cam.view_proj.data());
-  glUniform2f(glGetUniformLocation(g.lines_program, "u_viewport"), static_cast<float>(options.panel_px),
-              static_cast<float>(options.panel_px));
+  glUniformMatrix4fv(glGetUniformLocation(g.lines_program, "u_view_proj"), 1, GL_FALSE,
+                     cam.view_proj.data());
+  glUniform2f(glGetUniformLocation(g.lines_program, "u_viewport"),
+              static_cast<float>(options.panel_px), static_cast<float>(options.panel_px));
   glUniform1f(glGetUniformLocation(g.lines_program, "u_half_width"), 0.5f * options.edge_width_px);
   // Depth bias: 2^-9 of the NDC depth range [-1, 1] is 1/256 of the ball's diameter, enough
   // for an edge lying on the mesh (box faces touch it) to win over the 24-bit depth's
@@ -520,8 +538,9 @@ std::vector<uint8_t> resolve_and_read(const GlObjects& g, long long width, long 
 
 }  // namespace
 
-Status render_tree_figure(const GlContext& context, const Mesh& mesh, const std::vector<FigureRow>& rows,
-                          const FigureOptions& options, RgbaImage* out) {
+Status render_tree_figure(const GlContext& context, const Mesh& mesh,
+                          const std::vector<FigureRow>& rows, const FigureOptions& options,
+                          RgbaImage* out) {
   *out = RgbaImage();
   std::vector<int> levels;
   Status s = check_figure_arguments(mesh, rows, options, &levels);
@@ -533,8 +552,10 @@ Status render_tree_figure(const GlContext& context, const Mesh& mesh, const std:
   const std::vector<float> mesh_data = mesh_vertex_data(mesh, scene);
   const BoxGeometry boxes = box_geometry(rows, options, scene, n_rows, n_cols);
 
-  const long long width = static_cast<long long>(n_cols) * options.panel_px + (n_cols + 1LL) * options.gap_px;
-  const long long height = static_cast<long long>(n_rows) * options.panel_px + (n_rows + 1LL) * options.gap_px;
+  const long long width =
+      static_cast<long long>(n_cols) * options.panel_px + (n_cols + 1LL) * options.gap_px;
+  const long long height =
+      static_cast<long long>(n_rows) * options.panel_px + (n_rows + 1LL) * options.gap_px;
 
   GlContext::Current bound(context);  // released after g's objects are deleted
   drain_errors();
@@ -546,7 +567,8 @@ Status render_tree_figure(const GlContext& context, const Mesh& mesh, const std:
     return figure_error("a " + std::to_string(width) + "x" + std::to_string(height) +
                         " image exceeds the renderer's " + std::to_string(max_rb) +
                         " px framebuffer limit");
-  const GLsizei samples = std::max(0, std::min(options.samples > 1 ? options.samples : 0, max_samples));
+  const GLsizei samples =
+      std::max(0, std::min(options.samples > 1 ? options.samples : 0, max_samples));
   s = link_programs(&g);
   if (!s) return s;
   s = create_framebuffers(samples, width, height, &g);
@@ -565,7 +587,8 @@ Status render_tree_figure(const GlContext& context, const Mesh& mesh, const std:
   out->rgba.resize(bottom_up.size());
   const size_t row_bytes = static_cast<size_t>(width) * 4;
   for (long long y = 0; y < height; ++y)
-    std::copy_n(bottom_up.data() + (height - 1 - y) * row_bytes, row_bytes, out->rgba.data() + y * row_bytes);
+    std::copy_n(bottom_up.data() + (height - 1 - y) * row_bytes, row_bytes,
+                out->rgba.data() + y * row_bytes);
   return Status::ok();
 }
 

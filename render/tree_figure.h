@@ -36,12 +36,13 @@ struct FigureRow {
 };
 
 struct FigureOptions {
-  std::vector<int> levels;  // columns; empty: 1..min(8, deepest depth of the rows), or {0} for depth 0
-  int panel_px = 256;       // side of a square panel, pixels, >= 16
-  int gap_px = 3;           // border around and between panels, pixels, >= 0
-  int samples = 8;          // multisampling; clamped to what the renderer offers (1: none)
-  float edge_width_px = 1.6f;  // box edges, pixels
-  float fill_alpha = 0.12f;    // box faces' opacity; 0 draws no fill
+  std::vector<int>
+      levels;          // columns; empty: 1..min(8, deepest depth of the rows), or {0} for depth 0
+  int panel_px = 256;  // side of a square panel, pixels, >= 16
+  int gap_px = 3;      // border around and between panels, pixels, >= 0
+  int samples = 8;     // multisampling; clamped to what the renderer offers (1: none)
+  float edge_width_px = 1.6f;         // box edges, pixels
+  float fill_alpha = 0.12f;           // box faces' opacity; 0 draws no fill
   Vec3 view = Vec3(-0.5, 0.45, 1.0);  // towards the viewer (world coordinates); need not be unit
   Vec3 up = Vec3(0.0, 1.0, 0.0);      // world up; must not be parallel to `view`
   std::array<uint8_t, 4> background = {255, 255, 255, 255};  // inside panels
@@ -74,7 +75,8 @@ PanelRect figure_panel(const FigureOptions& options, int row, int column);
 // deeper than a tree's depth shows that tree's leaves. Binds `context` to the calling thread
 // for the render and releases it after; it must not be current on another thread (a GL
 // estimator's context is not, between its calls). GL errors come back as a one-line Status.
-Status render_tree_figure(const GlContext& context, const Mesh& mesh, const std::vector<FigureRow>& rows,
-                          const FigureOptions& options, RgbaImage* out);
+Status render_tree_figure(const GlContext& context, const Mesh& mesh,
+                          const std::vector<FigureRow>& rows, const FigureOptions& options,
+                          RgbaImage* out);
 
 }  // namespace vobb

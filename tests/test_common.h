@@ -3,7 +3,6 @@
 #pragma once
 
 #include <gtest/gtest.h>
-
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -32,8 +31,8 @@ inline bool exists(const std::string& path) {
 
 // Real meshes a prototype found clean, and ones it found broken (DESIGN §8).
 inline const std::vector<std::string>& clean_real_meshes() {
-  static const std::vector<std::string> k = {"dino", "elephant", "knot1", "armadillo", "bunny00",
-                                             "triceratops", "homer", "fandisk"};
+  static const std::vector<std::string> k = {"dino",    "elephant",    "knot1", "armadillo",
+                                             "bunny00", "triceratops", "homer", "fandisk"};
   return k;
 }
 
@@ -46,16 +45,16 @@ inline bool real_meshes_required() {
 
 // Skips the current test, saying why, when real meshes are not there (offline machine); fails
 // it where they are required.
-#define VOBB_SKIP_WITHOUT_REAL_MESHES(why)                                                          \
+#define VOBB_SKIP_WITHOUT_REAL_MESHES(why)                                                        \
   do {                                                                                            \
     if (::vobb::test::real_meshes_required()) FAIL() << (why) << " (VOBB_REQUIRE_REAL_MESHES=1)"; \
     GTEST_SKIP() << (why) << ": run data/fetch_meshes.sh";                                        \
   } while (0)
 
-#define VOBB_REQUIRE_REAL_MESH(name)                                                      \
-  do {                                                                                    \
-    if (!::vobb::test::exists(::vobb::test::real_mesh(name)))                             \
-      VOBB_SKIP_WITHOUT_REAL_MESHES(std::string("real mesh ") + (name) + " is absent");   \
+#define VOBB_REQUIRE_REAL_MESH(name)                                                    \
+  do {                                                                                  \
+    if (!::vobb::test::exists(::vobb::test::real_mesh(name)))                           \
+      VOBB_SKIP_WITHOUT_REAL_MESHES(std::string("real mesh ") + (name) + " is absent"); \
   } while (0)
 
 // The whole file's bytes ("" when it cannot be read).
@@ -98,7 +97,9 @@ inline std::string temp_dir() {
   return dir ? dir : "/tmp";
 }
 inline std::string temp_prefix() { return "vobb_test_" + std::to_string(::getpid()) + "_"; }
-inline std::string temp_path(const std::string& name) { return temp_dir() + "/" + temp_prefix() + name; }
+inline std::string temp_path(const std::string& name) {
+  return temp_dir() + "/" + temp_prefix() + name;
+}
 
 // What a test process leaves under its temp_path names (a test that stops at a failed ASSERT,
 // or one that does not remove its files) goes when the process exits: every entry of the temp
@@ -109,7 +110,8 @@ struct TempCleaner {
     std::error_code ec;
     const std::string prefix = temp_prefix();
     std::vector<std::filesystem::path> mine;
-    for (std::filesystem::directory_iterator it(temp_dir(), ec), end; !ec && it != end; it.increment(ec))
+    for (std::filesystem::directory_iterator it(temp_dir(), ec), end; !ec && it != end;
+         it.increment(ec))
       if (it->path().filename().string().rfind(prefix, 0) == 0) mine.push_back(it->path());
     for (const auto& p : mine) std::filesystem::remove_all(p, ec);
   }

@@ -11,9 +11,12 @@ namespace vobb::validate {
 
 const char* to_string(BoxSize s) {
   switch (s) {
-    case BoxSize::kLeaf: return "leaf";
-    case BoxSize::kMid: return "mid";
-    case BoxSize::kRoot: return "root";
+    case BoxSize::kLeaf:
+      return "leaf";
+    case BoxSize::kMid:
+      return "mid";
+    case BoxSize::kRoot:
+      return "root";
   }
   return "?";
 }
@@ -27,11 +30,12 @@ std::vector<Obb> box_corpus(const Mesh& mesh, BoxSize size, int count, uint64_t 
   const std::vector<int32_t> nodes = layer(tree, std::min(tree_level(size), tree.depth));
   std::mt19937_64 rng(seed);
   auto uniform = [&] { return static_cast<double>(rng() >> 11) * 0x1.0p-53; };  // [0, 1)
-  auto symmetric = [&] { return 2 * uniform() - 1; };                            // [-1, 1)
+  auto symmetric = [&] { return 2 * uniform() - 1; };                           // [-1, 1)
   std::vector<Obb> out;
   out.reserve(count);
   for (int i = 0; i < count; ++i) {
-    const Obb& source = tree.nodes[nodes[std::min<size_t>(nodes.size() - 1, uniform() * nodes.size())]].box;
+    const Obb& source =
+        tree.nodes[nodes[std::min<size_t>(nodes.size() - 1, uniform() * nodes.size())]].box;
     Obb b = source;
     for (int k = 0; k < 3; ++k) b.center += 0.25 * symmetric() * source.half[k] * source.axes[k];
     Vec3 axis(symmetric(), symmetric(), symmetric());

@@ -6,9 +6,9 @@
 #include <cstdio>
 #include <limits>
 
+#include "common/stopwatch.h"
 #include "exact/outer_volume.h"
 #include "fast/poly_solver.h"
-#include "common/stopwatch.h"
 
 namespace vobb::validate {
 double StudyEval::abs_error(const StudySample& s) const {
@@ -41,7 +41,8 @@ double lsq_slope(const std::vector<double>& x, const std::vector<double>& y) {
   return sxy / sxx;
 }
 
-ErrorStats error_stats(const DiscretizationResult& r, const std::function<bool(const StudyEval&)>& keep) {
+ErrorStats error_stats(const DiscretizationResult& r,
+                       const std::function<bool(const StudyEval&)>& keep) {
   ErrorStats st;
   std::vector<double> rel, ab, norm, rig;
   double secs = 0;
@@ -103,7 +104,8 @@ StatedBound fit_stated_bound(const DiscretizationResult& r, double alpha) {
     for (const StudyEval& e : r.evals) {
       const StudySample& s = r.samples[e.sample];
       if (e.m != m || s.held_out) continue;
-      u.push_back(std::isfinite(e.estimate) ? e.abs_error(s) / s.box_volume : std::numeric_limits<double>::infinity());
+      u.push_back(std::isfinite(e.estimate) ? e.abs_error(s) / s.box_volume
+                                            : std::numeric_limits<double>::infinity());
     }
     if (u.empty()) continue;
     const double q = quantile(u, b.quantile);
@@ -132,7 +134,8 @@ StatedBound fit_stated_bound(const DiscretizationResult& r, double alpha) {
     }
   }
   for (size_t k = 0; k < ms.size(); ++k)
-    if (per_m[k].first) b.held_out_rate_per_m.push_back({ms[k], double(per_m[k].second) / per_m[k].first});
+    if (per_m[k].first)
+      b.held_out_rate_per_m.push_back({ms[k], double(per_m[k].second) / per_m[k].first});
   return b;
 }
 

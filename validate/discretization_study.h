@@ -18,7 +18,6 @@
 #pragma once
 
 #include <cmath>
-
 #include <functional>
 #include <string>
 #include <vector>
@@ -61,8 +60,9 @@ struct StudySample {
   Location centre = Location::kOutside;
   Obb box;
   double box_volume = 0;
-  double exact = 0;  // the reference: the interval's midpoint (the rational's nearest double where computed)
-  double lo = 0, hi = 0;  // the certified interval of the exact OBV
+  double exact =
+      0;  // the reference: the interval's midpoint (the rational's nearest double where computed)
+  double lo = 0, hi = 0;    // the certified interval of the exact OBV
   double poly_seconds = 0;  // the polyhedral solver's time for this box (batch time amortised)
   int rational = 0;  // the exact rational: 0 not computed, 1 inside [lo, hi], -1 outside (a defect)
 };
@@ -72,7 +72,7 @@ struct StudyEval {
   Backend backend = Backend::kCpu;
   int m = 0;
   double estimate = 0;
-  double seconds = 0;   // per evaluation
+  double seconds = 0;  // per evaluation
   // On the detail subsample only (NaN elsewhere): EstimatorSet::rigorous_bound, and
   // gl_deviation_bound + round-off, the allowed |GL - CPU|.
   double rigorous = NAN;
@@ -105,15 +105,17 @@ struct RateFit {
 };
 
 struct StatedBound {
-  double alpha = 0.05;     // stated level: the largest held-out violation rate allowed
-  double quantile = 0.975; // fitted quantile of the normalised errors (1 - alpha/2)
-  double c = 0, p = 0;     // B(m) = c m^-p vol(O)
+  double alpha = 0.05;      // stated level: the largest held-out violation rate allowed
+  double quantile = 0.975;  // fitted quantile of the normalised errors (1 - alpha/2)
+  double c = 0, p = 0;      // B(m) = c m^-p vol(O)
   std::vector<std::pair<int, double>> fitted_quantiles;  // (m, quantile of the fit corpus)
   size_t fit_n = 0, fit_violations = 0;
   size_t held_out_n = 0, held_out_violations = 0;
   std::vector<std::pair<int, double>> held_out_rate_per_m;
   double per_volume(int m) const;  // c m^-p
-  double held_out_rate() const { return held_out_n ? double(held_out_violations) / held_out_n : 0.0; }
+  double held_out_rate() const {
+    return held_out_n ? double(held_out_violations) / held_out_n : 0.0;
+  }
   bool holds() const { return held_out_rate() <= alpha; }
 };
 
@@ -121,7 +123,8 @@ struct RichardsonRow {
   Backend backend;
   int m;  // pair (m, 2m); the estimate judged is the one at 2m
   size_t n = 0;
-  double cover_third = 0, cover_one = 0, cover_two = 0;  // fraction with |E(2m)-V| <= k |E(m)-E(2m)|
+  double cover_third = 0, cover_one = 0,
+         cover_two = 0;  // fraction with |E(2m)-V| <= k |E(m)-E(2m)|
 };
 
 struct ExactTiming {
@@ -150,7 +153,8 @@ struct DiscretizationResult {
   bool nef_agrees = true;  // Nef == clipping on every box timed by both
   size_t nef_compared = 0;
   size_t rational_checked = 0, rational_outside = 0;  // rationals outside their interval: a defect
-  double poly_certified_rel_median = 0;  // median over boxes with V > 0 of the interval's width / lo
+  double poly_certified_rel_median =
+      0;                          // median over boxes with V > 0 of the interval's width / lo
   std::vector<Backend> backends;  // those that ran
   std::string gl_note;            // why GL did not run, or the renderer
   double seconds = 0;
@@ -159,7 +163,8 @@ struct DiscretizationResult {
 DiscretizationResult run_discretization_study(const DiscretizationConfig& config);
 
 // Statistics of the evaluations selected by `keep`.
-ErrorStats error_stats(const DiscretizationResult& r, const std::function<bool(const StudyEval&)>& keep);
+ErrorStats error_stats(const DiscretizationResult& r,
+                       const std::function<bool(const StudyEval&)>& keep);
 
 // Fits B(m) on the fit corpus's evaluations and counts violations on both corpora.
 StatedBound fit_stated_bound(const DiscretizationResult& r, double alpha);

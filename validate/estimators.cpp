@@ -1,9 +1,10 @@
 #include "validate/estimators.h"
-#include "common/stopwatch.h"
 
 #include <chrono>
 #include <cmath>
 #include <limits>
+
+#include "common/stopwatch.h"
 
 namespace vobb::validate {
 const char* to_string(Backend b) { return b == Backend::kCpu ? "cpu" : "gl"; }
@@ -47,20 +48,28 @@ std::vector<double> EstimatorSet::estimate(Backend backend, const std::vector<Ob
   return out;
 }
 
-EstimatorSet::Bounds EstimatorSet::bounds(const Obb& box, int m) const { return cubemap_bounds(planner_, box, m); }
+EstimatorSet::Bounds EstimatorSet::bounds(const Obb& box, int m) const {
+  return cubemap_bounds(planner_, box, m);
+}
 
-double EstimatorSet::rigorous_bound(const Obb& box, int m) const { return bounds(box, m).rigorous(); }
+double EstimatorSet::rigorous_bound(const Obb& box, int m) const {
+  return bounds(box, m).rigorous();
+}
 
 double EstimatorSet::bound(Backend backend, const Obb& box, int m, bool* unresolved) const {
   return cubemap_bound(planner_, backend == Backend::kGl, box, m, unresolved);
 }
 
 Status EstimatorSet::check_request(Backend backend, const Obb& box, int m) const {
-  if (m < 1) return Status::error("cubemap resolution m = " + std::to_string(m) + " refused: m must be at least 1");
-  if (backend == Backend::kGl && !gl_) return Status::error("GL estimator unavailable: " + gl_status_);
+  if (m < 1)
+    return Status::error("cubemap resolution m = " + std::to_string(m) +
+                         " refused: m must be at least 1");
+  if (backend == Backend::kGl && !gl_)
+    return Status::error("GL estimator unavailable: " + gl_status_);
   if (backend == Backend::kGl && m > gl_->max_m())
-    return Status::error("cubemap resolution m = " + std::to_string(m) + " refused: beyond the GL limit " +
-                         std::to_string(gl_->max_m()) + " of renderer " + gl_->renderer());
+    return Status::error("cubemap resolution m = " + std::to_string(m) +
+                         " refused: beyond the GL limit " + std::to_string(gl_->max_m()) +
+                         " of renderer " + gl_->renderer());
   const std::string defect = box_defect(box);
   if (!defect.empty()) return Status::error("box refused: " + defect);
   return Status::ok();

@@ -17,8 +17,8 @@
 #include "common/obb.h"
 #include "common/status.h"
 #include "fast/cpu_estimator.h"
-#include "fast/gl_estimator.h"
 #include "fast/cubemap_bound.h"
+#include "fast/gl_estimator.h"
 #include "fast/texel_plan.h"
 
 namespace vobb::validate {

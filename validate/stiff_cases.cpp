@@ -36,14 +36,16 @@ Mesh convex_mesh(std::vector<Vec3> vertices, std::vector<Face> faces) {
 // A triangular prism of cross-section w x w (right triangle) and length len along z: its side
 // faces are needles of aspect len / w.
 Mesh needle_prism(double w, double len) {
-  return convex_mesh({{0, 0, 0}, {w, 0, 0}, {0, w, 0}, {0, 0, len}, {w, 0, len}, {0, w, len}},
-                     {{0, 1, 2}, {3, 4, 5}, {0, 1, 4}, {0, 4, 3}, {1, 2, 5}, {1, 5, 4}, {2, 0, 3}, {2, 3, 5}});
+  return convex_mesh(
+      {{0, 0, 0}, {w, 0, 0}, {0, w, 0}, {0, 0, len}, {w, 0, len}, {0, w, len}},
+      {{0, 1, 2}, {3, 4, 5}, {0, 1, 4}, {0, 4, 3}, {1, 2, 5}, {1, 5, 4}, {2, 0, 3}, {2, 3, 5}});
 }
 
 // A tetrahedron of height h over a unit right triangle, its apex above the base's interior:
 // for small h all four faces are nearly coplanar (slivers).
 Mesh sliver_tetrahedron(double h) {
-  return convex_mesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0.3, 0.3, h}}, {{0, 1, 2}, {0, 1, 3}, {1, 2, 3}, {2, 0, 3}});
+  return convex_mesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0.3, 0.3, h}},
+                     {{0, 1, 2}, {0, 1, 3}, {1, 2, 3}, {2, 0, 3}});
 }
 
 Mesh transformed(const Mesh& mesh, double s, const Vec3& o) {
@@ -88,15 +90,16 @@ class Runner {
     const std::vector<PolyObv> poly = PolyObvSolver(mesh).evaluate(boxes);
     int held = 0, exact_boxes = 0, exact_faces = 0;
     for (size_t i = 0; i < boxes.size(); ++i) {
-      held += std::isfinite(poly[i].lo) && std::isfinite(poly[i].hi) && Rational(poly[i].lo) <= exact_q[i] &&
-              exact_q[i] <= Rational(poly[i].hi);
+      held += std::isfinite(poly[i].lo) && std::isfinite(poly[i].hi) &&
+              Rational(poly[i].lo) <= exact_q[i] && exact_q[i] <= Rational(poly[i].hi);
       exact_boxes += poly[i].exact_box;
       exact_faces += poly[i].exact_faces;
     }
     r.poly_enclosed = held == static_cast<int>(boxes.size());
     ok = ok && r.poly_enclosed;
-    notes += "; poly interval holds the exact value on " + std::to_string(held) + "/" + std::to_string(boxes.size()) +
-             " (" + std::to_string(exact_faces) + " faces, " + std::to_string(exact_boxes) + " boxes in rationals)";
+    notes += "; poly interval holds the exact value on " + std::to_string(held) + "/" +
+             std::to_string(boxes.size()) + " (" + std::to_string(exact_faces) + " faces, " +
+             std::to_string(exact_boxes) + " boxes in rationals)";
     size_t n = 0;
     for (Backend backend : {Backend::kCpu, Backend::kGl}) {
       if (backend == Backend::kGl && !est.has_gl()) {
@@ -132,8 +135,11 @@ class Runner {
         }
       }
     }
-    r.outcome = std::to_string(n) + " estimates finite=" + (r.worst_rigorous_ratio < INFINITY ? "yes" : "no") +
-                fmt(", max |E-V|/R(m) %.3g, max |E-V|/B(m) %.3g", r.worst_rigorous_ratio, r.worst_bound_ratio) + notes;
+    r.outcome = std::to_string(n) +
+                " estimates finite=" + (r.worst_rigorous_ratio < INFINITY ? "yes" : "no") +
+                fmt(", max |E-V|/R(m) %.3g, max |E-V|/B(m) %.3g", r.worst_rigorous_ratio,
+                    r.worst_bound_ratio) +
+                notes;
     r.as_expected = ok && n > 0;
     return finish(r);
   }
@@ -147,7 +153,8 @@ class Runner {
     return finish(r);
   }
 
-  StiffCaseResult skipped(const std::string& name, const std::string& expected, const std::string& why) {
+  StiffCaseResult skipped(const std::string& name, const std::string& expected,
+                          const std::string& why) {
     StiffCaseResult r;
     r.name = name;
     r.expected = expected;
@@ -158,7 +165,9 @@ class Runner {
 
  private:
   StiffCaseResult finish(const StiffCaseResult& r) {
-    if (config_.progress) config_.progress("stiff case " + r.name + ": " + (r.as_expected ? "as expected" : "NOT as expected"));
+    if (config_.progress)
+      config_.progress("stiff case " + r.name + ": " +
+                       (r.as_expected ? "as expected" : "NOT as expected"));
     return r;
   }
   const StiffConfig& config_;
@@ -176,18 +185,21 @@ std::vector<StiffCaseResult> run_stiff_cases(const StiffConfig& config, const St
     const double w = 1e-3;
     const Mesh needle = needle_prism(w, 1.0);
     out.push_back(run.run("needle triangles (aspect 1000)", needle,
-                          {rotated_box({w / 3, w / 3, 0.5}, {w, w, 0.6}), rotated_box({w / 4, w / 4, 0.5}, {2 * w, 2 * w, 0.1}, 0.2)},
+                          {rotated_box({w / 3, w / 3, 0.5}, {w, w, 0.6}),
+                           rotated_box({w / 4, w / 4, 0.5}, {2 * w, 2 * w, 0.1}, 0.2)},
                           ms, false));
   }
   {  // slivers: a tetrahedron of height 1e-3 over a unit triangle
     const Mesh sliver = sliver_tetrahedron(1e-3);
     out.push_back(run.run("sliver triangles (height 1e-3)", sliver,
-                          {rotated_box({0.4, 0.4, 0}, {0.7, 0.7, 0.01}), rotated_box({0.3, 0.3, 5e-4}, {0.2, 0.2, 0.2}, 0.3)}, ms,
-                          false));
+                          {rotated_box({0.4, 0.4, 0}, {0.7, 0.7, 0.01}),
+                           rotated_box({0.3, 0.3, 5e-4}, {0.2, 0.2, 0.2}, 0.3)},
+                          ms, false));
   }
   const analytic::AnalyticMesh torus = analytic::polygonal_torus();
   out.push_back(run.run("box aspect ratio 1e-4", torus.mesh,
-                        {rotated_box({2.0, 0.1, 0.5}, {1.0, 1.0, 1e-4}, 0.1), rotated_box({0.0, 2.2, 0.3}, {1e-4, 0.8, 0.8}, 0.05)},
+                        {rotated_box({2.0, 0.1, 0.5}, {1.0, 1.0, 1e-4}, 0.1),
+                         rotated_box({0.0, 2.2, 0.3}, {1e-4, 0.8, 0.8}, 0.05)},
                         ms, false));
 
   if (config.real_mesh) {
@@ -198,46 +210,58 @@ std::vector<StiffCaseResult> run_stiff_cases(const StiffConfig& config, const St
       double s;
       Vec3 o;
     };
-    for (const Move& mv : {Move{"mesh offset by 1e6", 1.0, Vec3(1e6, -1e6, 1e6)}, Move{"mesh scaled by 1e-6", 1e-6, Vec3::Zero()},
+    for (const Move& mv : {Move{"mesh offset by 1e6", 1.0, Vec3(1e6, -1e6, 1e6)},
+                           Move{"mesh scaled by 1e-6", 1e-6, Vec3::Zero()},
                            Move{"mesh scaled by 1e6", 1e6, Vec3::Zero()}}) {
       std::vector<Obb> moved = mids;
       for (Obb& b : moved) {
         b.center = mv.s * b.center + mv.o;
         b.half *= mv.s;
       }
-      out.push_back(run.run(std::string(mv.name) + " (" + config.real_mesh_name + ")", transformed(real, mv.s, mv.o), moved,
-                            ms, true));
+      out.push_back(run.run(std::string(mv.name) + " (" + config.real_mesh_name + ")",
+                            transformed(real, mv.s, mv.o), moved, ms, true));
     }
     const Aabb bb = real.bounds();
     const Vec3 mid = 0.5 * (bb.lo + bb.hi), ext = bb.hi - bb.lo;
-    out.push_back(run.run("box holding the whole mesh (" + config.real_mesh_name + ")", real,
-                          {rotated_box(mid, 0.625 * ext), rotated_box(mid, Vec3::Constant(0.9 * ext.norm()), 0.4)}, ms, true));
+    out.push_back(run.run(
+        "box holding the whole mesh (" + config.real_mesh_name + ")", real,
+        {rotated_box(mid, 0.625 * ext), rotated_box(mid, Vec3::Constant(0.9 * ext.norm()), 0.4)},
+        ms, true));
     out.push_back(run.run("box disjoint from the mesh (" + config.real_mesh_name + ")", real,
                           {rotated_box(bb.hi + ext, 0.1 * ext, 0.3)}, ms, true));
     const std::vector<Obb> leaves = box_corpus(real, BoxSize::kLeaf, 2, 78);
-    out.push_back(run.run("m = 1 (" + config.real_mesh_name + " leaf boxes)", real, leaves, {1}, false));
-    out.push_back(run.run("m = 1024 (" + config.real_mesh_name + " leaf boxes)", real, leaves, {1024}, false,
+    out.push_back(
+        run.run("m = 1 (" + config.real_mesh_name + " leaf boxes)", real, leaves, {1}, false));
+    out.push_back(run.run("m = 1024 (" + config.real_mesh_name + " leaf boxes)", real, leaves,
+                          {1024}, false,
                           /*gl_may_refuse=*/true));
   } else {
-    for (const char* name : {"mesh offset by 1e6", "mesh scaled by 1e-6", "mesh scaled by 1e6", "box holding the whole mesh",
-                             "box disjoint from the mesh"})
+    for (const char* name : {"mesh offset by 1e6", "mesh scaled by 1e-6", "mesh scaled by 1e6",
+                             "box holding the whole mesh", "box disjoint from the mesh"})
       out.push_back(run.skipped(name, kWithinRB, "no real mesh"));
-    for (const char* name : {"m = 1", "m = 1024"}) out.push_back(run.skipped(name, kWithinR, "no real mesh"));
+    for (const char* name : {"m = 1", "m = 1024"})
+      out.push_back(run.skipped(name, kWithinR, "no real mesh"));
   }
 
   // Centre on the surface of the unit cube [0, 1]^3 (far-count mode), boxes turned off-axis.
   const analytic::AnalyticMesh cube = analytic::cube();
-  out.push_back(run.run("centre on a face", cube.mesh, {rotated_box({0.25, 0.5, 1.0}, {0.3, 0.2, 0.25}, 0.3)}, ms, false));
-  out.push_back(run.run("centre on an edge", cube.mesh, {rotated_box({0.5, 1.0, 1.0}, {0.3, 0.2, 0.25}, 0.3)}, ms, false));
-  out.push_back(run.run("centre on a vertex", cube.mesh, {rotated_box({1.0, 1.0, 1.0}, {0.3, 0.2, 0.25}, 0.3)}, ms, false));
+  out.push_back(run.run("centre on a face", cube.mesh,
+                        {rotated_box({0.25, 0.5, 1.0}, {0.3, 0.2, 0.25}, 0.3)}, ms, false));
+  out.push_back(run.run("centre on an edge", cube.mesh,
+                        {rotated_box({0.5, 1.0, 1.0}, {0.3, 0.2, 0.25}, 0.3)}, ms, false));
+  out.push_back(run.run("centre on a vertex", cube.mesh,
+                        {rotated_box({1.0, 1.0, 1.0}, {0.3, 0.2, 0.25}, 0.3)}, ms, false));
   // The faces x = 1 seen edge-on: the centre lies in their plane, outside the cube; and an
   // axis-aligned box about the cube, every face parallel to a cubemap face.
   out.push_back(run.run("faces parallel to the view rays", cube.mesh,
-                        {rotated_box({1.0, 1.5, 0.5}, {0.5, 0.75, 0.5}), rotated_box({0.5, 0.5, 0.5}, {0.75, 0.75, 0.75})}, ms,
-                        false));
+                        {rotated_box({1.0, 1.5, 0.5}, {0.5, 0.75, 0.5}),
+                         rotated_box({0.5, 0.5, 0.5}, {0.75, 0.75, 0.75})},
+                        ms, false));
   const analytic::AnalyticMesh cavity = analytic::cube_with_cavity();
-  out.push_back(run.run("nested shells (cube with a cubic cavity)", cavity.mesh,
-                        {rotated_box({2, 2, 2}, {1.5, 1.2, 1.3}, 0.35), rotated_box({1, 2, 2}, {0.6, 0.6, 0.6}, 0.2)}, ms, false));
+  out.push_back(run.run(
+      "nested shells (cube with a cubic cavity)", cavity.mesh,
+      {rotated_box({2, 2, 2}, {1.5, 1.2, 1.3}, 0.35), rotated_box({1, 2, 2}, {0.6, 0.6, 0.6}, 0.2)},
+      ms, false));
 
   // Refusals.
   {
@@ -246,7 +270,8 @@ std::vector<StiffCaseResult> run_stiff_cases(const StiffConfig& config, const St
     out.push_back(run.refusal("m = 0", est.check_request(Backend::kCpu, ok_box, 0)));
     Obb nan_box = ok_box;
     nan_box.center.x() = std::numeric_limits<double>::quiet_NaN();
-    out.push_back(run.refusal("box with a NaN centre", est.check_request(Backend::kCpu, nan_box, 8)));
+    out.push_back(
+        run.refusal("box with a NaN centre", est.check_request(Backend::kCpu, nan_box, 8)));
     const int beyond = est.has_gl() ? est.gl_max_m() + 1 : 1 << 20;
     out.push_back(run.refusal("GL m beyond its limit (m = " + std::to_string(beyond) + ")",
                               est.check_request(Backend::kGl, ok_box, beyond)));
@@ -261,7 +286,8 @@ std::vector<StiffCaseResult> run_stiff_cases(const StiffConfig& config, const St
   {
     const analytic::AnalyticMesh huge = analytic::cube(0x1p300);
     const SolidityReport rep = check_solidity(huge.mesh);
-    out.push_back(run.refusal("coordinates beyond 2^240", rep.solid() ? Status::ok() : Status::error(rep.verdict())));
+    out.push_back(run.refusal("coordinates beyond 2^240",
+                              rep.solid() ? Status::ok() : Status::error(rep.verdict())));
   }
   return out;
 }

@@ -30,8 +30,8 @@ struct StiffCaseResult {
   std::string expected;
   std::string outcome;  // what happened, in one line
   bool as_expected = false;
-  double worst_rigorous_ratio = 0;  // max |E - V| / R(m) over the case's estimates
-  double worst_bound_ratio = 0;     // max |E - V| / (B(m) vol(O))
+  double worst_rigorous_ratio = 0;      // max |E - V| / R(m) over the case's estimates
+  double worst_bound_ratio = 0;         // max |E - V| / (B(m) vol(O))
   double tightest_rigorous = INFINITY;  // min R(m) / vol(O) over the case's estimates
   bool poly_enclosed = false;  // the polyhedral solver's interval held the exact OBV of every box
 };

@@ -3,8 +3,8 @@
 #include <chrono>
 #include <cstdio>
 
-#include "exact/certify.h"
 #include "common/stopwatch.h"
+#include "exact/certify.h"
 #include "vobb/vobb.h"
 
 namespace vobb::validate {
@@ -90,8 +90,8 @@ UpperBoundResult run_upper_bound_study(const UpperBoundConfig& config, const Sta
         r.layers.push_back(row);
       }
       char buf[160];
-      std::snprintf(buf, sizeof buf, "%s %s depth %d: built in %.1f s, certified in %.1f s", nm.name.c_str(), builder,
-                    tree.depth, tc.build_seconds, tc.certify_seconds);
+      std::snprintf(buf, sizeof buf, "%s %s depth %d: built in %.1f s, certified in %.1f s",
+                    nm.name.c_str(), builder, tree.depth, tc.build_seconds, tc.certify_seconds);
       say(buf);
     }
   }

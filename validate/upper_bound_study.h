@@ -19,12 +19,12 @@ namespace vobb::validate {
 struct UpperBoundConfig {
   std::vector<NamedMesh> meshes;
   int depth = 4;
-  int variational_m = 32;   // the builder's estimator resolution
+  int variational_m = 32;  // the builder's estimator resolution
   int lloyd_iterations = 4;
-  int max_sweeps = 3;       // the variational builder's bottom-up merging sweeps
+  int max_sweeps = 3;             // the variational builder's bottom-up merging sweeps
   std::vector<int> ms = {8, 32};  // resolutions of the estimated sums
-  bool want_gl = false;     // the estimated sums use the CPU twin (same texels as GL)
-  EstimatePerturbation perturb;  // tests only
+  bool want_gl = false;           // the estimated sums use the CPU twin (same texels as GL)
+  EstimatePerturbation perturb;   // tests only
   std::function<void(const std::string&)> progress;
 };
 
@@ -33,16 +33,16 @@ struct LayerBoundRow {
   int level = 0;
   size_t boxes = 0, overlapping_boxes = 0;
   Rational omv, sum_obv;
-  bool exact_holds = false;   // sum_obv >= omv, as rationals
-  double gap = 0;             // sum_obv - omv, nearest double
-  double gap_relative = 0;    // gap / omv
+  bool exact_holds = false;  // sum_obv >= omv, as rationals
+  double gap = 0;            // sum_obv - omv, nearest double
+  double gap_relative = 0;   // gap / omv
   std::string omv_path;
   struct Estimated {
     int m = 0;
-    double sum = 0;        // sum of estimates
-    double allowance = 0;  // sum of B(m) vol(O_j)
-    bool above = false;            // sum >= OMV_exact
-    bool above_with_bound = false; // sum + allowance >= OMV_exact
+    double sum = 0;                 // sum of estimates
+    double allowance = 0;           // sum of B(m) vol(O_j)
+    bool above = false;             // sum >= OMV_exact
+    bool above_with_bound = false;  // sum + allowance >= OMV_exact
   };
   std::vector<Estimated> estimated;
 };

@@ -34,10 +34,10 @@ enum class SuiteKind { kQuick, kFull };
 
 struct SuiteOptions {
   SuiteKind suite = SuiteKind::kQuick;
-  std::string out_dir;   // created when missing
-  std::string mesh_dir;  // holds dino.off, elephant.off, knot1.off, armadillo.off, ...
-  bool want_gl = true;   // false: the CPU twin only (GL rows are then absent, and said so)
-  std::string command;   // the command line, recorded in summary.md
+  std::string out_dir;           // created when missing
+  std::string mesh_dir;          // holds dino.off, elephant.off, knot1.off, armadillo.off, ...
+  bool want_gl = true;           // false: the CPU twin only (GL rows are then absent, and said so)
+  std::string command;           // the command line, recorded in summary.md
   EstimatePerturbation perturb;  // tests only: breaks the estimator on purpose
   std::function<void(const std::string&)> progress;
 };

@@ -12,13 +12,16 @@ namespace vobb {
 namespace {
 
 std::string describe(const GlContext& gl) {
-  return "GL renderer: " + gl.renderer() + " (EGL " + gl.platform() + ", OpenGL " + gl.version() + ")";
+  return "GL renderer: " + gl.renderer() + " (EGL " + gl.platform() + ", OpenGL " + gl.version() +
+         ")";
 }
 
 class GlBackend final : public detail::GlEstimate {
  public:
   explicit GlBackend(std::unique_ptr<GlObvEstimator> gl) : gl_(std::move(gl)) {}
-  std::vector<double> estimate(const std::vector<Obb>& boxes, int m) override { return gl_->estimate(boxes, m); }
+  std::vector<double> estimate(const std::vector<Obb>& boxes, int m) override {
+    return gl_->estimate(boxes, m);
+  }
   int max_m() const override { return gl_->max_m(); }
   const std::string& renderer() const override { return gl_->renderer(); }
   std::string description() const override { return describe(gl_->context()); }
@@ -27,7 +30,8 @@ class GlBackend final : public detail::GlEstimate {
   std::unique_ptr<GlObvEstimator> gl_;
 };
 
-Status make_gl_backend(const Mesh& mesh, bool device_only, std::unique_ptr<detail::GlEstimate>* out) {
+Status make_gl_backend(const Mesh& mesh, bool device_only,
+                       std::unique_ptr<detail::GlEstimate>* out) {
   std::unique_ptr<GlObvEstimator> gl;
   const Status s = GlObvEstimator::create(mesh, &gl, device_only);
   if (!s) return s;
@@ -49,7 +53,8 @@ Status draw_compare_figure(const Mesh& mesh, const CompareResult& result, const 
   s = GlContext::create(&gl);
   if (!s) return Status::error("cannot draw the figure: " + s.message());
   if (note) note(describe(*gl));
-  const std::vector<FigureRow> rows = {{"obbtree", &result.trees[0]}, {"variational", &result.trees[1]}};
+  const std::vector<FigureRow> rows = {{"obbtree", &result.trees[0]},
+                                       {"variational", &result.trees[1]}};
   fo.levels = default_figure_levels(rows);
   s = render_tree_figure(*gl, mesh, rows, fo, image);
   if (!s) return s;

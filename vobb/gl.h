@@ -17,7 +17,7 @@ namespace vobb {
 void enable_gl();
 
 struct CompareFigure {
-  int width = 0, height = 0;    // pixels
+  int width = 0, height = 0;            // pixels
   int first_level = 0, last_level = 0;  // the columns' levels
 };
 // Draws both trees of a comparison over the mesh, levels 1..8 (paper Fig. 6: row 1 the

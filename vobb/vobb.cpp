@@ -41,7 +41,8 @@ void say(const std::function<void(const std::string&)>& to, const std::string& l
 Status make_gl(const Mesh& mesh, bool device_only, std::unique_ptr<detail::GlEstimate>* out) {
   const detail::GlFactory factory = detail::gl_factory();
   if (factory == nullptr)
-    return Status::error("GL is not enabled in this program (link vobb::gl and call vobb::enable_gl())");
+    return Status::error(
+        "GL is not enabled in this program (link vobb::gl and call vobb::enable_gl())");
   return factory(mesh, device_only, out);
 }
 
@@ -60,7 +61,8 @@ struct Estimator {
 Status make_estimator(const Mesh& mesh, const BuildOptions& o, Estimator* e) {
   if (!o.queries.empty()) {
     e->hits = std::make_unique<collision::QueryHitObjective>(mesh, o.queries);
-    say(o.note, "objective: the hits of " + std::to_string(e->hits->size()) + " recorded queries (no OBV estimator)");
+    say(o.note, "objective: the hits of " + std::to_string(e->hits->size()) +
+                    " recorded queries (no OBV estimator)");
     const collision::QueryHitObjective* h = e->hits.get();
     e->estimate = [h](const std::vector<Obb>& boxes) { return (*h)(boxes); };
     e->name = "queries";
@@ -75,7 +77,8 @@ Status make_estimator(const Mesh& mesh, const BuildOptions& o, Estimator* e) {
   }
   if (o.backend == Backend::kGl || (o.backend == Backend::kAuto && o.m >= kAutoGlFromM)) {
     const bool auto_gl = o.backend == Backend::kAuto;
-    Status s = auto_gl && detail::gl_factory() == nullptr ? Status::error("no GL") : make_gl(mesh, auto_gl, &e->gl);
+    Status s = auto_gl && detail::gl_factory() == nullptr ? Status::error("no GL")
+                                                          : make_gl(mesh, auto_gl, &e->gl);
     if (!s && !auto_gl) return s;
     if (s && o.m > e->gl->max_m())
       return Status::error("--m " + std::to_string(o.m) + " exceeds the GL estimator's limit");
@@ -98,16 +101,20 @@ Status make_estimator(const Mesh& mesh, const BuildOptions& o, Estimator* e) {
 // What a variational build depends on, for its checkpoints: a state saved under another
 // fingerprint is refused, so a resumed build is the build that was interrupted. "builder 2":
 // bump when the builder's decisions change, so that older states are refused.
-std::string build_fingerprint(const Mesh& mesh, const BuildOptions& o, const std::string& estimator) {
+std::string build_fingerprint(const Mesh& mesh, const BuildOptions& o,
+                              const std::string& estimator) {
   auto on = [](bool b) { return std::string(b ? "on" : "off"); };
   // The recorded-query builds name the estimator they would have had, as they always did.
-  const std::string named = estimator == "queries" ? (o.backend == Backend::kPoly ? "poly" : "cpu") : estimator;
-  return "builder 2; mesh " + mesh_sha256(mesh) + "; depth " + std::to_string(o.depth) + "; arity " +
-         std::to_string(o.arity) + "; lloyd " + std::to_string(o.lloyd) + "; seed " + std::to_string(o.seed) +
-         "; axis search " + on(o.axis_search) + "; adjust " + on(o.adjust) + "; merge " + on(o.merge) + "; sweeps " +
-         std::to_string(o.sweeps) + "; m " + std::to_string(o.m) + "; estimator " + named +
+  const std::string named =
+      estimator == "queries" ? (o.backend == Backend::kPoly ? "poly" : "cpu") : estimator;
+  return "builder 2; mesh " + mesh_sha256(mesh) + "; depth " + std::to_string(o.depth) +
+         "; arity " + std::to_string(o.arity) + "; lloyd " + std::to_string(o.lloyd) + "; seed " +
+         std::to_string(o.seed) + "; axis search " + on(o.axis_search) + "; adjust " +
+         on(o.adjust) + "; merge " + on(o.merge) + "; sweeps " + std::to_string(o.sweeps) + "; m " +
+         std::to_string(o.m) + "; estimator " + named +
          // Named only when set, so that states saved before the option existed still resume.
-         (o.collider_margin > 0 ? "; collider margin " + format_double(o.collider_margin) : std::string()) +
+         (o.collider_margin > 0 ? "; collider margin " + format_double(o.collider_margin)
+                                : std::string()) +
          (o.queries.empty() ? std::string() : "; recorded queries " + o.queries_digest) +
          (o.objective == Objective::kOmv ? "; objective omv" : "");
 }
@@ -116,8 +123,8 @@ std::string state_path(const std::string& checkpoint) {
   return (std::filesystem::path(checkpoint) / "state.json").string();
 }
 
-Status build_variational_tree(const Mesh& mesh, const BuildOptions& o, const Estimator& est, Tree* tree,
-                              VariationalReport* report) {
+Status build_variational_tree(const Mesh& mesh, const BuildOptions& o, const Estimator& est,
+                              Tree* tree, VariationalReport* report) {
   VariationalOptions opt;
   opt.depth = o.depth;
   opt.arity = o.arity;
@@ -137,7 +144,8 @@ Status build_variational_tree(const Mesh& mesh, const BuildOptions& o, const Est
     const PolyOverlapSolver* p = shares.get();
     opt.share = [p](const std::vector<ShareQuery>& v) { return p->estimate(v); };
   }
-  opt.concurrent_estimates = true;  // every estimator here may be called from several threads at once
+  opt.concurrent_estimates =
+      true;  // every estimator here may be called from several threads at once
   const auto t0 = std::chrono::steady_clock::now();
   if (o.time_budget > 0) opt.out_of_time = [&] { return seconds_since(t0) > o.time_budget; };
   opt.progress = o.progress;
@@ -149,11 +157,12 @@ Status build_variational_tree(const Mesh& mesh, const BuildOptions& o, const Est
     if (!s) return s;
     const std::string path = state_path(o.checkpoint);
     const std::string fingerprint = build_fingerprint(mesh, o, est.name);
-    s = read_variational_state(path, fingerprint, mesh.faces.size(), o.arity, o.depth, &resume, &resuming);
+    s = read_variational_state(path, fingerprint, mesh.faces.size(), o.arity, o.depth, &resume,
+                               &resuming);
     if (!s) return s;
     if (resuming)
-      say(o.note, "resuming from " + path + " (" + std::to_string(resume.split_levels) + " levels split, " +
-                      std::to_string(resume.sweeps) + " sweeps done)");
+      say(o.note, "resuming from " + path + " (" + std::to_string(resume.split_levels) +
+                      " levels split, " + std::to_string(resume.sweeps) + " sweeps done)");
     opt.checkpoint = [&, fingerprint, path](const VariationalState& st) {
       const Status w = write_variational_state(st, fingerprint, path);
       if (!w && !warned) {
@@ -176,8 +185,8 @@ struct CertifySaver {
   std::unique_ptr<exact::CertifyCheckpoint> files;
   bool warned = false;
 
-  Status attach(const std::string& folder, const Mesh& mesh, const Tree& tree, const std::string& path,
-                const CertifyOptions& o, exact::CertifyOptions* opt) {
+  Status attach(const std::string& folder, const Mesh& mesh, const Tree& tree,
+                const std::string& path, const CertifyOptions& o, exact::CertifyOptions* opt) {
     Status s = make_checkpoint_folder("--checkpoint " + folder, folder);
     if (!s) return s;
     const std::string tree_json = tree_to_json(tree);
@@ -189,7 +198,8 @@ struct CertifySaver {
     if (!s) return s;
     opt->resume = resuming ? &resume : nullptr;
     if (resuming)
-      say(o.note, "resuming from " + folder + " (the boxes' OBV, " + std::to_string(resume.layers.size()) + " of " +
+      say(o.note, "resuming from " + folder + " (the boxes' OBV, " +
+                      std::to_string(resume.layers.size()) + " of " +
                       std::to_string(tree.depth + 1) + " layers done)");
     opt->checkpoint = [this, &o](const exact::CertifyState& st) {
       const Status w = files->save(st);
@@ -205,15 +215,20 @@ struct CertifySaver {
 
 const char* path_name(exact::OmvPath p) {
   switch (p) {
-    case exact::OmvPath::kClip: return "clip";
-    case exact::OmvPath::kNef: return "nef";
-    case exact::OmvPath::kBoth: return "both";
-    default: return "auto";
+    case exact::OmvPath::kClip:
+      return "clip";
+    case exact::OmvPath::kNef:
+      return "nef";
+    case exact::OmvPath::kBoth:
+      return "both";
+    default:
+      return "auto";
   }
 }
 
-Status certify_with(const Mesh& mesh, const Tree& tree, const CertifyOptions& o, const std::string& folder,
-                    const std::string& fingerprint_path, exact::Certificate* out) {
+Status certify_with(const Mesh& mesh, const Tree& tree, const CertifyOptions& o,
+                    const std::string& folder, const std::string& fingerprint_path,
+                    exact::Certificate* out) {
   exact::CertifyOptions opt;
   opt.path = o.path;
   opt.rational = o.rational;
@@ -233,13 +248,14 @@ std::string certify_folder(const std::string& checkpoint, const std::string& met
 
 // compare's checkpoint, checked before its long work: the variational build's state against
 // these options, and each certification's files as files.
-Status check_compare_checkpoint(const Mesh& mesh, const BuildOptions& o, const std::string& estimator) {
+Status check_compare_checkpoint(const Mesh& mesh, const BuildOptions& o,
+                                const std::string& estimator) {
   Status s = make_checkpoint_folder("--checkpoint " + o.checkpoint, o.checkpoint);
   if (!s) return s;
   VariationalState state;
   bool found = false;
-  s = read_variational_state(state_path(o.checkpoint), build_fingerprint(mesh, o, estimator), mesh.faces.size(),
-                             o.arity, o.depth, &state, &found);
+  s = read_variational_state(state_path(o.checkpoint), build_fingerprint(mesh, o, estimator),
+                             mesh.faces.size(), o.arity, o.depth, &state, &found);
   if (!s) return s;
   for (const char* method : {"obbtree", "variational"}) {
     const std::string folder = certify_folder(o.checkpoint, method);
@@ -273,7 +289,8 @@ Status check_build_options(const BuildOptions& o) {
     return Status::error("--collider-margin must be a finite length >= 0");
   if (o.collider_margin > 0 && !variational)
     return Status::error("--collider-margin applies to --method variational only");
-  if (!o.queries.empty() && !variational) return Status::error("--queries applies to --method variational only");
+  if (!o.queries.empty() && !variational)
+    return Status::error("--queries applies to --method variational only");
   if (!o.queries.empty() && o.collider_margin > 0)
     return Status::error("--queries and --collider-margin are two objectives; choose one");
   if (o.objective == Objective::kOmv && !variational)
@@ -283,7 +300,8 @@ Status check_build_options(const BuildOptions& o) {
   // The baseline takes well under a second and has no search to budget or resume.
   if (!o.checkpoint.empty() && !variational)
     return Status::error("--checkpoint applies to --method variational only");
-  if (o.time_budget > 0 && !variational) return Status::error("--time-budget applies to --method variational only");
+  if (o.time_budget > 0 && !variational)
+    return Status::error("--time-budget applies to --method variational only");
   if (o.depth < 0 || o.depth > 30) return Status::error("--depth must be within 0..30");
   if (o.arity < 2 || o.arity > 64) return Status::error("--arity must be within 2..64");
   if (o.m < 1 || o.m > 4096) return Status::error("--m must be within 1..4096");
@@ -330,16 +348,24 @@ Status read_queries(const Mesh& mesh, const std::vector<std::string>& paths, Bui
     collision::QueryStream stream;
     const Status s = collision::read_query_stream(path, &stream);
     if (!s) return s;
-    if (stream.mesh_sha256 != sha) return Status::error(basename_of(path) + ": recorded for another mesh (sha256 differs)");
+    if (stream.mesh_sha256 != sha)
+      return Status::error(basename_of(path) + ": recorded for another mesh (sha256 differs)");
     if (colliders.size() + stream.colliders.size() > collision::kMaxRecordedQueries)
-      return Status::error("--queries: more than " + std::to_string(collision::kMaxRecordedQueries) + " colliders in all");
+      return Status::error("--queries: more than " +
+                           std::to_string(collision::kMaxRecordedQueries) + " colliders in all");
     colliders.insert(colliders.end(), stream.colliders.begin(), stream.colliders.end());
   }
   if (colliders.empty()) return Status::error("--queries: the files hold no colliders");
   std::string bytes;
   for (const collision::Collider& c : colliders) {
-    double v[17] = {c.shape == collision::ColliderShape::kSphere ? 0.0 : 1.0, c.center[0], c.center[1], c.center[2],
-                    c.radius, c.half[0], c.half[1], c.half[2]};
+    double v[17] = {c.shape == collision::ColliderShape::kSphere ? 0.0 : 1.0,
+                    c.center[0],
+                    c.center[1],
+                    c.center[2],
+                    c.radius,
+                    c.half[0],
+                    c.half[1],
+                    c.half[2]};
     for (int k = 0; k < 3; ++k)
       for (int i = 0; i < 3; ++i) v[8 + 3 * k + i] = c.axes[k][i];
     bytes.append(reinterpret_cast<const char*>(v), sizeof v);
@@ -357,14 +383,17 @@ Status check_tree_fits(const Mesh& mesh, const Tree& tree, const std::string& tr
   return Status::ok();
 }
 
-Status certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& o, exact::Certificate* certificate) {
+Status certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& o,
+               exact::Certificate* certificate) {
   Status s = check_tree_fits(mesh, tree, "tree");
   if (!s) return s;
   return certify_with(mesh, tree, o, o.checkpoint,
-                      std::string(path_name(o.path)) + (o.rational ? "; rational" : ""), certificate);
+                      std::string(path_name(o.path)) + (o.rational ? "; rational" : ""),
+                      certificate);
 }
 
-Status estimate_obv(const Mesh& mesh, const std::vector<Obb>& boxes, const EstimateOptions& o, ObvReport* out) {
+Status estimate_obv(const Mesh& mesh, const std::vector<Obb>& boxes, const EstimateOptions& o,
+                    ObvReport* out) {
   *out = ObvReport();
   const size_t n = boxes.size();
   for (const Obb& b : boxes)
@@ -382,8 +411,9 @@ Status estimate_obv(const Mesh& mesh, const std::vector<Obb>& boxes, const Estim
       out->renderer = gl->renderer();
       for (int m : o.ms)
         if (m > gl->max_m()) {
-          const Status too_big = Status::error("--m " + std::to_string(m) + " exceeds the GL estimator's limit " +
-                                               std::to_string(gl->max_m()) + " on this renderer");
+          const Status too_big =
+              Status::error("--m " + std::to_string(m) + " exceeds the GL estimator's limit " +
+                            std::to_string(gl->max_m()) + " on this renderer");
           if (!o.gl_fallback) return too_big;
           say(o.note, "warning: " + too_big.message() + "; using the CPU twin instead");
           gl.reset();
@@ -437,7 +467,8 @@ Status estimate_obv(const Mesh& mesh, const std::vector<Obb>& boxes, const Estim
       r.bound[i] = certified_error(r.obv[i], out->poly[i]);
       if (planner && r.m > 0) {
         bool u = false;
-        r.r_bound[i] = std::min(cubemap_bound(*planner, r.backend == "gl", boxes[i], r.m, &u), range_bound(boxes[i], r.obv[i]));
+        r.r_bound[i] = std::min(cubemap_bound(*planner, r.backend == "gl", boxes[i], r.m, &u),
+                                range_bound(boxes[i], r.obv[i]));
         out->unresolved[i] |= u;
       }
     }
@@ -445,7 +476,8 @@ Status estimate_obv(const Mesh& mesh, const std::vector<Obb>& boxes, const Estim
   for (size_t i = 0; i < n; ++i)
     if (out->unresolved[i])
       say(o.note, "warning: box " + std::to_string(i) +
-                      ": its view of the mesh does not fit the cubemap's doubles (faces beyond 2^300 box units); "
+                      ": its view of the mesh does not fit the cubemap's doubles (faces beyond "
+                      "2^300 box units); "
                       "estimated at half its volume");
   if (o.exact) {
     out->exact.assign(n, Rational(0));
@@ -463,7 +495,8 @@ Status estimate_obv(const Mesh& mesh, const std::vector<Obb>& boxes, const Estim
 std::vector<std::string> compare_checkpoint_files() {
   std::vector<std::string> files = {"state.json"};
   for (const char* method : {"obbtree", "variational"})
-    for (const char* name : {"obv.json", "layers.json"}) files.push_back(certify_folder("", method) + "/" + name);
+    for (const char* name : {"obv.json", "layers.json"})
+      files.push_back(certify_folder("", method) + "/" + name);
   return files;
 }
 
@@ -504,8 +537,10 @@ Status compare(const Mesh& mesh, const CompareOptions& co, CompareResult* r) {
     r->trees[i].mesh_sha256 = mesh_sha256(mesh);
     r->build_seconds[i] = seconds_since(t0);
     // With a checkpoint, each tree's certification keeps its own folder beside the build's state.
-    const std::string folder = o.checkpoint.empty() ? std::string() : certify_folder(o.checkpoint, r->trees[i].method);
-    s = certify_with(mesh, r->trees[i], copt, folder, co.rational ? "auto; rational" : "auto", &r->certificates[i]);
+    const std::string folder =
+        o.checkpoint.empty() ? std::string() : certify_folder(o.checkpoint, r->trees[i].method);
+    s = certify_with(mesh, r->trees[i], copt, folder, co.rational ? "auto; rational" : "auto",
+                     &r->certificates[i]);
     if (!s) return s;
   }
   r->levels = std::max(r->certificates[0].layers.size(), r->certificates[1].layers.size());
@@ -517,7 +552,8 @@ Status compare(const Mesh& mesh, const CompareOptions& co, CompareResult* r) {
   for (int i = 0; i < 2; ++i) {
     exact::MpInterval e(0);
     for (size_t l = 0; l < r->levels; ++l)
-      e += exact::MpInterval(layer_weight(depth, static_cast<int>(l))) * r->layer(i, l).omv_enclosure;
+      e += exact::MpInterval(layer_weight(depth, static_cast<int>(l))) *
+           r->layer(i, l).omv_enclosure;
     if (e.nearest(&r->e[i]) && !co.rational) continue;
     if (!r->certificates[i].rational) {
       CertifyOptions again = copt;

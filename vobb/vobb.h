@@ -89,21 +89,23 @@ Status check_build_options(const BuildOptions& options);
 // Builds the tree of a solid mesh; fills every field, mesh_sha256 included. Deterministic: the
 // same mesh and options give the same tree on any number of threads, and a build resumed from
 // its checkpoint gives the uninterrupted one's.
-Status build_tree(const Mesh& mesh, const BuildOptions& options, Tree* tree, BuildReport* report = nullptr);
+Status build_tree(const Mesh& mesh, const BuildOptions& options, Tree* tree,
+                  BuildReport* report = nullptr);
 
 // ---- certifying ----------------------------------------------------------------------------
 struct CertifyOptions {
   exact::OmvPath path = exact::OmvPath::kAuto;
   bool rational = false;   // also the exact rationals of every value (exact::CertifyOptions)
   std::string checkpoint;  // a folder; empty: none. A run started again with it resumes.
-  std::function<void(const std::string&)> progress;  // one line per finished stage
+  std::function<void(const std::string&)> progress;       // one line per finished stage
   std::function<void(const std::string&)> note, warning;  // as for BuildOptions
   std::function<void(const exact::CertifyState&)> saved;  // after each checkpoint saved
 };
 // Checks that the tree indexes this mesh (its triangle count and, when recorded, its SHA-256),
 // then certifies it (exact/certify.h): OMV, sum of OBV and overlap per layer, e, containment.
 // Creates no GL context. *certificate->ok() says whether it certifies.
-Status certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& options, exact::Certificate* certificate);
+Status certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& options,
+               exact::Certificate* certificate);
 // The tree-against-mesh check alone, with `tree_name` in its message.
 Status check_tree_fits(const Mesh& mesh, const Tree& tree, const std::string& tree_name);
 
@@ -116,24 +118,25 @@ struct EstimateOptions {
   std::function<void(const std::string&)> note;
 };
 struct ObvRun {
-  std::string backend;  // "poly", "cpu" or "gl"
-  int m = 0;            // 0: none (poly)
+  std::string backend;               // "poly", "cpu" or "gl"
+  int m = 0;                         // 0: none (poly)
   std::vector<double> obv, seconds;  // per box; seconds: the batch's amortised
   // Per box: the estimate's certified error from the polyhedral enclosure (rounded up), and
   // R(m) (min with the range bound; NaN when not asked or for poly).
   std::vector<double> bound, r_bound;
 };
 struct ObvReport {
-  std::string renderer;                 // GL's, when it ran
-  std::vector<PolyObv> poly;            // the enclosures, when any estimate was made
-  std::vector<ObvRun> runs;             // poly first, then CPU, then GL, each m ascending as given
-  std::vector<char> unresolved;         // per box: the cubemap's plan could not hold it
-  std::vector<Rational> exact;          // per box, when asked
+  std::string renderer;          // GL's, when it ran
+  std::vector<PolyObv> poly;     // the enclosures, when any estimate was made
+  std::vector<ObvRun> runs;      // poly first, then CPU, then GL, each m ascending as given
+  std::vector<char> unresolved;  // per box: the cubemap's plan could not hold it
+  std::vector<Rational> exact;   // per box, when asked
   std::vector<double> exact_seconds;
 };
 // Estimates of each box's OBV. Every cubemap estimate gets its certified error from the
 // polyhedral solver's enclosure. Boxes must pass box_defect (read_boxes checks them).
-Status estimate_obv(const Mesh& mesh, const std::vector<Obb>& boxes, const EstimateOptions& options, ObvReport* report);
+Status estimate_obv(const Mesh& mesh, const std::vector<Obb>& boxes, const EstimateOptions& options,
+                    ObvReport* report);
 
 // ---- comparing the builders ----------------------------------------------------------------
 struct CompareOptions {
@@ -141,13 +144,14 @@ struct CompareOptions {
   bool rational = false;
   std::function<void(const std::string&)> progress;  // the certifications' stages
   // build.note and build.warning also get the certifications' notes.
-  std::function<void(const exact::CertifyState&)> certify_saved;  // after each certification checkpoint
+  std::function<void(const exact::CertifyState&)>
+      certify_saved;  // after each certification checkpoint
 };
 struct CompareResult {
-  Tree trees[2];                     // [0] obbtree, [1] variational
+  Tree trees[2];  // [0] obbtree, [1] variational
   exact::Certificate certificates[2];
   double build_seconds[2] = {0, 0};
-  VariationalReport search;          // the variational build's counts
+  VariationalReport search;  // the variational build's counts
   // Layers 0..levels-1 of the deeper tree; a shallower tree's leaf layer repeats below its last.
   size_t levels = 0;
   // e of each tree over those layers with the deeper tree's weights: the nearest double, and the

@@ -6,12 +6,11 @@
 // loop forever. So the import runs in a child process (fork), under a CPU-time limit and the
 // address-space cap below, with its stdout and stderr sent to /dev/null; the mesh comes back
 // through a pipe. A crash or a loop then ends in a one-line refusal instead of taking vobb down.
-#include <assimp/postprocess.h>
-#include <assimp/scene.h>
+#include "common/io/assimp_reader.h"
 
 #include <assimp/DefaultIOSystem.h>
-#include <assimp/Importer.hpp>
-
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
 #include <fcntl.h>
 #include <poll.h>
 #include <sys/resource.h>
@@ -19,6 +18,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <assimp/Importer.hpp>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
@@ -28,7 +28,6 @@
 #include <cstring>
 #include <new>
 
-#include "common/io/assimp_reader.h"
 #include "common/io/mesh_io.h"
 
 namespace vobb {
@@ -75,7 +74,9 @@ class AddressSpaceCap {
 // there would block it or feed it without end.
 class RegularFilesOnly : public Assimp::DefaultIOSystem {
  public:
-  bool Exists(const char* file) const override { return regular(file) && DefaultIOSystem::Exists(file); }
+  bool Exists(const char* file) const override {
+    return regular(file) && DefaultIOSystem::Exists(file);
+  }
   Assimp::IOStream* Open(const char* file, const char* mode) override {
     return regular(file) ? DefaultIOSystem::Open(file, mode) : nullptr;
   }
@@ -111,7 +112,8 @@ Status import_here(const std::string& path, const std::string& display, LoadedMe
     // Bake node transforms into the vertices; split polygons into triangles. Welding is ours.
     bool out_of_memory = false;
     try {
-      scene = importer.ReadFile(path, aiProcess_Triangulate | aiProcess_PreTransformVertices | aiProcess_SortByPType);
+      scene = importer.ReadFile(
+          path, aiProcess_Triangulate | aiProcess_PreTransformVertices | aiProcess_SortByPType);
     } catch (const std::bad_alloc&) {
       scene = nullptr;
       out_of_memory = true;
@@ -131,7 +133,8 @@ Status import_here(const std::string& path, const std::string& display, LoadedMe
     // LightWave's does when an object file the scene names cannot be read).
     if (why.empty())
       why = scene == nullptr ? "unknown format"
-                             : "assimp made an incomplete scene (does the file name another that is missing or not a "
+                             : "assimp made an incomplete scene (does the file name another that "
+                               "is missing or not a "
                                "regular file?)";
     return Status::error(display + ": cannot read: " + why);
   }
@@ -189,7 +192,8 @@ bool decode(const std::string& in, const std::string& display, Status* s, Loaded
   uint64_t nv, nf;
   std::memcpy(&nv, in.data() + 1, 8);
   std::memcpy(&nf, in.data() + 9, 8);
-  if (nv > in.size() / 24 || nf > in.size() / 12 || in.size() < 17 + nv * 24 + nf * 12) return false;
+  if (nv > in.size() / 24 || nf > in.size() / 12 || in.size() < 17 + nv * 24 + nf * 12)
+    return false;
   m->mesh.vertices.resize(nv);
   m->mesh.faces.resize(nf);
   const char* p = in.data() + 17;
@@ -204,7 +208,8 @@ bool decode(const std::string& in, const std::string& display, Status* s, Loaded
   // index out of bounds later.
   for (const Face& f : m->mesh.faces)
     for (int32_t i : f)
-      if (i < 0 || static_cast<uint64_t>(i) >= nv) *s = Status::error(display + ": a face refers to a vertex that does not exist");
+      if (i < 0 || static_cast<uint64_t>(i) >= nv)
+        *s = Status::error(display + ": a face refers to a vertex that does not exist");
   return true;
 }
 
@@ -219,12 +224,17 @@ bool write_all(int fd, const std::string& s) {
   return true;
 }
 
-[[noreturn]] void run_child(int fd, const std::string& path, const std::string& display, double cpu_seconds) {
+[[noreturn]] void run_child(int fd, const std::string& path, const std::string& display,
+                            double cpu_seconds) {
   // No core files from a crashing importer, and no output from it either.
-  struct rlimit no_core {0, 0};
+  struct rlimit no_core {
+    0, 0
+  };
   ::setrlimit(RLIMIT_CORE, &no_core);
   const rlim_t cpu = static_cast<rlim_t>(std::ceil(cpu_seconds));
-  struct rlimit cpu_limit {cpu, cpu + 1};  // SIGXCPU at the soft limit, SIGKILL a second later
+  struct rlimit cpu_limit {
+    cpu, cpu + 1
+  };  // SIGXCPU at the soft limit, SIGKILL a second later
   ::setrlimit(RLIMIT_CPU, &cpu_limit);
   const int null = ::open("/dev/null", O_WRONLY);
   if (null >= 0) {
@@ -267,20 +277,24 @@ Status load_with_assimp(const std::string& path, const std::string& display, Loa
   ::close(fds[1]);
   // The CPU limit ends a loop; a child that sleeps (it should not) is killed after twice that
   // in wall time plus 10 s.
-  const auto deadline = std::chrono::steady_clock::now() +
-                        std::chrono::milliseconds(static_cast<int64_t>(1000 * (2 * cpu_seconds + 10)));
+  const auto deadline =
+      std::chrono::steady_clock::now() +
+      std::chrono::milliseconds(static_cast<int64_t>(1000 * (2 * cpu_seconds + 10)));
   std::string got;
   bool timed_out = false, waiting = false;
   char buf[1 << 16];
   for (;;) {
-    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
+        deadline - std::chrono::steady_clock::now());
     if (left.count() <= 0) {
       timed_out = true;
       waiting = sleeping(pid);
       ::kill(pid, SIGKILL);
       break;
     }
-    struct pollfd p {fds[0], POLLIN, 0};
+    struct pollfd p {
+      fds[0], POLLIN, 0
+    };
     const int r = ::poll(&p, 1, static_cast<int>(std::min<int64_t>(left.count(), 1000)));
     if (r < 0 && errno == EINTR) continue;
     if (r <= 0) continue;
@@ -294,21 +308,23 @@ Status load_with_assimp(const std::string& path, const std::string& display, Loa
   struct rusage usage {};
   while (::wait4(pid, &status, 0, &usage) < 0 && errno == EINTR) {
   }
-  const double cpu_used = usage.ru_utime.tv_sec + 1e-6 * usage.ru_utime.tv_usec + usage.ru_stime.tv_sec +
-                          1e-6 * usage.ru_stime.tv_usec;
+  const double cpu_used = usage.ru_utime.tv_sec + 1e-6 * usage.ru_utime.tv_usec +
+                          usage.ru_stime.tv_sec + 1e-6 * usage.ru_stime.tv_usec;
   char limit[32];
   std::snprintf(limit, sizeof limit, "%.0f", cpu_seconds);
   // SIGXCPU, or SIGKILL after it, with the CPU time spent: the limit; SIGKILL before it is
   // spent is an outside kill (the kernel's, out of memory) unless it was ours (timed_out).
-  const bool killed = WIFSIGNALED(status) && (WTERMSIG(status) == SIGXCPU || WTERMSIG(status) == SIGKILL);
+  const bool killed =
+      WIFSIGNALED(status) && (WTERMSIG(status) == SIGXCPU || WTERMSIG(status) == SIGKILL);
   // Our wall-clock kill of an importer that was asleep then (waiting on a file, not looping,
   // which a starved machine could also keep under its CPU limit). A pipe a scene named did this
   // until RegularFilesOnly; no file is known to do it since, so this is the safety net's message.
   if (timed_out && waiting) {
     char waited[32];
     std::snprintf(waited, sizeof waited, "%.0f", 2 * cpu_seconds + 10);
-    return Status::error(display + ": cannot read: assimp waited " + waited +
-                         " s without finishing (does the file name another that blocks, such as a pipe?)");
+    return Status::error(
+        display + ": cannot read: assimp waited " + waited +
+        " s without finishing (does the file name another that blocks, such as a pipe?)");
   }
   if (timed_out || (killed && (WTERMSIG(status) == SIGXCPU || cpu_used >= cpu_seconds - 0.5)))
     return Status::error(display + ": cannot read: assimp did not finish within " + limit +
@@ -318,9 +334,10 @@ Status load_with_assimp(const std::string& path, const std::string& display, Loa
   if (WIFSIGNALED(status)) {
     const int sig = WTERMSIG(status);
     const char* name = ::sigabbrev_np(sig);
-    return Status::error(display + ": cannot read: assimp's importer crashed on this file (signal " +
-                         std::to_string(sig) + (name ? std::string(", SIG") + name : std::string()) +
-                         "); the file is damaged or uses what assimp cannot read");
+    return Status::error(
+        display + ": cannot read: assimp's importer crashed on this file (signal " +
+        std::to_string(sig) + (name ? std::string(", SIG") + name : std::string()) +
+        "); the file is damaged or uses what assimp cannot read");
   }
   Status s;
   LoadedMesh m;
@@ -334,9 +351,10 @@ Status load_with_assimp(const std::string& path, const std::string& display, Loa
 }
 
 void enable_assimp() {
-  set_foreign_mesh_reader([](const std::string& path, const std::string& display, uint64_t bytes, LoadedMesh* out) {
-    return load_with_assimp(path, display, out, assimp_cpu_seconds(bytes));
-  });
+  set_foreign_mesh_reader(
+      [](const std::string& path, const std::string& display, uint64_t bytes, LoadedMesh* out) {
+        return load_with_assimp(path, display, out, assimp_cpu_seconds(bytes));
+      });
 }
 
 }  // namespace vobb

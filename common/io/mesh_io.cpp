@@ -19,7 +19,9 @@ namespace {
 
 // ---- small lexing helpers ----------------------------------------------------------------
 
-bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\v'; }
+bool is_space(char c) {
+  return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\v';
+}
 
 void split_tokens(std::string_view line, std::vector<std::string_view>* out) {
   out->clear();
@@ -153,12 +155,15 @@ Status read_off(const Reader& r, LoadedMesh* out) {
   std::string_view head = t[0];
   // Header keywords: [ST][C][N][4][n]OFF; vobb reads the 3D ones.
   if (head.size() < 3 || head.substr(head.size() - 3) != "OFF")
-    return r.fail_at(lines.number(), "not an OFF file (header '" + std::string(head.substr(0, 20)) + "')");
+    return r.fail_at(lines.number(),
+                     "not an OFF file (header '" + std::string(head.substr(0, 20)) + "')");
   const std::string_view prefix = head.substr(0, head.size() - 3);
   if (prefix.find('4') != std::string_view::npos || prefix.find('n') != std::string_view::npos)
-    return r.fail_at(lines.number(), "only 3D OFF is supported (header '" + std::string(head) + "')");
+    return r.fail_at(lines.number(),
+                     "only 3D OFF is supported (header '" + std::string(head) + "')");
   size_t first = 1;
-  if (t.size() > 1 && t[1] == "BINARY") return r.fail_at(lines.number(), "binary OFF is not supported");
+  if (t.size() > 1 && t[1] == "BINARY")
+    return r.fail_at(lines.number(), "binary OFF is not supported");
   if (t.size() == first) {
     if (!lines.next_tokens(&t, true)) return r.fail("truncated: missing vertex and face counts");
     first = 0;
@@ -170,10 +175,12 @@ Status read_off(const Reader& r, LoadedMesh* out) {
   const size_t left = r.text().size() - std::min(r.text().size(), lines.offset());
   if (!count_fits(nv, 6, left + 1) || nv > kMaxIndex)
     return r.fail_at(lines.number(), "truncated: header promises " + std::to_string(nv) +
-                                         " vertices but only " + std::to_string(left) + " bytes follow");
+                                         " vertices but only " + std::to_string(left) +
+                                         " bytes follow");
   if (!count_fits(nf, 8, left + 1))
     return r.fail_at(lines.number(), "truncated: header promises " + std::to_string(nf) +
-                                         " faces but only " + std::to_string(left) + " bytes follow");
+                                         " faces but only " + std::to_string(left) +
+                                         " bytes follow");
   Mesh& m = out->mesh;
   m.vertices.reserve(nv);
   for (long long i = 0; i < nv; ++i) {
@@ -197,20 +204,23 @@ Status read_off(const Reader& r, LoadedMesh* out) {
     if (!lines.next_tokens(&t, true))
       return r.fail("truncated: " + std::to_string(i) + " of " + std::to_string(nf) + " faces");
     long long n;
-    if (!parse_int(t[0], &n) || n < 0) return r.fail_at(lines.number(), "bad face size '" + std::string(t[0].substr(0, 32)) + "'");
+    if (!parse_int(t[0], &n) || n < 0)
+      return r.fail_at(lines.number(), "bad face size '" + std::string(t[0].substr(0, 32)) + "'");
     if (static_cast<long long>(t.size()) - 1 < n)
       return r.fail_at(lines.number(), "face lists " + std::to_string(t.size() - 1) + " of " +
                                            std::to_string(n) + " indices");
     idx.resize(n);
     for (long long k = 0; k < n; ++k)
       if (!parse_int(t[k + 1], &idx[k]))
-        return r.fail_at(lines.number(), "bad vertex index '" + std::string(t[k + 1].substr(0, 32)) + "'");
+        return r.fail_at(lines.number(),
+                         "bad vertex index '" + std::string(t[k + 1].substr(0, 32)) + "'");
     // After the indices OFF allows a colour: a colormap index, RGB or RGBA, as integers or
     // floats. More values, or words, mean the face size and the line disagree.
     const size_t extra = t.size() - 1 - static_cast<size_t>(n);
     if (extra > 4)
       return r.fail_at(lines.number(), "face of " + std::to_string(n) + " indices is followed by " +
-                                           std::to_string(extra) + " values (a colour has at most 4)");
+                                           std::to_string(extra) +
+                                           " values (a colour has at most 4)");
     if (const size_t k = first_word(t, 1 + static_cast<size_t>(n)); k < t.size())
       return r.fail_at(lines.number(), "unexpected '" + std::string(t[k].substr(0, 32)) +
                                            "' after the face's indices");
@@ -246,15 +256,17 @@ Status read_obj(const Reader& r, LoadedMesh* out) {
       Vec3 p;
       for (int k = 0; k < 3; ++k)
         if (!parse_double(t[k + 1], &p[k]))
-          return r.fail_at(lines.number(), "not a number: '" + std::string(t[k + 1].substr(0, 32)) + "'");
+          return r.fail_at(lines.number(),
+                           "not a number: '" + std::string(t[k + 1].substr(0, 32)) + "'");
       // After x y z: a weight w, or a colour r g b [a] (a common extension): at most 4
       // numbers. A word, or more numbers, means the line is not what it seems.
       if (const size_t k = first_word(t, 4); k < t.size())
         return r.fail_at(lines.number(), "unexpected '" + std::string(t[k].substr(0, 32)) +
                                              "' after the vertex's coordinates");
       if (t.size() > 8)
-        return r.fail_at(lines.number(), "vertex has " + std::to_string(t.size() - 4) +
-                                             " values after its coordinates (a weight or a colour has at most 4)");
+        return r.fail_at(lines.number(),
+                         "vertex has " + std::to_string(t.size() - 4) +
+                             " values after its coordinates (a weight or a colour has at most 4)");
       m.vertices.push_back(p);
     } else if (t[0] == "f") {
       idx.clear();
@@ -262,10 +274,12 @@ Status read_obj(const Reader& r, LoadedMesh* out) {
         std::string_view v = t[k].substr(0, t[k].find('/'));
         long long i;
         if (!parse_int(v, &i) || i == 0)
-          return r.fail_at(lines.number(), "bad vertex index '" + std::string(t[k].substr(0, 32)) + "'");
+          return r.fail_at(lines.number(),
+                           "bad vertex index '" + std::string(t[k].substr(0, 32)) + "'");
         // 1-based, negative counts back from the last vertex read so far.
         if (i < 0 && static_cast<long long>(m.vertices.size()) + i < 0)
-          return r.fail_at(lines.number(), "relative vertex index " + std::to_string(i) + " reaches before the first vertex (" +
+          return r.fail_at(lines.number(), "relative vertex index " + std::to_string(i) +
+                                               " reaches before the first vertex (" +
                                                std::to_string(m.vertices.size()) + " read so far)");
         idx.push_back(i > 0 ? i - 1 : static_cast<long long>(m.vertices.size()) + i);
       }
@@ -301,11 +315,20 @@ PlyType ply_type(std::string_view s) {
 
 size_t ply_size(PlyType t) {
   switch (t) {
-    case PlyType::kInt8: case PlyType::kUint8: return 1;
-    case PlyType::kInt16: case PlyType::kUint16: return 2;
-    case PlyType::kInt32: case PlyType::kUint32: case PlyType::kFloat32: return 4;
-    case PlyType::kFloat64: return 8;
-    default: return 0;
+    case PlyType::kInt8:
+    case PlyType::kUint8:
+      return 1;
+    case PlyType::kInt16:
+    case PlyType::kUint16:
+      return 2;
+    case PlyType::kInt32:
+    case PlyType::kUint32:
+    case PlyType::kFloat32:
+      return 4;
+    case PlyType::kFloat64:
+      return 8;
+    default:
+      return 0;
   }
 }
 
@@ -333,15 +356,56 @@ class BinaryCursor {
     pos_ += n;
     if (big_) std::reverse(b, b + n);
     switch (t) {
-      case PlyType::kInt8: { int8_t v; std::memcpy(&v, b, 1); *out = v; break; }
-      case PlyType::kUint8: { uint8_t v; std::memcpy(&v, b, 1); *out = v; break; }
-      case PlyType::kInt16: { int16_t v; std::memcpy(&v, b, 2); *out = v; break; }
-      case PlyType::kUint16: { uint16_t v; std::memcpy(&v, b, 2); *out = v; break; }
-      case PlyType::kInt32: { int32_t v; std::memcpy(&v, b, 4); *out = v; break; }
-      case PlyType::kUint32: { uint32_t v; std::memcpy(&v, b, 4); *out = v; break; }
-      case PlyType::kFloat32: { float v; std::memcpy(&v, b, 4); *out = v; break; }
-      case PlyType::kFloat64: { double v; std::memcpy(&v, b, 8); *out = v; break; }
-      default: return false;
+      case PlyType::kInt8: {
+        int8_t v;
+        std::memcpy(&v, b, 1);
+        *out = v;
+        break;
+      }
+      case PlyType::kUint8: {
+        uint8_t v;
+        std::memcpy(&v, b, 1);
+        *out = v;
+        break;
+      }
+      case PlyType::kInt16: {
+        int16_t v;
+        std::memcpy(&v, b, 2);
+        *out = v;
+        break;
+      }
+      case PlyType::kUint16: {
+        uint16_t v;
+        std::memcpy(&v, b, 2);
+        *out = v;
+        break;
+      }
+      case PlyType::kInt32: {
+        int32_t v;
+        std::memcpy(&v, b, 4);
+        *out = v;
+        break;
+      }
+      case PlyType::kUint32: {
+        uint32_t v;
+        std::memcpy(&v, b, 4);
+        *out = v;
+        break;
+      }
+      case PlyType::kFloat32: {
+        float v;
+        std::memcpy(&v, b, 4);
+        *out = v;
+        break;
+      }
+      case PlyType::kFloat64: {
+        double v;
+        std::memcpy(&v, b, 8);
+        *out = v;
+        break;
+      }
+      default:
+        return false;
     }
     return true;
   }
@@ -438,7 +502,8 @@ PlyLayout ply_layout(const std::vector<PlyElement>& elems) {
       }
     if (e.name == "face")
       for (size_t k = 0; k < e.props.size(); ++k)
-        if (e.props[k].is_list && (e.props[k].name == "vertex_indices" || e.props[k].name == "vertex_index"))
+        if (e.props[k].is_list &&
+            (e.props[k].name == "vertex_indices" || e.props[k].name == "vertex_index"))
           l.iface = static_cast<int>(k);
   }
   return l;
@@ -463,11 +528,13 @@ Status read_ply_records(const Reader& r, const std::vector<PlyElement>& elems,
       idx.clear();
       size_t tok = 0;
       if (ascii && !lines->next_tokens(tokens, false))
-        return r.fail("truncated: " + std::to_string(i) + " of " + std::to_string(e.count) + " " + e.name + " records");
+        return r.fail("truncated: " + std::to_string(i) + " of " + std::to_string(e.count) + " " +
+                      e.name + " records");
       const size_t line = lines->number();
       // Binary data has no lines: its errors name the element's record instead.
       auto at_record = [&](const std::string& why) {
-        return ascii ? r.fail_at(line, why) : r.fail(e.name + " record " + std::to_string(i) + ": " + why);
+        return ascii ? r.fail_at(line, why)
+                     : r.fail(e.name + " record " + std::to_string(i) + ": " + why);
       };
       for (size_t k = 0; k < e.props.size(); ++k) {
         const PlyProperty& prop = e.props[k];
@@ -475,11 +542,13 @@ Status read_ply_records(const Reader& r, const std::vector<PlyElement>& elems,
           if (ascii) {
             if (tok >= t.size()) return r.fail_at(line, "record has too few values");
             const std::string_view s = t[tok++];
-            if (!parse_double(s, v)) return r.fail_at(line, "not a number: '" + std::string(s.substr(0, 32)) + "'");
+            if (!parse_double(s, v))
+              return r.fail_at(line, "not a number: '" + std::string(s.substr(0, 32)) + "'");
             return Status::ok();
           }
           if (!bin->read(type, v))
-            return r.fail("truncated: binary data ends inside " + e.name + " record " + std::to_string(i));
+            return r.fail("truncated: binary data ends inside " + e.name + " record " +
+                          std::to_string(i));
           return Status::ok();
         };
         double v;
@@ -489,7 +558,8 @@ Status read_ply_records(const Reader& r, const std::vector<PlyElement>& elems,
           long long n;
           if (!integral_value(v, &n) || n < 0) return at_record("bad list length");
           if (!ascii && static_cast<unsigned long long>(n) * ply_size(prop.type) > bin->remaining())
-            return r.fail("truncated: binary data ends inside " + e.name + " record " + std::to_string(i));
+            return r.fail("truncated: binary data ends inside " + e.name + " record " +
+                          std::to_string(i));
           for (long long j = 0; j < n; ++j) {
             s = next_value(prop.type, &v);
             if (!s) return s;
@@ -510,8 +580,8 @@ Status read_ply_records(const Reader& r, const std::vector<PlyElement>& elems,
       // An ASCII record is one line: values beyond its properties (a damaged list length, a
       // stray word) mean the line and the header disagree.
       if (ascii && tok < t.size())
-        return r.fail_at(line, "unexpected '" + std::string(t[tok].substr(0, 32)) + "' after the " + e.name +
-                                   " record's " + std::to_string(tok) + " values");
+        return r.fail_at(line, "unexpected '" + std::string(t[tok].substr(0, 32)) + "' after the " +
+                                   e.name + " record's " + std::to_string(tok) + " values");
       if (is_vertex) m.vertices.push_back(p);
       if (is_face) polys->emplace_back(idx, ascii ? line : 0);
     }
@@ -531,7 +601,8 @@ Status check_ply_end(const Reader& r, bool ascii, Lines* lines, std::vector<std:
   } else {
     const std::string_view rest = r.text().substr(r.text().size() - bin.remaining());
     if (!rest.empty() && rest != "\n" && rest != "\r\n")
-      return r.fail(std::to_string(rest.size()) + " bytes of data after the records the header declares");
+      return r.fail(std::to_string(rest.size()) +
+                    " bytes of data after the records the header declares");
   }
   return Status::ok();
 }
@@ -583,8 +654,8 @@ Status read_stl_binary(const Reader& r, LoadedMesh* out) {
   // some writers pad the file, and those bytes are ignored.
   const uint64_t extra = (d.size() - 84 - 50ull * n) / 50;
   if (extra > 0)
-    return r.fail("binary STL holds " + std::to_string(extra) + " more triangle records after the " +
-                  std::to_string(n) + " its header declares");
+    return r.fail("binary STL holds " + std::to_string(extra) +
+                  " more triangle records after the " + std::to_string(n) + " its header declares");
   Mesh& m = out->mesh;
   m.vertices.reserve(3ull * n);
   for (uint32_t i = 0; i < n; ++i) {
@@ -594,7 +665,8 @@ Status read_stl_binary(const Reader& r, LoadedMesh* out) {
       std::memcpy(v, rec + 12 * k, 12);
       m.vertices.emplace_back(v[0], v[1], v[2]);  // float to double is exact
     }
-    m.faces.push_back({static_cast<int32_t>(3 * i), static_cast<int32_t>(3 * i + 1), static_cast<int32_t>(3 * i + 2)});
+    m.faces.push_back({static_cast<int32_t>(3 * i), static_cast<int32_t>(3 * i + 1),
+                       static_cast<int32_t>(3 * i + 2)});
   }
   return Status::ok();
 }
@@ -613,8 +685,9 @@ Status read_stl_ascii(const Reader& r, LoadedMesh* out) {
   bool ended = false;
   auto keyword_line = [&](const char* what, size_t tokens) -> Status {
     if (t.size() != tokens)
-      return r.fail_at(lines.number(), "'" + std::string(what) + "' line with " + std::to_string(t.size()) +
-                                           " words, expected " + std::to_string(tokens));
+      return r.fail_at(lines.number(), "'" + std::string(what) + "' line with " +
+                                           std::to_string(t.size()) + " words, expected " +
+                                           std::to_string(tokens));
     return Status::ok();
   };
   while (lines.next_tokens(&t, false)) {
@@ -622,14 +695,19 @@ Status read_stl_ascii(const Reader& r, LoadedMesh* out) {
     Status s = Status::ok();
     if (ended) {  // some writers put several solids in one file: read them all
       // A DOS end-of-file mark (Ctrl-Z) or NUL padding after the last solid is not content.
-      if (t.size() == 1 && k.find_first_not_of(std::string_view("\x1a\0", 2)) == std::string_view::npos) continue;
-      if (k != "solid") return r.fail_at(lines.number(), "unexpected '" + std::string(k.substr(0, 32)) + "' after endsolid");
+      if (t.size() == 1 &&
+          k.find_first_not_of(std::string_view("\x1a\0", 2)) == std::string_view::npos)
+        continue;
+      if (k != "solid")
+        return r.fail_at(lines.number(),
+                         "unexpected '" + std::string(k.substr(0, 32)) + "' after endsolid");
       ended = false;
       continue;
     }
     if (k == "facet") {
       if (at != At::kSolid) return r.fail_at(lines.number(), "facet inside a facet");
-      if (t.size() < 2 || t[1] != "normal") return r.fail_at(lines.number(), "'facet' without 'normal'");
+      if (t.size() < 2 || t[1] != "normal")
+        return r.fail_at(lines.number(), "'facet' without 'normal'");
       if (!(s = keyword_line("facet normal", 5))) return s;
       // The normal is ignored, but must be numbers: nan, inf and MSVC's 1.#IND / 1.#QNAN, which
       // some exporters write for degenerate facets, count as numbers here.
@@ -638,12 +716,15 @@ Status read_stl_ascii(const Reader& r, LoadedMesh* out) {
         std::string_view w = t[c];
         if (!w.empty() && (w[0] == '-' || w[0] == '+')) w.remove_prefix(1);
         if (!parse_double(t[c], &ignored) && w.substr(0, 3) != "1.#")
-          return r.fail_at(lines.number(), "not a number: '" + std::string(t[c].substr(0, 32)) + "'");
+          return r.fail_at(lines.number(),
+                           "not a number: '" + std::string(t[c].substr(0, 32)) + "'");
       }
       at = At::kFacet;
     } else if (k == "outer") {
-      if (at != At::kFacet) return r.fail_at(lines.number(), "'outer loop' outside a facet, or twice");
-      if (t.size() < 2 || t[1] != "loop") return r.fail_at(lines.number(), "'outer' without 'loop'");
+      if (at != At::kFacet)
+        return r.fail_at(lines.number(), "'outer loop' outside a facet, or twice");
+      if (t.size() < 2 || t[1] != "loop")
+        return r.fail_at(lines.number(), "'outer' without 'loop'");
       if (!(s = keyword_line("outer loop", 2))) return s;
       at = At::kLoop;
       corners = 0;
@@ -654,9 +735,11 @@ Status read_stl_ascii(const Reader& r, LoadedMesh* out) {
       Vec3 p;
       for (int c = 0; c < 3; ++c)
         if (!parse_double(t[c + 1], &p[c]))
-          return r.fail_at(lines.number(), "not a number: '" + std::string(t[c + 1].substr(0, 32)) + "'");
+          return r.fail_at(lines.number(),
+                           "not a number: '" + std::string(t[c + 1].substr(0, 32)) + "'");
       if (t.size() > 4)
-        return r.fail_at(lines.number(), "unexpected '" + std::string(t[4].substr(0, 32)) + "' after the vertex's coordinates");
+        return r.fail_at(lines.number(), "unexpected '" + std::string(t[4].substr(0, 32)) +
+                                             "' after the vertex's coordinates");
       m.vertices.push_back(p);
       ++corners;
     } else if (k == "endloop") {
@@ -666,7 +749,8 @@ Status read_stl_ascii(const Reader& r, LoadedMesh* out) {
       at = At::kLoopEnd;
     } else if (k == "endfacet") {
       if (at == At::kLoop) return r.fail_at(lines.number(), "'endfacet' before 'endloop'");
-      if (at != At::kLoopEnd) return r.fail_at(lines.number(), "'endfacet' without a facet and its outer loop");
+      if (at != At::kLoopEnd)
+        return r.fail_at(lines.number(), "'endfacet' without a facet and its outer loop");
       if (!(s = keyword_line("endfacet", 1))) return s;
       const int32_t b = static_cast<int32_t>(m.vertices.size()) - 3;
       m.faces.push_back({b, b + 1, b + 2});
@@ -711,7 +795,9 @@ Status read_stl(const Reader& r, LoadedMesh* out) {
 void weld_vertices(Mesh* mesh, size_t* welded, size_t* unreferenced) {
   struct Key {
     uint64_t b[3];
-    bool operator==(const Key& o) const { return b[0] == o.b[0] && b[1] == o.b[1] && b[2] == o.b[2]; }
+    bool operator==(const Key& o) const {
+      return b[0] == o.b[0] && b[1] == o.b[1] && b[2] == o.b[2];
+    }
   };
   struct KeyHash {
     size_t operator()(const Key& k) const {
@@ -741,8 +827,10 @@ void weld_vertices(Mesh* mesh, size_t* welded, size_t* unreferenced) {
       std::memcpy(&k.b[c], &v, 8);
     }
     auto [it, inserted] = first.emplace(k, static_cast<int32_t>(kept.size()));
-    if (inserted) kept.push_back(mesh->vertices[i]);
-    else ++*welded;
+    if (inserted)
+      kept.push_back(mesh->vertices[i]);
+    else
+      ++*welded;
     remap[i] = it->second;
   }
   for (Face& f : mesh->faces)
@@ -792,7 +880,8 @@ Status load_mesh(const std::string& path, LoadedMesh* out) {
     if (!regular) return regular;
     const ForeignMeshReader reader = foreign_reader;
     if (reader == nullptr)
-      return Status::error(display + ": unknown mesh format '" + ext + "' (this build reads OFF, OBJ, PLY, STL)");
+      return Status::error(display + ": unknown mesh format '" + ext +
+                           "' (this build reads OFF, OBJ, PLY, STL)");
     Status s = reader(path, display, size, out);
     if (!s) return s;
   } else {
@@ -811,8 +900,10 @@ Status load_mesh(const std::string& path, LoadedMesh* out) {
     if (content.find('\0') != std::string::npos && ext != "ply" && ext != "stl")
       return hinted(Status::error(display + ": binary data in a text format"));
     // Lines that end in CR alone (classic Mac OS) would read as one long line.
-    if (ext != "stl" && content.find('\n') == std::string::npos && content.find('\r') != std::string::npos)
-      return Status::error(display + ": lines end in CR alone (classic Mac OS); convert them to LF or CR LF");
+    if (ext != "stl" && content.find('\n') == std::string::npos &&
+        content.find('\r') != std::string::npos)
+      return Status::error(display +
+                           ": lines end in CR alone (classic Mac OS); convert them to LF or CR LF");
     // A UTF-8 byte-order mark, which some Windows editors put first, is no part of the text
     // (OBJ's first "v" line was dropped with it, and PLY's magic missed). Not for STL: a
     // binary STL's 80-byte header may begin with any bytes.
@@ -820,10 +911,14 @@ Status load_mesh(const std::string& path, LoadedMesh* out) {
     if (ext != "stl" && text.substr(0, 3) == "\xEF\xBB\xBF") text.remove_prefix(3);
     Reader r(display, text);
     out->format = ext;
-    if (ext == "off") s = read_off(r, out);
-    else if (ext == "obj") s = read_obj(r, out);
-    else if (ext == "ply") s = read_ply(r, out);
-    else s = read_stl(r, out);
+    if (ext == "off")
+      s = read_off(r, out);
+    else if (ext == "obj")
+      s = read_obj(r, out);
+    else if (ext == "ply")
+      s = read_ply(r, out);
+    else
+      s = read_stl(r, out);
     if (!s) return hinted(s);
   }
   if (out->mesh.vertices.size() > static_cast<size_t>(kMaxIndex))
@@ -859,15 +954,18 @@ Status save_mesh(const Mesh& m, const std::string& path, MeshFormat format) {
   };
   switch (format) {
     case MeshFormat::kOff:
-      s = "OFF\n" + std::to_string(m.vertices.size()) + " " + std::to_string(m.faces.size()) + " 0\n";
+      s = "OFF\n" + std::to_string(m.vertices.size()) + " " + std::to_string(m.faces.size()) +
+          " 0\n";
       for (const Vec3& v : m.vertices) vertex_line("", v);
       for (const Face& f : m.faces)
-        s += "3 " + std::to_string(f[0]) + " " + std::to_string(f[1]) + " " + std::to_string(f[2]) + "\n";
+        s += "3 " + std::to_string(f[0]) + " " + std::to_string(f[1]) + " " + std::to_string(f[2]) +
+             "\n";
       break;
     case MeshFormat::kObj:
       for (const Vec3& v : m.vertices) vertex_line("v ", v);
       for (const Face& f : m.faces)
-        s += "f " + std::to_string(f[0] + 1) + " " + std::to_string(f[1] + 1) + " " + std::to_string(f[2] + 1) + "\n";
+        s += "f " + std::to_string(f[0] + 1) + " " + std::to_string(f[1] + 1) + " " +
+             std::to_string(f[2] + 1) + "\n";
       break;
     case MeshFormat::kPlyAscii:
     case MeshFormat::kPlyBinary: {
@@ -878,15 +976,18 @@ Status save_mesh(const Mesh& m, const std::string& path, MeshFormat format) {
       s += "element face " + std::to_string(m.faces.size()) + "\n";
       s += "property list uchar int vertex_indices\nend_header\n";
       for (const Vec3& v : m.vertices) {
-        if (bin) for (int k = 0; k < 3; ++k) put_bin(&s, v[k]);
-        else vertex_line("", v);
+        if (bin)
+          for (int k = 0; k < 3; ++k) put_bin(&s, v[k]);
+        else
+          vertex_line("", v);
       }
       for (const Face& f : m.faces) {
         if (bin) {
           put_bin<uint8_t>(&s, 3);
           for (int32_t i : f) put_bin(&s, i);
         } else {
-          s += "3 " + std::to_string(f[0]) + " " + std::to_string(f[1]) + " " + std::to_string(f[2]) + "\n";
+          s += "3 " + std::to_string(f[0]) + " " + std::to_string(f[1]) + " " +
+               std::to_string(f[2]) + "\n";
         }
       }
       break;

@@ -28,7 +28,7 @@ struct LoadedMesh {
   size_t file_vertices = 0;       // vertex records in the file
   size_t welded_vertices = 0;     // records merged into an exactly equal earlier vertex
   size_t unreferenced_vertices = 0;
-  size_t polygons_split = 0;      // faces with more than 3 corners, split into fans
+  size_t polygons_split = 0;  // faces with more than 3 corners, split into fans
 };
 
 // Reads `path`. On failure the Status message is one line: "<file>: <reason>" or
@@ -37,8 +37,8 @@ Status load_mesh(const std::string& path, LoadedMesh* out);
 
 // The reader of the formats vobb does not parse itself, for a regular file of `bytes` bytes
 // (`display`: its name in messages). Without one registered, load_mesh refuses them.
-using ForeignMeshReader = Status (*)(const std::string& path, const std::string& display, uint64_t bytes,
-                                     LoadedMesh* out);
+using ForeignMeshReader = Status (*)(const std::string& path, const std::string& display,
+                                     uint64_t bytes, LoadedMesh* out);
 void set_foreign_mesh_reader(ForeignMeshReader reader);
 
 // Writers, for round trips and generated data. Numbers are written with 17 significant

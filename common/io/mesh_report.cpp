@@ -33,18 +33,22 @@ std::string format_report_text(const MeshReport& r, bool rational) {
   std::ostringstream o;
   const SolidityReport& s = r.solidity;
   o << "file:      " << r.file << " (" << r.loaded.format << ", "
-    << (r.loaded.single_precision ? "read in single precision through assimp" : "double precision, as written")
+    << (r.loaded.single_precision ? "read in single precision through assimp"
+                                  : "double precision, as written")
     << ")\n";
   o << "vertices:  " << s.vertices << " (" << r.loaded.file_vertices << " in the file, "
-    << r.loaded.welded_vertices << " welded, " << r.loaded.unreferenced_vertices << " unreferenced)\n";
+    << r.loaded.welded_vertices << " welded, " << r.loaded.unreferenced_vertices
+    << " unreferenced)\n";
   o << "faces:     " << s.faces;
-  if (r.loaded.polygons_split) o << " (" << r.loaded.polygons_split << " polygons split into triangles)";
+  if (r.loaded.polygons_split)
+    o << " (" << r.loaded.polygons_split << " polygons split into triangles)";
   o << "\nedges:     " << s.edges << "\nshells:    " << s.shells << "\n";
   const Aabb b = r.loaded.mesh.bounds();
   if (!b.empty() && b.lo.allFinite() && b.hi.allFinite())
     // The file's own doubles: the shortest form that reads back exactly.
-    o << "bbox:      [" << format_double(b.lo[0]) << ", " << format_double(b.lo[1]) << ", " << format_double(b.lo[2]) << "] .. ["
-      << format_double(b.hi[0]) << ", " << format_double(b.hi[1]) << ", " << format_double(b.hi[2]) << "]\n";
+    o << "bbox:      [" << format_double(b.lo[0]) << ", " << format_double(b.lo[1]) << ", "
+      << format_double(b.lo[2]) << "] .. [" << format_double(b.hi[0]) << ", "
+      << format_double(b.hi[1]) << ", " << format_double(b.hi[2]) << "]\n";
   if (s.volume_known) {
     o << "volume:    " << format_nearest(s.volume) << " (exact, rounded to nearest)\n";
     if (rational) o << "rational:  " << s.volume.get_str() << "\n";
@@ -87,7 +91,8 @@ std::string format_report_json(const MeshReport& r, bool rational) {
     d.push_back(one);
   }
   j["defects"] = d;
-  return j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";  // file names need not be UTF-8
+  return j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) +
+         "\n";  // file names need not be UTF-8
 }
 
 }  // namespace vobb

@@ -2,23 +2,20 @@
 // output, and the bad-input corpus in tests/data/bad.
 #include <fcntl.h>
 #include <gtest/gtest.h>
-
-#include <algorithm>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <csignal>
-#include <cstdlib>
-
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <limits>
-#include <sstream>
-
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "common/exact_predicates.h"
 #include "common/sha256.h"
@@ -73,8 +70,9 @@ TEST(CliBadInput, MissingFileDirectoryAndUsage) {
   r = vobb_cli("info " + test::data_dir());
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("is a directory"), std::string::npos) << r.err;
-  for (const char* args : {"", "frobnicate", "info", "build x.off", "build x.off -o t.json --depth -1",
-                           "build x.off -o t.json --arity 1", "export t.json -o b.obj"}) {
+  for (const char* args :
+       {"", "frobnicate", "info", "build x.off", "build x.off -o t.json --depth -1",
+        "build x.off -o t.json --arity 1", "export t.json -o b.obj"}) {
     r = vobb_cli(args);
     EXPECT_EQ(r.code, 2) << args;
     EXPECT_EQ(line_count(r.err), 1u) << args << ": " << r.err;
@@ -82,20 +80,24 @@ TEST(CliBadInput, MissingFileDirectoryAndUsage) {
   // An unknown command is named back with the list of commands; a known command's usage
   // error names the command.
   r = vobb_cli("frobnicate");
-  EXPECT_NE(r.err.find("unknown command 'frobnicate'; the commands are info, build"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("unknown command 'frobnicate'; the commands are info, build"),
+            std::string::npos)
+      << r.err;
   r = vobb_cli("build x.off");
   EXPECT_EQ(r.err.rfind("vobb build: usage: ", 0), 0u) << r.err;
   EXPECT_NE(r.err.find("see vobb build --help"), std::string::npos) << r.err;
   // A bad margin is refused before the mesh is read, so the line names the flag, not x.off.
-  for (const char* args : {"build x.off -o t.json --collider-margin -1", "build x.off -o t.json --collider-margin nan",
-                           "build x.off -o t.json --collider-margin 0.1 --method obbtree"}) {
+  for (const char* args :
+       {"build x.off -o t.json --collider-margin -1", "build x.off -o t.json --collider-margin nan",
+        "build x.off -o t.json --collider-margin 0.1 --method obbtree"}) {
     r = vobb_cli(args);
     EXPECT_EQ(r.code, 2) << args;
     EXPECT_EQ(line_count(r.err), 1u) << args << ": " << r.err;
     EXPECT_NE(r.err.find("--collider-margin"), std::string::npos) << args << ": " << r.err;
   }
   // An objective that is neither, and two objectives at once, before the mesh is read.
-  for (const char* args : {"build x.off -o t.json --objective sum", "build x.off -o t.json --objective omv --queries q.json"}) {
+  for (const char* args : {"build x.off -o t.json --objective sum",
+                           "build x.off -o t.json --objective omv --queries q.json"}) {
     r = vobb_cli(args);
     EXPECT_EQ(r.code, 2) << args;
     EXPECT_EQ(line_count(r.err), 1u) << args << ": " << r.err;
@@ -109,7 +111,8 @@ std::string write_cube(const std::string& name, double scale) {
   std::ofstream f(mesh);
   f.precision(17);
   f << "OFF\n8 12 0\n";
-  for (int i = 0; i < 8; ++i) f << scale * (i & 1) << " " << scale * ((i >> 1) & 1) << " " << scale * ((i >> 2) & 1) << "\n";
+  for (int i = 0; i < 8; ++i)
+    f << scale * (i & 1) << " " << scale * ((i >> 1) & 1) << " " << scale * ((i >> 2) & 1) << "\n";
   f << "3 0 4 6\n3 0 6 2\n3 1 3 7\n3 1 7 5\n3 0 1 5\n3 0 5 4\n3 2 6 7\n3 2 7 3\n3 0 2 3\n3 0 3 1\n"
        "3 4 5 7\n3 4 7 6\n";
   return mesh;
@@ -163,7 +166,8 @@ TEST(CliBadInput, OutputThatIsAnInputIsRefused) {
   const std::string mesh_again = dir + "/./" + mesh.substr(mesh.find_last_of('/') + 1);
   for (const std::string& args :
        {"build " + mesh + " -o " + mesh_again + " --method obbtree --depth 1",
-        "export " + tree + " --level 0 -o " + tree, "collide " + mesh + " " + tree + " --static --colliders 5 -o " + tree,
+        "export " + tree + " --level 0 -o " + tree,
+        "collide " + mesh + " " + tree + " --static --colliders 5 -o " + tree,
         "collide " + mesh + " " + tree + " --static --colliders 5 -o " + mesh,
         "compare " + mesh + " --depth 1 --backend cpu --m 4 --quiet --figure " + mesh_again}) {
     const CliRun r = vobb_cli(args);
@@ -188,27 +192,30 @@ TEST(CliBadInput, UnwritableOutputIsRefusedBeforeTheRun) {
   struct Case {
     std::string args, says;
   };
-  for (const Case& c : {Case{"build " + open_mesh + " -o /nonexistent/t.json --backend cpu", "no such folder /nonexistent"},
-                        Case{"build " + open_mesh + " -o " + dir + " --backend cpu", "is a folder"},
-                        Case{"export " + tree + " --level 1 -o /nonexistent/b.obj", "no such folder /nonexistent"},
-                        Case{"collide " + open_mesh + " " + tree + " --static --colliders 5 -o /nonexistent/c.json",
-                             "no such folder /nonexistent"},
-                        Case{"build " + open_mesh + " -o /proc/t.json --backend cpu", "cannot write in /proc"},
-                        Case{"build " + open_mesh + " -o " + dir + "/" + std::string(300, 'a') + ".json",
-                             "file name longer than"},
-                        Case{"compare " + open_mesh + " --depth 1 --backend cpu --figure " + dir, "is a folder"},
-                        Case{"export " + tree + " --level 1 -o " + dir + "/b.stl", "unknown box export format"},
-                        // An empty name names nothing (it was taken for "no file" and the run
-                        // failed only at its end).
-                        Case{"build " + open_mesh + " -o '' --backend cpu", "an empty name"},
-                        Case{"collide " + open_mesh + " " + tree + " --static -o ''", "an empty name"},
-                        Case{"compare " + open_mesh + " --figure ''", "an empty name"},
-                        // Folders that exist and take no file: refused before the run, not warned
-                        // about at every save.
-                        Case{"build " + mesh + " -o " + dir + "/t.json --backend cpu --checkpoint /proc/self",
-                             "cannot write in /proc/self"},
-                        Case{"certify " + mesh + " " + tree + " --checkpoint /proc/self", "cannot write in /proc/self"},
-                        Case{"validate --cpu-only --out /proc/self/v", "cannot write in /proc/self"}}) {
+  for (const Case& c :
+       {Case{"build " + open_mesh + " -o /nonexistent/t.json --backend cpu",
+             "no such folder /nonexistent"},
+        Case{"build " + open_mesh + " -o " + dir + " --backend cpu", "is a folder"},
+        Case{"export " + tree + " --level 1 -o /nonexistent/b.obj", "no such folder /nonexistent"},
+        Case{"collide " + open_mesh + " " + tree + " --static --colliders 5 -o /nonexistent/c.json",
+             "no such folder /nonexistent"},
+        Case{"build " + open_mesh + " -o /proc/t.json --backend cpu", "cannot write in /proc"},
+        Case{"build " + open_mesh + " -o " + dir + "/" + std::string(300, 'a') + ".json",
+             "file name longer than"},
+        Case{"compare " + open_mesh + " --depth 1 --backend cpu --figure " + dir, "is a folder"},
+        Case{"export " + tree + " --level 1 -o " + dir + "/b.stl", "unknown box export format"},
+        // An empty name names nothing (it was taken for "no file" and the run
+        // failed only at its end).
+        Case{"build " + open_mesh + " -o '' --backend cpu", "an empty name"},
+        Case{"collide " + open_mesh + " " + tree + " --static -o ''", "an empty name"},
+        Case{"compare " + open_mesh + " --figure ''", "an empty name"},
+        // Folders that exist and take no file: refused before the run, not warned
+        // about at every save.
+        Case{"build " + mesh + " -o " + dir + "/t.json --backend cpu --checkpoint /proc/self",
+             "cannot write in /proc/self"},
+        Case{"certify " + mesh + " " + tree + " --checkpoint /proc/self",
+             "cannot write in /proc/self"},
+        Case{"validate --cpu-only --out /proc/self/v", "cannot write in /proc/self"}}) {
     const CliRun r = vobb_cli(c.args);
     EXPECT_EQ(r.code, 2) << c.args << ": " << r.err;
     EXPECT_EQ(line_count(r.err), 1u) << c.args << ": " << r.err;
@@ -220,10 +227,12 @@ TEST(CliBadInput, UnwritableOutputIsRefusedBeforeTheRun) {
   CliRun ok = vobb_cli("build " + mesh + " -o " + empty + "/t.json --method obbtree --depth 1");
   ASSERT_EQ(ok.code, 0) << ok.err;
   std::vector<std::string> left;
-  for (const auto& e : std::filesystem::directory_iterator(empty)) left.push_back(e.path().filename().string());
+  for (const auto& e : std::filesystem::directory_iterator(empty))
+    left.push_back(e.path().filename().string());
   EXPECT_EQ(left, std::vector<std::string>{"t.json"});
   std::filesystem::remove_all(empty);
-  ok = vobb_cli("build " + mesh + " -o /dev/stdout --method obbtree --depth 1");  // stdout is popen's pipe
+  ok = vobb_cli("build " + mesh +
+                " -o /dev/stdout --method obbtree --depth 1");  // stdout is popen's pipe
   ASSERT_EQ(ok.code, 0) << ok.err;
   Tree piped;
   const std::string piped_path = test::temp_path("out_piped.json");
@@ -253,13 +262,15 @@ TEST(CliBadInput, OutputsThroughLinksAndTheRunsOwnCheckpoint) {
   fs::create_symlink("real/tree.json", dir / "a.json");  // relative, to a file not there yet
   fs::create_symlink("/nonexistent/dir/tree.json", dir / "b.json");
   fs::create_symlink("c.json", dir / "c.json");
-  CliRun r = vobb_cli("build " + mesh + " -o " + (dir / "a.json").string() + " --method obbtree --depth 1 --quiet");
+  CliRun r = vobb_cli("build " + mesh + " -o " + (dir / "a.json").string() +
+                      " --method obbtree --depth 1 --quiet");
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_TRUE(fs::is_symlink(fs::symlink_status(dir / "a.json")));
   Tree t;
   EXPECT_TRUE(read_tree((dir / "real" / "tree.json").string(), &t));
-  for (const auto& [link, says] : {std::pair<std::string, std::string>{"b.json", "no such folder /nonexistent/dir"},
-                                   {"c.json", "cannot follow the link"}}) {
+  for (const auto& [link, says] :
+       {std::pair<std::string, std::string>{"b.json", "no such folder /nonexistent/dir"},
+        {"c.json", "cannot follow the link"}}) {
     r = vobb_cli("build " + mesh + " -o " + (dir / link).string() + " --method obbtree --depth 1");
     EXPECT_EQ(r.code, 2) << link;
     EXPECT_EQ(line_count(r.err), 1u) << r.err;
@@ -271,14 +282,21 @@ TEST(CliBadInput, OutputsThroughLinksAndTheRunsOwnCheckpoint) {
   const std::string ck = (dir / "ck").string(), in_dir = "cd " + dir.string() + " && ";
   const std::string small = " --depth 1 --m 4 --backend cpu";
   for (const auto& [args, says] : std::vector<std::pair<std::string, std::string>>{
-           {"build " + mesh + " -o " + ck + "/state.json --checkpoint " + ck + small, "checkpoint file"},
-           {"build " + mesh + " -o " + ck + "/../ck/state.json --checkpoint " + ck + "/." + small, "checkpoint file"},
+           {"build " + mesh + " -o " + ck + "/state.json --checkpoint " + ck + small,
+            "checkpoint file"},
+           {"build " + mesh + " -o " + ck + "/../ck/state.json --checkpoint " + ck + "/." + small,
+            "checkpoint file"},
            {"build " + mesh + " -o ck/state.json --checkpoint ./ck" + small, "checkpoint file"},
            {"build " + mesh + " -o ck/state.json --checkpoint " + ck + small, "checkpoint file"},
-           {"build " + mesh + " -o ck --checkpoint ck" + small, "is a folder of this run's checkpoint"},
-           {"build " + mesh + " -o x --checkpoint x/ck" + small, "is a folder of this run's checkpoint"},
-           {"compare " + mesh + small + " --checkpoint ck --figure ck/certify-variational/layers.json", "checkpoint file"},
-           {"compare " + mesh + small + " --checkpoint ck --figure ck/certify-obbtree", "is a folder of this run's checkpoint"}}) {
+           {"build " + mesh + " -o ck --checkpoint ck" + small,
+            "is a folder of this run's checkpoint"},
+           {"build " + mesh + " -o x --checkpoint x/ck" + small,
+            "is a folder of this run's checkpoint"},
+           {"compare " + mesh + small +
+                " --checkpoint ck --figure ck/certify-variational/layers.json",
+            "checkpoint file"},
+           {"compare " + mesh + small + " --checkpoint ck --figure ck/certify-obbtree",
+            "is a folder of this run's checkpoint"}}) {
     const CliRun run = vobb_cli_in(in_dir, args);
     EXPECT_EQ(run.code, 2) << args;
     EXPECT_EQ(line_count(run.err), 1u) << run.err;
@@ -327,7 +345,8 @@ TEST(CliBadInput, StandardOutputWithNoReaderEndsWithExitThree) {
 TEST(CliBadInput, VariationalOnlyOptionsAreRefusedForTheBaseline) {
   const std::string mesh = write_cube("only_cube.off", 1);
   const std::string tree = test::temp_path("only_tree.json");
-  for (const std::string& flag : {std::string("--checkpoint ") + test::temp_path("only_ck"), std::string("--time-budget 1")}) {
+  for (const std::string& flag : {std::string("--checkpoint ") + test::temp_path("only_ck"),
+                                  std::string("--time-budget 1")}) {
     const CliRun r = vobb_cli("build " + mesh + " -o " + tree + " --method obbtree " + flag);
     EXPECT_EQ(r.code, 2) << flag;
     EXPECT_EQ(line_count(r.err), 1u) << r.err;
@@ -349,7 +368,8 @@ TEST(Cli, SinglePrecisionReadsAreNamed) {
     const int tri[12][3] = {{0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5}, {0, 1, 5}, {0, 5, 4},
                             {2, 6, 7}, {2, 7, 3}, {0, 2, 3}, {0, 3, 1}, {4, 5, 7}, {4, 7, 6}};
     for (const auto& t : tri) {
-      for (int c = 0; c < 3; ++c) f << (t[c] & 1) << " " << ((t[c] >> 1) & 1) << " " << ((t[c] >> 2) & 1) << " ";
+      for (int c = 0; c < 3; ++c)
+        f << (t[c] & 1) << " " << ((t[c] >> 1) & 1) << " " << ((t[c] >> 2) & 1) << " ";
       f << "\n";
     }
   }
@@ -365,13 +385,16 @@ TEST(Cli, SinglePrecisionReadsAreNamed) {
     Tree t;
     ASSERT_TRUE(read_tree(tree, &t));
     ASSERT_TRUE(write_boxes({t.nodes[0].box}, boxes));
-    for (const std::string& args : {"certify " + mesh + " " + tree + " --json --quiet",
-                                    "obv " + mesh + " --boxes " + boxes + " --backend cpu --m 4 --json",
-                                    "compare " + mesh + " --depth 1 --backend cpu --m 4 --json --quiet"}) {
+    for (const std::string& args :
+         {"certify " + mesh + " " + tree + " --json --quiet",
+          "obv " + mesh + " --boxes " + boxes + " --backend cpu --m 4 --json",
+          "compare " + mesh + " --depth 1 --backend cpu --m 4 --json --quiet"}) {
       r = vobb_cli(args);
       ASSERT_EQ(r.code, 0) << args << ": " << r.err;
-      EXPECT_EQ(r.err.find("read in single precision through assimp") != std::string::npos, single) << args << ": " << r.err;
-      EXPECT_EQ(nlohmann::json::parse(r.out).at("mesh_single_precision").get<bool>(), single) << args;
+      EXPECT_EQ(r.err.find("read in single precision through assimp") != std::string::npos, single)
+          << args << ": " << r.err;
+      EXPECT_EQ(nlohmann::json::parse(r.out).at("mesh_single_precision").get<bool>(), single)
+          << args;
     }
     r = vobb_cli("collide " + mesh + " " + tree + " --static --colliders 5 --no-fcl");
     ASSERT_EQ(r.code, 0) << r.err;
@@ -382,8 +405,9 @@ TEST(Cli, SinglePrecisionReadsAreNamed) {
     EXPECT_EQ(line_count(r.err), 1u) << r.err;
     // Input refused after the mesh was read (a margin beyond the cube, a box file that is
     // not one): the refusal is the one line, with no note before it.
-    for (const std::string& args : {"build " + mesh + " -o " + tree + " --collider-margin 100 --backend cpu",
-                                    "obv " + mesh + " --boxes " + mesh + " --backend cpu"}) {
+    for (const std::string& args :
+         {"build " + mesh + " -o " + tree + " --collider-margin 100 --backend cpu",
+          "obv " + mesh + " --boxes " + mesh + " --backend cpu"}) {
       r = vobb_cli(args);
       EXPECT_EQ(r.code, 2) << args;
       EXPECT_EQ(line_count(r.err), 1u) << args << ": " << r.err;
@@ -413,8 +437,10 @@ TEST(Cli, CompareWeighsTreesOfDifferentDepthsAlike) {
   Rational e[2];
   for (size_t l = 0; l < levels; ++l) {
     const auto& row = doc["levels"][l];
-    e[0] += static_cast<long>(levels - l) * Rational(row.at("omv_baseline_rational").get<std::string>());
-    e[1] += static_cast<long>(levels - l) * Rational(row.at("omv_variational_rational").get<std::string>());
+    e[0] += static_cast<long>(levels - l) *
+            Rational(row.at("omv_baseline_rational").get<std::string>());
+    e[1] += static_cast<long>(levels - l) *
+            Rational(row.at("omv_variational_rational").get<std::string>());
   }
   EXPECT_TRUE(e[0] == Rational(doc.at("e_baseline_rational").get<std::string>()));
   EXPECT_TRUE(e[1] == Rational(doc.at("e_variational_rational").get<std::string>()));
@@ -427,7 +453,8 @@ TEST(Cli, CompareWeighsTreesOfDifferentDepthsAlike) {
   // e_D = e_d + (D - d) sum_{l <= d} OMV_l + (D - d)(D - d + 1) / 2 OMV_d.
   {
     const std::string shallow_tree = test::temp_path("cmp_shallow.json");
-    r = vobb_cli("build " + mesh + " -o " + shallow_tree + " --method " + (d0 < d1 ? "obbtree" : "variational") + flags);
+    r = vobb_cli("build " + mesh + " -o " + shallow_tree + " --method " +
+                 (d0 < d1 ? "obbtree" : "variational") + flags);
     ASSERT_EQ(r.code, 0) << r.err;
     r = vobb_cli("certify " + mesh + " " + shallow_tree + " --json --rational --quiet");
     ASSERT_EQ(r.code, 0) << r.err;
@@ -437,18 +464,21 @@ TEST(Cli, CompareWeighsTreesOfDifferentDepthsAlike) {
     for (const auto& l : c["levels"]) sum += Rational(l.at("omv_rational").get<std::string>());
     const Rational last(c["levels"][d].at("omv_rational").get<std::string>());
     const long k = deep - d;
-    const Rational expected = Rational(c.at("weighted_error_rational").get<std::string>()) + k * sum + (k * (k + 1) / 2) * last;
+    const Rational expected = Rational(c.at("weighted_error_rational").get<std::string>()) +
+                              k * sum + (k * (k + 1) / 2) * last;
     EXPECT_TRUE(expected == e[d0 < d1 ? 0 : 1]);
     std::remove(shallow_tree.c_str());
   }
   // The deeper tree alone, certified: the same e.
   const bool variational_deeper = d1 > d0;
   const std::string tree = test::temp_path("cmp_tree.json");
-  r = vobb_cli("build " + mesh + " -o " + tree + " --method " + (variational_deeper ? "variational" : "obbtree") + flags);
+  r = vobb_cli("build " + mesh + " -o " + tree + " --method " +
+               (variational_deeper ? "variational" : "obbtree") + flags);
   ASSERT_EQ(r.code, 0) << r.err;
   r = vobb_cli("certify " + mesh + " " + tree + " --json --rational --quiet");
   ASSERT_EQ(r.code, 0) << r.err;
-  const Rational certified(nlohmann::json::parse(r.out).at("weighted_error_rational").get<std::string>());
+  const Rational certified(
+      nlohmann::json::parse(r.out).at("weighted_error_rational").get<std::string>());
   EXPECT_TRUE(certified == e[variational_deeper ? 1 : 0]);
   // The text report says why the layers were padded.
   r = vobb_cli("compare " + mesh + flags);
@@ -482,7 +512,8 @@ TEST(Cli, CompareAndBuildShareACheckpoint) {
   EXPECT_EQ(line_count(r.err), 1u) << r.err;
   EXPECT_NE(r.err.find("obv.json: damaged certify checkpoint"), std::string::npos) << r.err;
   { std::ofstream(obv) << obv_bytes; }
-  const std::string resumed = test::temp_path("ck_resumed.json"), fresh = test::temp_path("ck_fresh.json");
+  const std::string resumed = test::temp_path("ck_resumed.json"),
+                    fresh = test::temp_path("ck_fresh.json");
   r = vobb_cli("build " + mesh + " -o " + resumed + flags + " --checkpoint " + dir);
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.err.find("resuming from"), std::string::npos) << r.err;
@@ -509,7 +540,8 @@ TEST(Cli, JsonReportsTakeFileNamesThatAreNotUtf8) {
 // redrawn with carriage returns; the first progress line comes at once.
 TEST(Cli, ProgressIntoAFileIsWholeLines) {
   const std::string mesh = write_cube("progress_cube.off", 1);
-  const CliRun r = vobb_cli("build " + mesh + " -o " + test::temp_path("progress_tree.json") + " --depth 2 --backend cpu --m 4");
+  const CliRun r = vobb_cli("build " + mesh + " -o " + test::temp_path("progress_tree.json") +
+                            " --depth 2 --backend cpu --m 4");
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_EQ(r.err.find('\r'), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("vobb: level 1/2  nodes done 0/1  iteration"), std::string::npos) << r.err;
@@ -524,7 +556,8 @@ TEST(CliBadInput, PhysicsFailureIsOneLineNotAnAbort) {
   const std::string tree = test::temp_path("huge_tree.json");
   ASSERT_EQ(vobb_cli("build " + mesh + " -o " + tree + " --method obbtree --depth 2").code, 0);
   const std::string out = test::temp_path("huge_report.json");
-  const CliRun r = vobb_cli("collide " + mesh + " " + tree + " --colliders 30 --seconds 1 --no-fcl -o " + out);
+  const CliRun r =
+      vobb_cli("collide " + mesh + " " + tree + " --colliders 30 --seconds 1 --no-fcl -o " + out);
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_EQ(line_count(r.err), 1u) << r.err;
   EXPECT_NE(r.err.find("physics engine stopped: ODE"), std::string::npos) << r.err;
@@ -541,7 +574,8 @@ TEST(CliBadInput, CrossingSheetsAreRefusedWithALowerBound) {
   const CliRun r = vobb_cli("info " + mesh + " --json");
   EXPECT_EQ(r.code, 2);
   EXPECT_EQ(line_count(r.err), 1u) << r.err;
-  EXPECT_NE(r.err.find("self-intersecting: at least 1000000 pairs of faces"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("self-intersecting: at least 1000000 pairs of faces"), std::string::npos)
+      << r.err;
   EXPECT_NE(r.out.find("\"count_is_lower_bound\": true"), std::string::npos) << r.out;
   std::remove(mesh.c_str());
 }
@@ -568,7 +602,8 @@ class CliOnCube : public ::testing::Test {
     {
       std::ofstream f(mesh_);
       f << "OFF\n8 12 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n0 0 1\n1 0 1\n0 1 1\n1 1 1\n"
-           "3 0 4 6\n3 0 6 2\n3 1 3 7\n3 1 7 5\n3 0 1 5\n3 0 5 4\n3 2 6 7\n3 2 7 3\n3 0 2 3\n3 0 3 1\n"
+           "3 0 4 6\n3 0 6 2\n3 1 3 7\n3 1 7 5\n3 0 1 5\n3 0 5 4\n3 2 6 7\n3 2 7 3\n3 0 2 3\n3 0 3 "
+           "1\n"
            "3 4 5 7\n3 4 7 6\n";
     }
     tree_ = test::temp_path("cube_tree.json");
@@ -598,7 +633,8 @@ TEST_F(CliOnCube, InfoAndBuild) {
   EXPECT_EQ(t.mesh_sha256.size(), 64u);
   // A collider margin beyond the cube's diagonal (sqrt 3) is refused, and no tree is written.
   const std::string margin_tree = test::temp_path("margin_tree.json");
-  r = vobb_cli("build " + mesh + " -o " + margin_tree + " --collider-margin 1.8 --backend cpu --depth 1");
+  r = vobb_cli("build " + mesh + " -o " + margin_tree +
+               " --collider-margin 1.8 --backend cpu --depth 1");
   EXPECT_EQ(r.code, 2);
   EXPECT_EQ(line_count(r.err), 1u) << r.err;
   EXPECT_NE(r.err.find("bounding-box diagonal"), std::string::npos) << r.err;
@@ -606,7 +642,8 @@ TEST_F(CliOnCube, InfoAndBuild) {
   // Within the diagonal it builds, and the margin reaches the builder: the tree differs from
   // the margin-0 build of the same flags (the same difference the builder test pins down).
   const std::string plain_tree = test::temp_path("plain_tree.json");
-  r = vobb_cli("build " + mesh + " -o " + margin_tree + " --collider-margin 0.5 --backend cpu --depth 2 --m 8 --quiet");
+  r = vobb_cli("build " + mesh + " -o " + margin_tree +
+               " --collider-margin 0.5 --backend cpu --depth 2 --m 8 --quiet");
   ASSERT_EQ(r.code, 0) << r.err;
   r = vobb_cli("build " + mesh + " -o " + plain_tree + " --backend cpu --depth 2 --m 8 --quiet");
   ASSERT_EQ(r.code, 0) << r.err;
@@ -635,7 +672,9 @@ TEST_F(CliOnCube, ExportWritesEachBoxOfTheLayer) {
       std::string tag;
       words >> tag;
       if (tag == "o") ++objects;
-      if (tag == "f") quads += std::distance(std::istream_iterator<std::string>(words), std::istream_iterator<std::string>()) == 4;
+      if (tag == "f")
+        quads += std::distance(std::istream_iterator<std::string>(words),
+                               std::istream_iterator<std::string>()) == 4;
       if (tag == "v") {
         Vec3 v;
         words >> v[0] >> v[1] >> v[2];
@@ -674,8 +713,9 @@ TEST_F(CliOnCube, CertifyPassesFailsAndRefuses) {
   // (exit 1); a tree for another mesh is bad input (exit 2).
   r = vobb_cli("certify " + mesh + " " + tree + " --json --quiet");
   ASSERT_EQ(r.code, 0) << r.err;
-  for (const char* key : {"\"levels\"", "\"omv\"", "\"sum_obv\"", "\"overlap\"", "\"upper_bound_holds\": true",
-                          "\"weighted_error\"", "\"containment\"", "\"seconds\""})
+  for (const char* key :
+       {"\"levels\"", "\"omv\"", "\"sum_obv\"", "\"overlap\"", "\"upper_bound_holds\": true",
+        "\"weighted_error\"", "\"containment\"", "\"seconds\""})
     EXPECT_NE(r.out.find(key), std::string::npos) << key;
   {
     Tree shrunk;
@@ -713,9 +753,10 @@ TEST_F(CliOnCube, ObvEstimatesWithinTheirCertifiedBounds) {
     ASSERT_TRUE(write_boxes({t.nodes[0].box}, boxes));
     r = vobb_cli("obv " + mesh + " --boxes " + boxes + " --m 4,8 --backend all --json --rational");
     ASSERT_EQ(r.code, 0) << r.err;
-    for (const char* key : {"\"index\"", "\"box_volume\"", "\"interval\"", "\"exact\"", "\"estimates\"",
-                            "\"backend\": \"cpu\"", "\"backend\": \"gl\"", "\"backend\": \"poly\"", "\"m\": 8",
-                            "\"obv\"", "\"seconds\"", "\"renderer\""})
+    for (const char* key :
+         {"\"index\"", "\"box_volume\"", "\"interval\"", "\"exact\"", "\"estimates\"",
+          "\"backend\": \"cpu\"", "\"backend\": \"gl\"", "\"backend\": \"poly\"", "\"m\": 8",
+          "\"obv\"", "\"seconds\"", "\"renderer\""})
       EXPECT_NE(r.out.find(key), std::string::npos) << key << r.out;
     // The exact OBV as a rational too, whose nearest double is "exact"; the interval holds it,
     // and every estimate lies within its certified bound of it (compared as rationals).
@@ -727,7 +768,8 @@ TEST_F(CliOnCube, ObvEstimatesWithinTheirCertifiedBounds) {
       EXPECT_LE(q, Rational(box["interval"][1].get<double>()));
       ASSERT_EQ(box["estimates"].size(), 5u);  // poly, then cpu and gl at m = 4 and 8
       for (const auto& e : box["estimates"]) {
-        EXPECT_LE(abs(Rational(e["obv"].get<double>()) - q), Rational(e["bound"].get<double>())) << e;
+        EXPECT_LE(abs(Rational(e["obv"].get<double>()) - q), Rational(e["bound"].get<double>()))
+            << e;
         EXPECT_FALSE(e.contains("r_bound")) << e;  // R(m) only when asked for
       }
     }
@@ -738,8 +780,10 @@ TEST_F(CliOnCube, ObvEstimatesWithinTheirCertifiedBounds) {
     EXPECT_FALSE(nlohmann::json::parse(r.out)["boxes"][0].contains("exact_rational")) << r.out;
     r = vobb_cli("obv " + mesh + " --boxes " + boxes + " --backend exact --rational");
     ASSERT_EQ(r.code, 0) << r.err;
-    EXPECT_NE(r.out.find("box 0 exact (rational): " + doc["boxes"][0]["exact_rational"].get<std::string>() + "\n"),
-              std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("box 0 exact (rational): " +
+                         doc["boxes"][0]["exact_rational"].get<std::string>() + "\n"),
+              std::string::npos)
+        << r.out;
     // Without a GL context: gl is refused in one line, auto falls back to the CPU twin and warns.
     ::setenv("VOBB_GL", "off", 1);
     r = vobb_cli("obv " + mesh + " --boxes " + boxes + " --backend gl");
@@ -761,7 +805,8 @@ TEST_F(CliOnCube, VariationalTreeCertifies) {
   const std::string tree = test::temp_path("cube_variational.json");
   CliRun r;
   // The variational builder (CPU twin in its loop) writes a tree that certifies.
-  r = vobb_cli("build " + mesh + " -o " + tree + " --method variational --depth 3 --m 8 --backend cpu --quiet");
+  r = vobb_cli("build " + mesh + " -o " + tree +
+               " --method variational --depth 3 --m 8 --backend cpu --quiet");
   ASSERT_EQ(r.code, 0) << r.err;
   r = vobb_cli("certify " + mesh + " " + tree + " --quiet");
   EXPECT_EQ(r.code, 0) << r.out << r.err;
@@ -785,7 +830,8 @@ TEST(Cli, ObvBoundIsNeverAboveTheBoxVolume) {
   b.half = Vec3(0.3, 0.3, 0.3);
   const std::string boxes = test::temp_path("range_boxes.json");
   ASSERT_TRUE(write_boxes({b}, boxes));
-  const CliRun r = vobb_cli("obv " + mesh + " --boxes " + boxes + " --m 1,2 --backend all --json --r-bound --rational");
+  const CliRun r = vobb_cli("obv " + mesh + " --boxes " + boxes +
+                            " --m 1,2 --backend all --json --r-bound --rational");
   ASSERT_EQ(r.code, 0) << r.err;
   const nlohmann::json doc = nlohmann::json::parse(r.out);
   ASSERT_EQ(doc["boxes"].size(), 1u);
@@ -805,7 +851,8 @@ TEST(Cli, ObvBoundIsNeverAboveTheBoxVolume) {
     ++cubemap;
     const double rb = e["r_bound"].get<double>();
     EXPECT_LE(std::abs(obv - exact), rb) << e;
-    EXPECT_LE(rb, std::max(obv, vol - obv) * (1 + 128 * std::numeric_limits<double>::epsilon())) << e;
+    EXPECT_LE(rb, std::max(obv, vol - obv) * (1 + 128 * std::numeric_limits<double>::epsilon()))
+        << e;
     EXPECT_LT(rb, vol) << e;
   }
   EXPECT_EQ(cubemap, 4);
@@ -834,7 +881,8 @@ TEST(Cli, PolyBackendEstimatesAndBuilds) {
   EXPECT_FALSE(doc.contains("renderer"));  // no GL context for poly
   r = vobb_cli("obv " + mesh + " --boxes " + boxes + " --backend exact --json --rational");
   ASSERT_EQ(r.code, 0) << r.err;
-  const Rational exact(nlohmann::json::parse(r.out)["boxes"][0]["exact_rational"].get<std::string>());
+  const Rational exact(
+      nlohmann::json::parse(r.out)["boxes"][0]["exact_rational"].get<std::string>());
   EXPECT_LE(Rational(box["interval"][0].get<double>()), exact);
   EXPECT_LE(exact, Rational(box["interval"][1].get<double>()));
   r = vobb_cli("obv " + mesh + " --boxes " + boxes + " --backend poly");
@@ -881,7 +929,8 @@ TEST(Cli, GlRendererIsNamedByTheCommandLineOnlyWhenNotQuiet) {
 // process (exec), the shell is the one killed.
 bool killed_by_its_hook(const std::string& command) {
   const int status = std::system((command + " >/dev/null 2>&1").c_str());
-  return (WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL) || (WIFEXITED(status) && WEXITSTATUS(status) == 128 + SIGKILL);
+  return (WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL) ||
+         (WIFEXITED(status) && WEXITSTATUS(status) == 128 + SIGKILL);
 }
 
 // A variational build killed (SIGKILL) once its checkpoint holds two split levels, then started
@@ -891,15 +940,17 @@ TEST(Cli, KilledBuildResumesToTheSameTree) {
   const std::string mesh = test::real_mesh("dino");
   VOBB_REQUIRE_REAL_MESH("dino");
   const std::string dir = test::temp_path("ckpt"), state = dir + "/state.json";
-  const std::string whole = test::temp_path("whole.json"), resumed = test::temp_path("resumed.json");
+  const std::string whole = test::temp_path("whole.json"),
+                    resumed = test::temp_path("resumed.json");
   std::system(("rm -rf " + dir).c_str());
   // Small settings: the test is about resuming, not about quality (about 15 s a build here).
   const std::string args = " --depth 3 --m 8 --lloyd 1 --backend cpu --quiet";
   ASSERT_EQ(vobb_cli("build " + mesh + " -o " + whole + args).code, 0);
   // Killed (SIGKILL, by the build itself through a test hook) right after the state with two
   // levels split is saved: a known point, not a race with a poller.
-  EXPECT_TRUE(killed_by_its_hook("VOBB_TEST_KILL_AT_SPLIT_LEVELS=2 " + std::string(VOBB_CLI) + " build " + mesh +
-                                 " -o " + resumed + args + " --checkpoint " + dir))
+  EXPECT_TRUE(killed_by_its_hook("VOBB_TEST_KILL_AT_SPLIT_LEVELS=2 " + std::string(VOBB_CLI) +
+                                 " build " + mesh + " -o " + resumed + args + " --checkpoint " +
+                                 dir))
       << "the build was not killed at its level-2 checkpoint";
   EXPECT_NE(slurp(state).find("\"split_levels\":2"), std::string::npos);
   EXPECT_FALSE(test::exists(resumed)) << "the killed build wrote its tree";
@@ -907,22 +958,27 @@ TEST(Cli, KilledBuildResumesToTheSameTree) {
   // (Unlocked, and written longer ago than remove_stray_temporaries waits.)
   const std::string stray = dir + "/.vobb-12345-0.tmp";
   { std::ofstream(stray) << "{\"half"; }
-  std::filesystem::last_write_time(stray, std::filesystem::file_time_type::clock::now() - std::chrono::minutes(5));
+  std::filesystem::last_write_time(
+      stray, std::filesystem::file_time_type::clock::now() - std::chrono::minutes(5));
   ASSERT_TRUE(test::exists(stray));
-  const CliRun again = vobb_cli("build " + mesh + " -o " + resumed + " --depth 3 --m 8 --lloyd 1 --backend cpu --checkpoint " + dir);
+  const CliRun again = vobb_cli("build " + mesh + " -o " + resumed +
+                                " --depth 3 --m 8 --lloyd 1 --backend cpu --checkpoint " + dir);
   ASSERT_EQ(again.code, 0) << again.err;
   EXPECT_NE(again.err.find("resuming from"), std::string::npos) << again.err;
   EXPECT_EQ(slurp(resumed), slurp(whole));
   EXPECT_FALSE(test::exists(stray)) << "a killed run's temporary file was left in the checkpoint";
-  const CliRun other = vobb_cli("build " + mesh + " -o " + resumed + args + " --seed 2 --checkpoint " + dir);
+  const CliRun other =
+      vobb_cli("build " + mesh + " -o " + resumed + args + " --seed 2 --checkpoint " + dir);
   EXPECT_EQ(other.code, 2);
   EXPECT_NE(other.err.find("checkpoint of another build"), std::string::npos) << other.err;
   // A margin is part of what the checkpoint names: the margin-0 state is refused.
-  const CliRun margin = vobb_cli("build " + mesh + " -o " + resumed + args + " --collider-margin 0.1 --checkpoint " + dir);
+  const CliRun margin = vobb_cli("build " + mesh + " -o " + resumed + args +
+                                 " --collider-margin 0.1 --checkpoint " + dir);
   EXPECT_EQ(margin.code, 2);
   EXPECT_NE(margin.err.find("checkpoint of another build"), std::string::npos) << margin.err;
   // So is the objective: the obv state is refused by an omv build.
-  const CliRun objective = vobb_cli("build " + mesh + " -o " + resumed + args + " --objective omv --checkpoint " + dir);
+  const CliRun objective =
+      vobb_cli("build " + mesh + " -o " + resumed + args + " --objective omv --checkpoint " + dir);
   EXPECT_EQ(objective.code, 2);
   EXPECT_NE(objective.err.find("checkpoint of another build"), std::string::npos) << objective.err;
   std::system(("rm -rf " + dir).c_str());
@@ -933,7 +989,8 @@ TEST(Cli, KilledBuildResumesToTheSameTree) {
 // run keeps those of its resumed layers, not the whole run's).
 nlohmann::json without_seconds(nlohmann::json j) {
   if (j.is_object()) {
-    for (auto it = j.begin(); it != j.end();) it = it.key().find("seconds") != std::string::npos ? j.erase(it) : std::next(it);
+    for (auto it = j.begin(); it != j.end();)
+      it = it.key().find("seconds") != std::string::npos ? j.erase(it) : std::next(it);
     for (auto& item : j.items()) item.value() = without_seconds(item.value());
   } else if (j.is_array()) {
     for (auto& v : j) v = without_seconds(v);
@@ -950,29 +1007,36 @@ TEST(Cli, KilledCertifyResumesToTheSameCertificate) {
   const std::string dir = test::temp_path("cert_ckpt"), state = dir + "/layers.json";
   const std::string tree = test::temp_path("cert_tree.json");
   std::system(("rm -rf " + dir).c_str());
-  ASSERT_EQ(vobb_cli("build " + mesh + " -o " + tree + " --method obbtree --depth 4 --quiet").code, 0);
+  ASSERT_EQ(vobb_cli("build " + mesh + " -o " + tree + " --method obbtree --depth 4 --quiet").code,
+            0);
   const CliRun whole = vobb_cli("certify " + mesh + " " + tree + " --json --rational --quiet");
   ASSERT_EQ(whole.code, 0) << whole.err;
-  EXPECT_TRUE(killed_by_its_hook("VOBB_TEST_KILL_AFTER_CERTIFIED_LAYERS=2 " + std::string(VOBB_CLI) + " certify " +
-                                 mesh + " " + tree + " --json --rational --quiet --checkpoint " + dir))
+  EXPECT_TRUE(killed_by_its_hook("VOBB_TEST_KILL_AFTER_CERTIFIED_LAYERS=2 " +
+                                 std::string(VOBB_CLI) + " certify " + mesh + " " + tree +
+                                 " --json --rational --quiet --checkpoint " + dir))
       << "certify was not killed at its two-layer checkpoint";
   const nlohmann::json saved = nlohmann::json::parse(slurp(state), nullptr, false);
   ASSERT_TRUE(saved.is_object()) << "no checkpoint was saved";
   EXPECT_EQ(saved.at("layers").size(), 2u);
   const std::string stray = dir + "/.vobb-12345-4.tmp";
   { std::ofstream(stray) << "{\"half"; }
-  std::filesystem::last_write_time(stray, std::filesystem::file_time_type::clock::now() - std::chrono::minutes(5));
-  const CliRun again = vobb_cli("certify " + mesh + " " + tree + " --json --rational --checkpoint " + dir);
+  std::filesystem::last_write_time(
+      stray, std::filesystem::file_time_type::clock::now() - std::chrono::minutes(5));
+  const CliRun again =
+      vobb_cli("certify " + mesh + " " + tree + " --json --rational --checkpoint " + dir);
   ASSERT_EQ(again.code, 0) << again.err;
   EXPECT_NE(again.err.find("resuming from"), std::string::npos) << again.err;
   EXPECT_NE(again.err.find("2 of 5 layers done"), std::string::npos) << again.err;
   EXPECT_NE(again.err.find("OBV of 31 boxes: from the checkpoint"), std::string::npos) << again.err;
   size_t layer_lines = 0;
-  for (size_t at = 0; (at = again.err.find("certify: layer ", at)) != std::string::npos; ++at) ++layer_lines;
+  for (size_t at = 0; (at = again.err.find("certify: layer ", at)) != std::string::npos; ++at)
+    ++layer_lines;
   EXPECT_EQ(layer_lines, 3u) << again.err;
   EXPECT_FALSE(test::exists(stray)) << "a killed run's temporary file was left in the checkpoint";
-  EXPECT_EQ(without_seconds(nlohmann::json::parse(again.out)), without_seconds(nlohmann::json::parse(whole.out)));
-  const CliRun other = vobb_cli("certify " + mesh + " " + tree + " --path clip --quiet --checkpoint " + dir);
+  EXPECT_EQ(without_seconds(nlohmann::json::parse(again.out)),
+            without_seconds(nlohmann::json::parse(whole.out)));
+  const CliRun other =
+      vobb_cli("certify " + mesh + " " + tree + " --path clip --quiet --checkpoint " + dir);
   EXPECT_EQ(other.code, 2);
   EXPECT_NE(other.err.find("checkpoint of another certification"), std::string::npos) << other.err;
   std::system(("rm -rf " + dir).c_str());
@@ -988,7 +1052,8 @@ TEST(Cli, CertifyJsonGivesEnclosuresAndHowEachValueWasDecided) {
   VOBB_REQUIRE_REAL_MESH("dino");
   const std::string tree = test::temp_path("encl_tree.json"), dir = test::temp_path("encl_ckpt");
   std::system(("rm -rf " + dir).c_str());
-  ASSERT_EQ(vobb_cli("build " + mesh + " -o " + tree + " --method obbtree --depth 5 --quiet").code, 0);
+  ASSERT_EQ(vobb_cli("build " + mesh + " -o " + tree + " --method obbtree --depth 5 --quiet").code,
+            0);
   const CliRun r = vobb_cli("certify " + mesh + " " + tree + " --json --rational");
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.err.find("in rationals: 0 OBV, 0 overlap terms"), std::string::npos) << r.err;
@@ -1006,7 +1071,8 @@ TEST(Cli, CertifyJsonGivesEnclosuresAndHowEachValueWasDecided) {
       EXPECT_LE(q, Rational(e.at(1).get<double>())) << v;
     }
     for (const char* by : {"omv_rounded_by", "sum_obv_rounded_by", "overlap_rounded_by"})
-      EXPECT_EQ(l.at(by), "exact") << by << ": with --rational every value is the rationals' rounded";
+      EXPECT_EQ(l.at(by), "exact")
+          << by << ": with --rational every value is the rationals' rounded";
     EXPECT_TRUE(l.at("bound_by") == "filter" || l.at("bound_by") == "exact");
     EXPECT_EQ(l.at("exact_obv").get<int>(), 0);
   }
@@ -1052,20 +1118,27 @@ TEST(Cli, KilledCompareResumesItsCertification) {
   const std::string args = " --depth 3 --m 8 --lloyd 1 --backend cpu --json --quiet";
   const CliRun whole = vobb_cli("compare " + mesh + args);
   ASSERT_EQ(whole.code, 0) << whole.err;
-  EXPECT_TRUE(killed_by_its_hook("VOBB_TEST_KILL_AFTER_CERTIFIED_LAYERS=2 " + std::string(VOBB_CLI) + " compare " +
-                                 mesh + args + " --checkpoint " + dir))
+  EXPECT_TRUE(killed_by_its_hook("VOBB_TEST_KILL_AFTER_CERTIFIED_LAYERS=2 " +
+                                 std::string(VOBB_CLI) + " compare " + mesh + args +
+                                 " --checkpoint " + dir))
       << "compare was not killed at its two-layer checkpoint";
   EXPECT_TRUE(test::exists(dir + "/certify-obbtree/layers.json"));
   // Killed in the baseline's certification: the variational one's folder (made, and checked,
   // at the start) holds nothing yet.
-  EXPECT_FALSE(test::exists(dir + "/certify-variational/obv.json")) << "killed in the baseline's certification";
-  const CliRun again = vobb_cli("compare " + mesh + " --depth 3 --m 8 --lloyd 1 --backend cpu --json --checkpoint " + dir);
+  EXPECT_FALSE(test::exists(dir + "/certify-variational/obv.json"))
+      << "killed in the baseline's certification";
+  const CliRun again = vobb_cli(
+      "compare " + mesh + " --depth 3 --m 8 --lloyd 1 --backend cpu --json --checkpoint " + dir);
   ASSERT_EQ(again.code, 0) << again.err;
-  EXPECT_NE(again.err.find("resuming from " + dir + "/certify-obbtree (the boxes' OBV, 2 of 4 layers done)"),
-            std::string::npos) << again.err;
+  EXPECT_NE(again.err.find("resuming from " + dir +
+                           "/certify-obbtree (the boxes' OBV, 2 of 4 layers done)"),
+            std::string::npos)
+      << again.err;
   // The saved layers were used, not certified again: two of the baseline's four layers.
-  EXPECT_NE(again.err.find("vobb: 2 of 4 layers: from the checkpoint\n"), std::string::npos) << again.err;
-  EXPECT_EQ(without_seconds(nlohmann::json::parse(again.out)), without_seconds(nlohmann::json::parse(whole.out)));
+  EXPECT_NE(again.err.find("vobb: 2 of 4 layers: from the checkpoint\n"), std::string::npos)
+      << again.err;
+  EXPECT_EQ(without_seconds(nlohmann::json::parse(again.out)),
+            without_seconds(nlohmann::json::parse(whole.out)));
   EXPECT_TRUE(test::exists(dir + "/certify-variational/layers.json"));
   std::system(("rm -rf " + dir).c_str());
 }

@@ -8,11 +8,11 @@
 #include <string>
 #include <vector>
 
+#include "builder/obbtree_builder.h"
+#include "builder/variational_builder.h"
 #include "common/mesh.h"
 #include "common/tree.h"
 #include "common/tree_io.h"
-#include "builder/obbtree_builder.h"
-#include "builder/variational_builder.h"
 
 namespace vobb::test {
 
@@ -53,7 +53,8 @@ inline std::string resumed_tree(const Mesh& mesh, VariationalOptions o, const Ob
   EXPECT_TRUE(static_cast<bool>(write_variational_state(state, "fp", path)));
   VariationalState back;
   bool found = false;
-  const bool read = static_cast<bool>(read_variational_state(path, "fp", mesh.faces.size(), o.arity, o.depth, &back, &found));
+  const bool read = static_cast<bool>(
+      read_variational_state(path, "fp", mesh.faces.size(), o.arity, o.depth, &back, &found));
   EXPECT_TRUE(read && found);
   if (!read || !found) return std::string();
   o.checkpoint = nullptr;

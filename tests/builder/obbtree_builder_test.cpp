@@ -3,7 +3,6 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-
 #include <limits>
 #include <numeric>
 
@@ -64,7 +63,8 @@ TEST(ObbTree, CovarianceMajorAxisFollowsTheLongSide) {
   EXPECT_LE(std::abs(axes[0][0]), tilt);
   EXPECT_LE(std::abs(axes[0][2]), tilt);
   // A right-handed orthonormal frame: unit determinant to the rounding of its 9 products.
-  EXPECT_NEAR(axes[0].cross(axes[1]).dot(axes[2]), 1.0, 16 * std::numeric_limits<double>::epsilon());
+  EXPECT_NEAR(axes[0].cross(axes[1]).dot(axes[2]), 1.0,
+              16 * std::numeric_limits<double>::epsilon());
 }
 
 // The root's split obeys the RAPID rule: every face of the first child has its centroid
@@ -84,7 +84,9 @@ TEST(ObbTree, RootSplitsAtTheAreaWeightedMean) {
     moment += a * c.dot(axes[0]);
   }
   const double mean = moment / area;
-  auto proj = [&](int32_t f) { return ((m.corner(f, 0) + m.corner(f, 1) + m.corner(f, 2)) / 3).dot(axes[0]); };
+  auto proj = [&](int32_t f) {
+    return ((m.corner(f, 0) + m.corner(f, 1) + m.corner(f, 2)) / 3).dot(axes[0]);
+  };
   for (int32_t f : t.nodes[1].faces) EXPECT_LT(proj(f), mean);
   for (int32_t f : t.nodes[2].faces) EXPECT_GE(proj(f), mean);
 }

@@ -1,19 +1,18 @@
 // The variational builder with the GL estimator (fast_gl_tests: needs a GL context), beside
 // variational_builder_test.cpp, which uses the CPU twin.
 #include <gtest/gtest.h>
+#include <tbb/info.h>
+#include <tbb/task_arena.h>
 
 #include <cstdlib>
 #include <memory>
 #include <string>
 
-#include <tbb/info.h>
-#include <tbb/task_arena.h>
-
+#include "builder/variational_builder.h"
 #include "common/tree_io.h"
 #include "data/analytic_meshes.h"
 #include "fast/gl_estimator.h"
 #include "fast/gl_test_util.h"
-#include "builder/variational_builder.h"
 #include "test_common.h"
 
 namespace vobb {
@@ -29,7 +28,9 @@ namespace {
 TEST(VariationalBuilderGl, NodesSearchedAtOnceGiveTheSameTree) {
   const Mesh mesh = analytic::polygonal_torus().mesh;
   VOBB_MAKE_GL(gl, mesh);
-  const ObvEstimate estimate = [&](const std::vector<Obb>& boxes) { return gl->estimate(boxes, 8); };
+  const ObvEstimate estimate = [&](const std::vector<Obb>& boxes) {
+    return gl->estimate(boxes, 8);
+  };
   VariationalOptions o;
   o.depth = 4;
   VariationalReport serial;
@@ -40,7 +41,8 @@ TEST(VariationalBuilderGl, NodesSearchedAtOnceGiveTheSameTree) {
   for (int threads : {1, 2, 3, 8}) {
     VariationalReport report;
     std::string got;
-    tbb::task_arena(threads).execute([&] { got = tree_to_json(build_variational(mesh, o, estimate, nullptr, &report)); });
+    tbb::task_arena(threads).execute(
+        [&] { got = tree_to_json(build_variational(mesh, o, estimate, nullptr, &report)); });
     EXPECT_EQ(got, ref) << threads << " threads";
     EXPECT_EQ(report.estimates, serial.estimates) << threads;
     EXPECT_EQ(report.reused, serial.reused) << threads;

@@ -2,19 +2,18 @@
 // polyhedral shares (fast/poly_overlap.h): a conservative tree that certifies, the same bytes
 // for any thread count and after a resume, and an objective that reaches the tree.
 #include <gtest/gtest.h>
-
 #include <tbb/task_arena.h>
 
 #include <cmath>
 #include <string>
 
+#include "builder/measured_tree.h"
+#include "builder/variational_builder.h"
 #include "common/tree_io.h"
 #include "data/analytic_meshes.h"
 #include "exact/certify.h"
 #include "fast/cpu_estimator.h"
 #include "fast/poly_overlap.h"
-#include "builder/measured_tree.h"
-#include "builder/variational_builder.h"
 #include "test_common.h"
 
 namespace vobb {
@@ -56,7 +55,8 @@ TEST(VariationalBuilderOmv, ConservativeCertifiedAndTheSameForAnyThreads) {
     VariationalOptions c = o;
     c.concurrent_estimates = true;
     std::string got;
-    tbb::task_arena(threads).execute([&] { got = tree_to_json(build_variational(mesh, c, cpu_at(cpu, 8))); });
+    tbb::task_arena(threads).execute(
+        [&] { got = tree_to_json(build_variational(mesh, c, cpu_at(cpu, 8))); });
     EXPECT_EQ(got, one) << "threads " << threads;
   }
 }
@@ -69,7 +69,8 @@ TEST(VariationalBuilderOmv, ResumedBuildEqualsUninterrupted) {
   std::vector<VariationalState> saved;
   o.checkpoint = [&](const VariationalState& st) { saved.push_back(st); };
   VariationalReport report;
-  const std::string whole = tree_to_json(build_variational(mesh, o, cpu_at(cpu, 8), nullptr, &report));
+  const std::string whole =
+      tree_to_json(build_variational(mesh, o, cpu_at(cpu, 8), nullptr, &report));
   ASSERT_GE(saved.size(), 6u);  // the root, 4 levels and at least one sweep
   const std::string path = test::temp_path("omv_state.json");
   // From mid-way down, from the end of the top-down pass, and from the last sweep's state.
@@ -95,8 +96,10 @@ TEST(VariationalBuilderOmv, LowersTheExactErrorWhereSiblingsOverlap) {
   const VariationalOptions omv = omv_options(shares, 2);
   exact::CertifyOptions co;
   co.rational = true;
-  const exact::Certificate a = exact::certify(mesh, build_variational(mesh, obv, cpu_at(cpu, 16)), co);
-  const exact::Certificate b = exact::certify(mesh, build_variational(mesh, omv, cpu_at(cpu, 16)), co);
+  const exact::Certificate a =
+      exact::certify(mesh, build_variational(mesh, obv, cpu_at(cpu, 16)), co);
+  const exact::Certificate b =
+      exact::certify(mesh, build_variational(mesh, omv, cpu_at(cpu, 16)), co);
   ASSERT_TRUE(a.ok() && b.ok() && a.rational && b.rational);
   // The case is one of large sibling overlap: under kObv the children share over a tenth of
   // their layer's OMV.

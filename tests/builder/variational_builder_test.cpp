@@ -2,38 +2,38 @@
 
 #include <gtest/gtest.h>
 #include <sys/stat.h>
-#include <nlohmann/json.hpp>
-
-#include <atomic>
-#include <cmath>
-#include <cstdio>
-#include <chrono>
-#include <fstream>
-#include <thread>
-
 #include <tbb/info.h>
 #include <tbb/task_arena.h>
 
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <thread>
+
+#include "builder/measured_tree.h"
+#include "builder/obbtree_builder.h"
 #include "common/io/mesh_io.h"
 #include "common/tree_io.h"
 #include "data/analytic_meshes.h"
 #include "fast/cpu_estimator.h"
-#include "builder/obbtree_builder.h"
-#include "builder/measured_tree.h"
 #include "test_common.h"
 
 namespace vobb {
 namespace {
 
-using test::Measured;
 using test::baseline_measured;
 using test::build_measured;
+using test::Measured;
 
 ObvEstimate cpu_at(const CpuObvEstimator& cpu, int m) {
   return [&cpu, m](const std::vector<Obb>& boxes) { return cpu.estimate(boxes, m); };
 }
 
-double sum_of(const CpuObvEstimator& cpu, const Mesh& mesh, const Measured& t, const std::vector<int32_t>& ids, int m) {
+double sum_of(const CpuObvEstimator& cpu, const Mesh& mesh, const Measured& t,
+              const std::vector<int32_t>& ids, int m) {
   std::vector<Obb> boxes;
   for (int32_t id : ids) boxes.push_back(tight_box(mesh, t.tree.nodes[id].faces, t.axes[id]));
   double s = 0;
@@ -41,7 +41,8 @@ double sum_of(const CpuObvEstimator& cpu, const Mesh& mesh, const Measured& t, c
   return s;
 }
 
-double layer_sum(const CpuObvEstimator& cpu, const Mesh& mesh, const Measured& t, int level, int m) {
+double layer_sum(const CpuObvEstimator& cpu, const Mesh& mesh, const Measured& t, int level,
+                 int m) {
   return sum_of(cpu, mesh, t, layer(t.tree, level), m);
 }
 
@@ -53,7 +54,8 @@ double root_children_sum(const CpuObvEstimator& cpu, const Mesh& mesh, const Mea
 bool same_structure(const VariationalState& a, const VariationalState& b) {
   if (a.nodes.size() != b.nodes.size()) return false;
   for (size_t i = 0; i < a.nodes.size(); ++i)
-    if (a.nodes[i].children != b.nodes[i].children || a.nodes[i].faces != b.nodes[i].faces) return false;
+    if (a.nodes[i].children != b.nodes[i].children || a.nodes[i].faces != b.nodes[i].faces)
+      return false;
   return true;
 }
 
@@ -76,8 +78,10 @@ TEST(VariationalBuilder, SameTreeForAnyThreadCount) {
   VariationalOptions o;
   o.depth = 4;
   std::string one, four;
-  tbb::task_arena(1).execute([&] { one = tree_to_json(build_variational(mesh, o, cpu_at(cpu, 8))); });
-  tbb::task_arena(4).execute([&] { four = tree_to_json(build_variational(mesh, o, cpu_at(cpu, 8))); });
+  tbb::task_arena(1).execute(
+      [&] { one = tree_to_json(build_variational(mesh, o, cpu_at(cpu, 8))); });
+  tbb::task_arena(4).execute(
+      [&] { four = tree_to_json(build_variational(mesh, o, cpu_at(cpu, 8))); });
   EXPECT_EQ(one, four);
 }
 
@@ -97,8 +101,10 @@ TEST(VariationalBuilder, ConcurrentSearchGivesTheSameTree) {
     o.arity = arity;
     VariationalReport serial;
     std::string ref;
-    tbb::task_arena(2).execute([&] { ref = tree_to_json(build_variational(mesh, o, cpu_at(cpu, 8), nullptr, &serial)); });
-    ASSERT_GT(serial.merges, 0u) << "no merge kept: the parallel sweep would go untested, arity " << arity;
+    tbb::task_arena(2).execute(
+        [&] { ref = tree_to_json(build_variational(mesh, o, cpu_at(cpu, 8), nullptr, &serial)); });
+    ASSERT_GT(serial.merges, 0u) << "no merge kept: the parallel sweep would go untested, arity "
+                                 << arity;
     o.concurrent_estimates = true;
     for (int threads : {1, 2, 3, 8}) {
       std::atomic<int> in_flight{0}, most{0};
@@ -113,7 +119,8 @@ TEST(VariationalBuilder, ConcurrentSearchGivesTheSameTree) {
       };
       VariationalReport report;
       std::string got;
-      tbb::task_arena(threads).execute([&] { got = tree_to_json(build_variational(mesh, o, timed, nullptr, &report)); });
+      tbb::task_arena(threads).execute(
+          [&] { got = tree_to_json(build_variational(mesh, o, timed, nullptr, &report)); });
       EXPECT_EQ(got, ref) << "arity " << arity << ", threads " << threads;
       EXPECT_EQ(report.estimates, serial.estimates) << threads;
       EXPECT_EQ(report.reused, serial.reused) << threads;
@@ -122,7 +129,8 @@ TEST(VariationalBuilder, ConcurrentSearchGivesTheSameTree) {
       if (threads == 1) {
         EXPECT_EQ(most, 1) << "one thread made two calls at once";
       }
-      if (threads == 2 && arity == 2 && tbb::info::default_concurrency() >= 2) {  // TBB may not run 2 threads on 1 CPU
+      if (threads == 2 && arity == 2 &&
+          tbb::info::default_concurrency() >= 2) {  // TBB may not run 2 threads on 1 CPU
         EXPECT_GE(most, 2) << "the nodes were not searched at once";
       }
     }
@@ -175,9 +183,10 @@ TEST(VariationalBuilder, ReusingWhatIsKnownChangesNothing) {
     double margin;
   };
   size_t later_sweeps_with_moves = 0;
-  for (const Case c : {Case{&dino.mesh, 2, 4, 0.0}, Case{&torus, 2, 5, 0.0}, Case{&torus, 3, 4, 0.1}}) {
-    SCOPED_TRACE(testing::Message() << c.mesh->faces.size() << " faces, arity " << c.arity << ", depth " << c.depth
-                                    << ", margin " << c.margin);
+  for (const Case c :
+       {Case{&dino.mesh, 2, 4, 0.0}, Case{&torus, 2, 5, 0.0}, Case{&torus, 3, 4, 0.1}}) {
+    SCOPED_TRACE(testing::Message() << c.mesh->faces.size() << " faces, arity " << c.arity
+                                    << ", depth " << c.depth << ", margin " << c.margin);
     const CpuObvEstimator cpu(*c.mesh);
     VariationalOptions o;
     o.arity = c.arity;
@@ -192,10 +201,14 @@ TEST(VariationalBuilder, ReusingWhatIsKnownChangesNothing) {
     VariationalReport skip, full;
     std::string with_skip, without;
     tbb::task_arena arena(2);
-    arena.execute([&] { with_skip = tree_to_json(build_variational(*c.mesh, o, cpu_at(cpu, 8), nullptr, &skip)); });
+    arena.execute([&] {
+      with_skip = tree_to_json(build_variational(*c.mesh, o, cpu_at(cpu, 8), nullptr, &skip));
+    });
     o.checkpoint = nullptr;
     o.reuse_known = false;
-    arena.execute([&] { without = tree_to_json(build_variational(*c.mesh, o, cpu_at(cpu, 8), nullptr, &full)); });
+    arena.execute([&] {
+      without = tree_to_json(build_variational(*c.mesh, o, cpu_at(cpu, 8), nullptr, &full));
+    });
     EXPECT_TRUE(with_skip == without) << "the trees differ";  // not printed: a megabyte of JSON
     EXPECT_EQ(skip.merges, full.merges);
     EXPECT_EQ(skip.sweeps, full.sweeps);
@@ -210,10 +223,12 @@ TEST(VariationalBuilder, ReusingWhatIsKnownChangesNothing) {
     EXPECT_LT(skip.estimates, full.estimates);
     // Sweeps after the first that moved units: the states saved before and after them differ.
     for (size_t k = 1; k < saved.size(); ++k)
-      if (saved[k - 1].sweeps >= 1 && saved[k].sweeps > saved[k - 1].sweeps && !same_structure(saved[k - 1], saved[k]))
+      if (saved[k - 1].sweeps >= 1 && saved[k].sweeps > saved[k - 1].sweeps &&
+          !same_structure(saved[k - 1], saved[k]))
         ++later_sweeps_with_moves;
   }
-  EXPECT_GE(later_sweeps_with_moves, 1u) << "no sweep after the first moved a unit: the check above is weak";
+  EXPECT_GE(later_sweeps_with_moves, 1u)
+      << "no sweep after the first moved a unit: the check above is weak";
 }
 
 // The collider margin is defined as measuring each box grown by the margin: a build with
@@ -312,7 +327,8 @@ TEST(VariationalBuilder, AdjustmentNeverRaisesTheRootChildrensEstimatedSum) {
     VariationalReport report;
     const Measured t = build_measured(mesh, o, cpu_at(cpu, m), &report);
     if (adjust) {
-      EXPECT_GT(report.adjustments, 0u) << "no adjusted split was kept: the check below would be empty";
+      EXPECT_GT(report.adjustments, 0u)
+          << "no adjusted split was kept: the check below would be empty";
     }
     EXPECT_TRUE(check_conservative(mesh, t.tree).ok());
     sums[adjust] = root_children_sum(cpu, mesh, t, m);
@@ -330,7 +346,8 @@ TEST(VariationalBuilder, ResumedBuildEqualsUninterrupted) {
   std::vector<VariationalState> saved;
   o.checkpoint = [&](const VariationalState& st) { saved.push_back(st); };
   VariationalReport report;
-  const std::string whole = tree_to_json(build_variational(mesh, o, cpu_at(cpu, 8), nullptr, &report));
+  const std::string whole =
+      tree_to_json(build_variational(mesh, o, cpu_at(cpu, 8), nullptr, &report));
   // The root, 4 levels, and at least two sweeps, with merges kept: resuming between sweeps
   // must carry the merged structure.
   ASSERT_GE(saved.size(), 7u);
@@ -357,7 +374,8 @@ TEST(VariationalBuilder, CheckpointThatIsNotARegularFileIsRefused) {
   ASSERT_EQ(::mkfifo(path.c_str(), 0600), 0);
   const Status s = read_variational_state(path, "fp", 8, 2, 2, &back, &found);
   EXPECT_FALSE(s);
-  EXPECT_NE(s.message().find("fifo_state.json: not a regular file"), std::string::npos) << s.message();
+  EXPECT_NE(s.message().find("fifo_state.json: not a regular file"), std::string::npos)
+      << s.message();
   std::remove(path.c_str());
 }
 
@@ -373,43 +391,53 @@ TEST(VariationalBuilder, CheckpointOfAnotherBuildOrDamagedIsRefused) {
   ASSERT_TRUE(write_variational_state(last, "build A", path));
   VariationalState back;
   bool found = false;
-  const Status other = read_variational_state(path, "build B", mesh.faces.size(), o.arity, o.depth, &back, &found);
+  const Status other =
+      read_variational_state(path, "build B", mesh.faces.size(), o.arity, o.depth, &back, &found);
   EXPECT_FALSE(other);
   EXPECT_NE(other.message().find("another build"), std::string::npos) << other.message();
   // Faces beyond the mesh: a damaged state, refused rather than crashed on.
-  EXPECT_FALSE(read_variational_state(path, "build A", mesh.faces.size() / 2, o.arity, o.depth, &back, &found));
+  EXPECT_FALSE(read_variational_state(path, "build A", mesh.faces.size() / 2, o.arity, o.depth,
+                                      &back, &found));
   // Nodes nested 10^5 deep: refused as the file is parsed. The checksum over such a document
   // overflowed the stack (a segmentation fault) before the parse limited the depth.
   {
     const std::string deep = test::temp_path("deep_state.json");
     std::ofstream(deep) << R"({"format":"vobb-variational-state","version":1,"sha256":"x","nodes":)"
                         << std::string(100000, '[') << std::string(100000, ']') << "}";
-    const Status d = read_variational_state(deep, "build A", mesh.faces.size(), o.arity, o.depth, &back, &found);
+    const Status d =
+        read_variational_state(deep, "build A", mesh.faces.size(), o.arity, o.depth, &back, &found);
     EXPECT_FALSE(d);
-    EXPECT_NE(d.message().find("nested deeper than a checkpoint can be"), std::string::npos) << d.message();
+    EXPECT_NE(d.message().find("nested deeper than a checkpoint can be"), std::string::npos)
+        << d.message();
     std::remove(deep.c_str());
   }
   // Axes that are not orthonormal, and levels beyond split_levels: refused too.
   VariationalState skew = last;
   skew.axes[0][1] = skew.axes[0][0];
   ASSERT_TRUE(write_variational_state(skew, "build A", path));
-  EXPECT_FALSE(read_variational_state(path, "build A", mesh.faces.size(), o.arity, o.depth, &back, &found));
+  EXPECT_FALSE(
+      read_variational_state(path, "build A", mesh.faces.size(), o.arity, o.depth, &back, &found));
   VariationalState behind = last;
   behind.split_levels = 1;
   ASSERT_TRUE(write_variational_state(behind, "build A", path));
-  const Status levels = read_variational_state(path, "build A", mesh.faces.size(), o.arity, o.depth, &back, &found);
+  const Status levels =
+      read_variational_state(path, "build A", mesh.faces.size(), o.arity, o.depth, &back, &found);
   EXPECT_FALSE(levels);
   EXPECT_NE(levels.message().find("split_levels"), std::string::npos) << levels.message();
   // A state that does not fit the build resuming it (a fingerprint edited by hand): more
   // children than its arity, or nodes below its depth. Refused, not an assertion later.
   ASSERT_TRUE(write_variational_state(last, "build A", path));
-  const Status narrow = read_variational_state(path, "build A", mesh.faces.size(), 1, o.depth, &back, &found);
+  const Status narrow =
+      read_variational_state(path, "build A", mesh.faces.size(), 1, o.depth, &back, &found);
   EXPECT_FALSE(narrow);
   EXPECT_NE(narrow.message().find("arity"), std::string::npos) << narrow.message();
-  const Status shallow = read_variational_state(path, "build A", mesh.faces.size(), o.arity, 1, &back, &found);
+  const Status shallow =
+      read_variational_state(path, "build A", mesh.faces.size(), o.arity, 1, &back, &found);
   EXPECT_FALSE(shallow);
-  EXPECT_NE(shallow.message().find("deeper than the build's depth 1"), std::string::npos) << shallow.message();
-  EXPECT_TRUE(read_variational_state(path, "build A", mesh.faces.size(), o.arity, o.depth, &back, &found));
+  EXPECT_NE(shallow.message().find("deeper than the build's depth 1"), std::string::npos)
+      << shallow.message();
+  EXPECT_TRUE(
+      read_variational_state(path, "build A", mesh.faces.size(), o.arity, o.depth, &back, &found));
   ASSERT_TRUE(write_variational_state(last, "build A", path));
   std::string text;
   {
@@ -426,19 +454,23 @@ TEST(VariationalBuilder, CheckpointOfAnotherBuildOrDamagedIsRefused) {
     while (last.axes[0][0][k] == 0.0) ++k;
     j["nodes"][0]["axes"][0][k] = std::nextafter(last.axes[0][0][k], 0.0);
     std::ofstream(path) << j.dump();
-    const Status s = read_variational_state(path, "build A", mesh.faces.size(), o.arity, o.depth, &back, &found);
+    const Status s =
+        read_variational_state(path, "build A", mesh.faces.size(), o.arity, o.depth, &back, &found);
     EXPECT_FALSE(s);
     EXPECT_NE(s.message().find("checksum"), std::string::npos) << s.message();
     // The checksum under a damaged key name is not taken for a state without one.
     j["sha257"] = j["sha256"];
     j.erase("sha256");
     std::ofstream(path) << j.dump();
-    const Status renamed = read_variational_state(path, "build A", mesh.faces.size(), o.arity, o.depth, &back, &found);
+    const Status renamed =
+        read_variational_state(path, "build A", mesh.faces.size(), o.arity, o.depth, &back, &found);
     EXPECT_FALSE(renamed);
-    EXPECT_NE(renamed.message().find("unknown field 'sha257'"), std::string::npos) << renamed.message();
+    EXPECT_NE(renamed.message().find("unknown field 'sha257'"), std::string::npos)
+        << renamed.message();
     j.erase("sha257");
     std::ofstream(path) << j.dump();
-    ASSERT_TRUE(read_variational_state(path, "build A", mesh.faces.size(), o.arity, o.depth, &back, &found));
+    ASSERT_TRUE(read_variational_state(path, "build A", mesh.faces.size(), o.arity, o.depth, &back,
+                                       &found));
     EXPECT_NE(back.axes[0][0][k], last.axes[0][0][k]);
   }
   // A fractional or negative count, which get<int> would truncate: refused by the structure
@@ -457,17 +489,21 @@ TEST(VariationalBuilder, CheckpointOfAnotherBuildOrDamagedIsRefused) {
       std::string edited = text;
       edited.replace(at + key.size(), end - at - key.size(), value);
       std::ofstream(path) << edited;
-      const Status s = read_variational_state(path, "build A", mesh.faces.size(), o.arity, o.depth, &back, &found);
+      const Status s = read_variational_state(path, "build A", mesh.faces.size(), o.arity, o.depth,
+                                              &back, &found);
       EXPECT_FALSE(s) << key << value;
       EXPECT_NE(s.message().find("mistyped"), std::string::npos) << s.message();
     }
   }
   {
-    std::ofstream(path) << "{\"format\":\"vobb-variational-state\",\"version\":1,\"fingerprint\":\"build A\"";
+    std::ofstream(path)
+        << "{\"format\":\"vobb-variational-state\",\"version\":1,\"fingerprint\":\"build A\"";
   }
-  EXPECT_FALSE(read_variational_state(path, "build A", mesh.faces.size(), o.arity, o.depth, &back, &found));
+  EXPECT_FALSE(
+      read_variational_state(path, "build A", mesh.faces.size(), o.arity, o.depth, &back, &found));
   std::remove(path.c_str());
-  EXPECT_TRUE(read_variational_state(path, "build A", mesh.faces.size(), o.arity, o.depth, &back, &found));
+  EXPECT_TRUE(
+      read_variational_state(path, "build A", mesh.faces.size(), o.arity, o.depth, &back, &found));
   EXPECT_FALSE(found);
 }
 
@@ -489,7 +525,8 @@ TEST(VariationalBuilder, MergingNeverRaisesALayersEstimatedSum) {
   EXPECT_TRUE(validate_tree(after.tree, "merged"));
   EXPECT_TRUE(check_conservative(mesh, after.tree).ok());
   for (int level = 0; level <= 4; ++level)
-    EXPECT_LE(layer_sum(cpu, mesh, after, level, m), layer_sum(cpu, mesh, before, level, m)) << level;
+    EXPECT_LE(layer_sum(cpu, mesh, after, level, m), layer_sum(cpu, mesh, before, level, m))
+        << level;
 }
 
 // The time budget: spent at once, the build still writes a valid, conservative tree of the
@@ -536,7 +573,7 @@ TEST(VariationalBuilder, BudgetEndsTheSearchInTheCallUnderWay) {
     if (slow) std::this_thread::sleep_for(std::chrono::milliseconds(60));
     return cpu.estimate(batch, 8);
   };
-  size_t sweep_from = 0;  // boxes estimated when the first sweep reported progress
+  size_t sweep_from = 0;       // boxes estimated when the first sweep reported progress
   std::vector<size_t> level1;  // boxes estimated at each of level 1's progress reports
   o.progress = [&](const VariationalProgress& p) {
     if (p.sweep > 0 && sweep_from == 0) sweep_from = boxes;
@@ -549,7 +586,8 @@ TEST(VariationalBuilder, BudgetEndsTheSearchInTheCallUnderWay) {
   ASSERT_GE(level1.size(), 2u);
   ASSERT_GT(level1[0], 150u) << "a budget of 150 is meant to fall before level 1's first report";
   ASSERT_LT(level1[0], 300u);
-  ASSERT_GT(level1[1], 300u) << "a budget of 300 is meant to fall in level 1's first Lloyd iteration";
+  ASSERT_GT(level1[1], 300u)
+      << "a budget of 300 is meant to fall in level 1's first Lloyd iteration";
   ASSERT_GT(sweep_from, 300u);
   ASSERT_LT(sweep_from, all - 20) << "the last budget is meant to fall in a sweep";
   o.progress = nullptr;
@@ -564,7 +602,8 @@ TEST(VariationalBuilder, BudgetEndsTheSearchInTheCallUnderWay) {
     EXPECT_EQ(calls_after, 0u) << "estimator calls after the budget was spent, k = " << k;
     EXPECT_GE(boxes, k);
     if (slow) {
-      EXPECT_LT(boxes, k + threads) << "the call that spent the budget held more than one box per thread";
+      EXPECT_LT(boxes, k + threads)
+          << "the call that spent the budget held more than one box per thread";
     }
     EXPECT_EQ(report.estimates, boxes);
     EXPECT_TRUE(report.budget_spent) << k;
@@ -611,7 +650,8 @@ TEST(VariationalBuilder, BudgetEndsConcurrentSearches) {
         const int now = ++in_flight;
         for (int seen = most; now > seen && !most.compare_exchange_weak(seen, now);) {
         }
-        if (boxes + 40 * static_cast<size_t>(threads) >= k) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+        if (boxes + 40 * static_cast<size_t>(threads) >= k)
+          std::this_thread::sleep_for(std::chrono::milliseconds(1));
         if (boxes >= k) ++calls_after;
         boxes += batch.size();
         std::vector<double> v = cpu.estimate(batch, 8);
@@ -621,7 +661,8 @@ TEST(VariationalBuilder, BudgetEndsConcurrentSearches) {
       o.out_of_time = [&boxes, k] { return boxes >= k; };
       VariationalReport report;
       Tree t;
-      tbb::task_arena(threads).execute([&] { t = build_variational(mesh, o, counted, nullptr, &report); });
+      tbb::task_arena(threads).execute(
+          [&] { t = build_variational(mesh, o, counted, nullptr, &report); });
       const size_t n = static_cast<size_t>(threads);
       EXPECT_LE(calls_after, n - 1) << "threads " << threads << ", k " << k;
       EXPECT_GE(boxes, k);
@@ -652,7 +693,8 @@ TEST(VariationalBuilder, UnspentBudgetGivesTheSameTree) {
   VariationalReport plain, budgeted;
   const std::string a = tree_to_json(build_variational(mesh, o, cpu_at(cpu, 16), nullptr, &plain));
   o.out_of_time = [] { return false; };
-  const std::string b = tree_to_json(build_variational(mesh, o, cpu_at(cpu, 16), nullptr, &budgeted));
+  const std::string b =
+      tree_to_json(build_variational(mesh, o, cpu_at(cpu, 16), nullptr, &budgeted));
   EXPECT_EQ(a, b);
   EXPECT_EQ(plain.estimates, budgeted.estimates);
   EXPECT_FALSE(budgeted.budget_spent);

@@ -77,7 +77,8 @@ TEST(ContactPredicates, NodeTestNeverPrunesATouchedFace) {
       c.shape = ColliderShape::kBox;
       const Eigen::Quaterniond qc(u(rng), u(rng), u(rng), u(rng));
       const Eigen::Matrix3d Rc = qc.normalized().toRotationMatrix();
-      for (int k = 0; k < 3; ++k) c.axes[k] = Rc.col(k), c.half[k] = size * (0.5 + std::abs(u(rng)));
+      for (int k = 0; k < 3; ++k)
+        c.axes[k] = Rc.col(k), c.half[k] = size * (0.5 + std::abs(u(rng)));
     }
     const PreparedCollider pc = prepare_collider(c, 20);
     const bool touches = touches_triangle(pc, p[0], p[1], p[2]);

@@ -6,22 +6,22 @@
 #include "collision/query_objective.h"
 
 #include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
 
+#include <array>
 #include <cmath>
 #include <cstdio>
-#include <array>
 #include <cstring>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <random>
 
+#include "builder/measured_tree.h"
+#include "builder/obbtree_builder.h"
+#include "builder/variational_builder.h"
 #include "common/io/mesh_io.h"
 #include "common/sha256.h"
 #include "common/tree_io.h"
 #include "data/analytic_meshes.h"
-#include "builder/measured_tree.h"
-#include "builder/obbtree_builder.h"
-#include "builder/variational_builder.h"
 #include "test_common.h"
 #include "validate/collision/collision_experiment.h"
 
@@ -124,7 +124,8 @@ TEST_P(HitsAtScale, HitsAreMayTouchBoxOverEveryCollider) {
             } else {
               const double angle = std::array<double, 3>{0, 1e-9, 1e-4}[pick(rng)];
               const Eigen::Matrix3d turn =
-                  Eigen::AngleAxisd(angle, Vec3(u(rng), u(rng), u(rng)).normalized()).toRotationMatrix();
+                  Eigen::AngleAxisd(angle, Vec3(u(rng), u(rng), u(rng)).normalized())
+                      .toRotationMatrix();
               reach = 0;
               for (int k = 0; k < 3; ++k) {
                 c.axes[k] = turn * b.axes[k];
@@ -137,7 +138,9 @@ TEST_P(HitsAtScale, HitsAreMayTouchBoxOverEveryCollider) {
               moved.center = on + (reach + t) * out;
               return moved;
             };
-            auto accepted = [&](double t) { return may_touch_box(prepare_collider(at(t), scale), pb); };
+            auto accepted = [&](double t) {
+              return may_touch_box(prepare_collider(at(t), scale), pb);
+            };
             if (!accepted(0)) continue;  // rounding put the touching pose just outside
             double lo = 0, hi = std::ldexp(b.half.maxCoeff(), -20);
             if (accepted(hi)) continue;
@@ -169,7 +172,8 @@ TEST_P(HitsAtScale, HitsAreMayTouchBoxOverEveryCollider) {
   EXPECT_LT(total, 80u * colliders.size() / 2);
 }
 
-INSTANTIATE_TEST_SUITE_P(Scales, HitsAtScale, ::testing::Values(1.0, std::ldexp(1.0, -140), std::ldexp(1.0, 200)));
+INSTANTIATE_TEST_SUITE_P(Scales, HitsAtScale,
+                         ::testing::Values(1.0, std::ldexp(1.0, -140), std::ldexp(1.0, 200)));
 
 bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
 
@@ -229,12 +233,14 @@ TEST(QueryObjective, FilesRoundTripBitForBit) {
 
 TEST(QueryObjective, BadFilesAreRefusedInOneLine) {
   const std::string path = test::temp_path("bad_queries.json");
-  const std::string head = R"({"format": "vobb-queries", "version": 1, "mesh_sha256": "ab", "colliders": )";
+  const std::string head =
+      R"({"format": "vobb-queries", "version": 1, "mesh_sha256": "ab", "colliders": )";
   const std::string box = "[0, 0, 0, 1, 1, 1, 1, 0, 0, 0, 1, 0, 0, 0, 1]";
   const std::vector<std::pair<std::string, std::string>> cases = {
       {head + "[[0, 0, 0, 1]", "not valid JSON"},  // truncated
       {"{\"format\": \"vobb-tree\"}", "not a vobb query file"},
-      {R"({"format": "vobb-queries", "version": 2, "mesh_sha256": "ab", "colliders": []})", "unsupported version"},
+      {R"({"format": "vobb-queries", "version": 2, "mesh_sha256": "ab", "colliders": []})",
+       "unsupported version"},
       {R"({"format": "vobb-queries", "version": 1, "colliders": []})", "mesh_sha256"},
       {head + "[[0, 0, 0, 1, 2]]}", "collider 0: not an array of 4"},
       {head + "[[0, 0, 0, \"1\"]]}", "collider 0: not an array of numbers"},
@@ -242,7 +248,8 @@ TEST(QueryObjective, BadFilesAreRefusedInOneLine) {
       {head + "[[0, 0, 0, 0]]}", "collider 0: radius"},
       {head + "[[0, 0, 0, 1e-310]]}", "collider 0: radius"},
       {head + "[[1e300, 0, 0, 1]]}", "collider 0: centre beyond"},
-      {head + "[" + box + ", [0, 0, 0, 1, 0, 1, 1, 0, 0, 0, 1, 0, 0, 0, 1]]}", "collider 1: half extent"},
+      {head + "[" + box + ", [0, 0, 0, 1, 0, 1, 1, 0, 0, 0, 1, 0, 0, 0, 1]]}",
+       "collider 1: half extent"},
       {head + "[[0, 0, 0, 1, 1, 1, 1, 0, 0, 0.1, 1, 0, 0, 0, 1]]}", "collider 0: box axes"},
       {head + "[[[[[0]]]]]}", "nested deeper"},
   };
@@ -278,9 +285,11 @@ std::vector<Collider> recorded(const Mesh& mesh, const Tree& first, uint64_t see
   return out;
 }
 
-uint64_t layer_hits(const QueryHitObjective& h, const Mesh& mesh, const test::Measured& t, int level) {
+uint64_t layer_hits(const QueryHitObjective& h, const Mesh& mesh, const test::Measured& t,
+                    int level) {
   uint64_t n = 0;
-  for (int32_t id : layer(t.tree, level)) n += h.hits(tight_box(mesh, t.tree.nodes[id].faces, t.axes[id]));
+  for (int32_t id : layer(t.tree, level))
+    n += h.hits(tight_box(mesh, t.tree.nodes[id].faces, t.axes[id]));
   return n;
 }
 
@@ -303,7 +312,8 @@ TEST(QueryObjective, BuilderOnRecordedHitsBeatsTheBaseline) {
       mesh, o, [&objective](const std::vector<Obb>& boxes) { return objective(boxes); });
   ASSERT_TRUE(check_conservative(mesh, hits.tree).ok());
   for (int level = 0; level <= depth; ++level) {
-    const uint64_t b = layer_hits(objective, mesh, base, level), h = layer_hits(objective, mesh, hits, level);
+    const uint64_t b = layer_hits(objective, mesh, base, level),
+                   h = layer_hits(objective, mesh, hits, level);
     EXPECT_LE(h, b) << "level " << level;
     if (level == 1) {
       EXPECT_LT(h, b);  // the search found better than its start
@@ -315,7 +325,8 @@ TEST(QueryObjective, BuilderOnRecordedHitsBeatsTheBaseline) {
   opt.seed = 12;
   opt.fcl = false;
   ExperimentReport r;
-  ASSERT_TRUE(run_collision_experiment(mesh, {{"base", &base.tree}, {"hits", &hits.tree}}, opt, &r));
+  ASSERT_TRUE(
+      run_collision_experiment(mesh, {{"base", &base.tree}, {"hits", &hits.tree}}, opt, &r));
   EXPECT_TRUE(r.brute_force_agrees) << r.first_disagreement;
   EXPECT_LT(r.trees[1].counts.box_tests, r.trees[0].counts.box_tests);
 }
@@ -323,13 +334,18 @@ TEST(QueryObjective, BuilderOnRecordedHitsBeatsTheBaseline) {
 using test::CliRun;
 using test::vobb_cli;
 
-size_t lines_of(const std::string& s) { return static_cast<size_t>(std::count(s.begin(), s.end(), '\n')); }
+size_t lines_of(const std::string& s) {
+  return static_cast<size_t>(std::count(s.begin(), s.end(), '\n'));
+}
 
 TEST(QueryObjectiveCli, RecordBuildCollideAndRefusals) {
   const Mesh torus = analytic::polygonal_torus().mesh, octa = analytic::octahedron().mesh;
-  const std::string mesh_path = test::temp_path("q_torus.off"), octa_path = test::temp_path("q_octa.off");
-  const std::string base_path = test::temp_path("q_base.json"), hits_path = test::temp_path("q_hits.json");
-  const std::string q1 = test::temp_path("q1.json"), q2 = test::temp_path("q2.json"), oq = test::temp_path("q_octa_q.json");
+  const std::string mesh_path = test::temp_path("q_torus.off"),
+                    octa_path = test::temp_path("q_octa.off");
+  const std::string base_path = test::temp_path("q_base.json"),
+                    hits_path = test::temp_path("q_hits.json");
+  const std::string q1 = test::temp_path("q1.json"), q2 = test::temp_path("q2.json"),
+                    oq = test::temp_path("q_octa_q.json");
   const std::string report_path = test::temp_path("q_report.json");
   ASSERT_TRUE(save_mesh(torus, mesh_path, MeshFormat::kOff));
   ASSERT_TRUE(save_mesh(octa, octa_path, MeshFormat::kOff));
@@ -337,11 +353,13 @@ TEST(QueryObjectiveCli, RecordBuildCollideAndRefusals) {
   ASSERT_EQ(r.code, 0) << r.err;
 
   // Every query, then every 3rd: 400 and ceil(400 / 3) colliders, the same stream thinned.
-  r = vobb_cli("collide " + mesh_path + " " + base_path + " --static --colliders 400 --seed 5 --no-fcl --json -o " +
-               report_path + " --record-queries " + q1);
+  r = vobb_cli("collide " + mesh_path + " " + base_path +
+               " --static --colliders 400 --seed 5 --no-fcl --json -o " + report_path +
+               " --record-queries " + q1);
   ASSERT_EQ(r.code, 0) << r.err;
-  r = vobb_cli("collide " + mesh_path + " " + base_path + " --static --colliders 400 --seed 5 --no-fcl --record-queries " +
-               q2 + " --record-every 3");
+  r = vobb_cli("collide " + mesh_path + " " + base_path +
+               " --static --colliders 400 --seed 5 --no-fcl --record-queries " + q2 +
+               " --record-every 3");
   ASSERT_EQ(r.code, 0) << r.err;
   QueryStream s1, s2;
   ASSERT_TRUE(read_query_stream(q1, &s1));
@@ -355,22 +373,27 @@ TEST(QueryObjectiveCli, RecordBuildCollideAndRefusals) {
   }
 
   // Two files merged: the objective names their sum; the tree is for the mesh and valid.
-  r = vobb_cli("build " + mesh_path + " -o " + hits_path + " --depth 3 --queries " + q1 + " --queries " + q2);
+  r = vobb_cli("build " + mesh_path + " -o " + hits_path + " --depth 3 --queries " + q1 +
+               " --queries " + q2);
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.err.find("the hits of 534 recorded queries"), std::string::npos) << r.err;
   Tree t;
   ASSERT_TRUE(read_tree(hits_path, &t));
   EXPECT_EQ(t.mesh_sha256, mesh_sha256(torus));
   EXPECT_EQ(t.method, "variational");
-  r = vobb_cli("collide " + mesh_path + " " + base_path + " " + hits_path + " --static --colliders 100 --seed 6");
+  r = vobb_cli("collide " + mesh_path + " " + base_path + " " + hits_path +
+               " --static --colliders 100 --seed 6");
   EXPECT_EQ(r.code, 0) << r.err;
   // Each --queries takes one file: a MESH after it is still the MESH.
-  r = vobb_cli("build --queries " + q1 + " " + mesh_path + " -o " + hits_path + " --depth 1 --quiet");
+  r = vobb_cli("build --queries " + q1 + " " + mesh_path + " -o " + hits_path +
+               " --depth 1 --quiet");
   EXPECT_EQ(r.code, 0) << r.err;
 
   // Refusals: exit 2, one line, before anything is written.
-  ASSERT_EQ(vobb_cli("build " + octa_path + " -o " + base_path + " --method obbtree --depth 1").code, 0);
-  r = vobb_cli("collide " + octa_path + " " + base_path + " --static --colliders 10 --no-fcl --record-queries " + oq);
+  ASSERT_EQ(
+      vobb_cli("build " + octa_path + " -o " + base_path + " --method obbtree --depth 1").code, 0);
+  r = vobb_cli("collide " + octa_path + " " + base_path +
+               " --static --colliders 10 --no-fcl --record-queries " + oq);
   ASSERT_EQ(r.code, 0) << r.err;
   std::remove(hits_path.c_str());
   struct Case {
@@ -378,15 +401,24 @@ TEST(QueryObjectiveCli, RecordBuildCollideAndRefusals) {
   };
   const std::vector<Case> cases = {
       {"build " + mesh_path + " -o " + hits_path + " --queries " + oq, "recorded for another mesh"},
-      {"build " + mesh_path + " -o " + hits_path + " --queries " + q1 + " --method obbtree", "--method variational only"},
-      {"build " + mesh_path + " -o " + hits_path + " --queries " + q1 + " --collider-margin 0.1", "two objectives"},
-      {"build " + mesh_path + " -o " + hits_path + " --queries " + q1 + " --m 64", "which --queries replaces"},
-      {"build " + mesh_path + " -o " + hits_path + " --queries " + q1 + " --backend cpu", "which --queries replaces"},
-      {"build " + mesh_path + " -o " + hits_path + " --queries " + test::temp_path("missing.json"), "missing.json"},
+      {"build " + mesh_path + " -o " + hits_path + " --queries " + q1 + " --method obbtree",
+       "--method variational only"},
+      {"build " + mesh_path + " -o " + hits_path + " --queries " + q1 + " --collider-margin 0.1",
+       "two objectives"},
+      {"build " + mesh_path + " -o " + hits_path + " --queries " + q1 + " --m 64",
+       "which --queries replaces"},
+      {"build " + mesh_path + " -o " + hits_path + " --queries " + q1 + " --backend cpu",
+       "which --queries replaces"},
+      {"build " + mesh_path + " -o " + hits_path + " --queries " + test::temp_path("missing.json"),
+       "missing.json"},
       {"build " + mesh_path + " -o " + q1 + " --queries " + q1, "is the input file"},
-      {"collide " + mesh_path + " " + base_path + " --static --colliders 10 --record-every 2", "record-queries"},
-      {"collide " + mesh_path + " " + base_path + " --static --colliders 10 --record-queries " + mesh_path, "is the input file"},
-      {"collide " + mesh_path + " " + base_path + " --static --colliders 10 -o " + hits_path + " --record-queries " + hits_path,
+      {"collide " + mesh_path + " " + base_path + " --static --colliders 10 --record-every 2",
+       "record-queries"},
+      {"collide " + mesh_path + " " + base_path + " --static --colliders 10 --record-queries " +
+           mesh_path,
+       "is the input file"},
+      {"collide " + mesh_path + " " + base_path + " --static --colliders 10 -o " + hits_path +
+           " --record-queries " + hits_path,
        "is also the file of -o"},
   };
   const std::string q1_bytes = test::slurp(q1);
@@ -401,16 +433,19 @@ TEST(QueryObjectiveCli, RecordBuildCollideAndRefusals) {
   // A checkpoint saved with one recording is refused under another: the fingerprint names the
   // recorded colliders.
   const std::string ck = test::temp_path("q_ck");
-  r = vobb_cli("build " + mesh_path + " -o " + hits_path + " --depth 2 --quiet --checkpoint " + ck + " --queries " + q1);
+  r = vobb_cli("build " + mesh_path + " -o " + hits_path + " --depth 2 --quiet --checkpoint " + ck +
+               " --queries " + q1);
   ASSERT_EQ(r.code, 0) << r.err;
   std::remove(hits_path.c_str());
-  r = vobb_cli("build " + mesh_path + " -o " + hits_path + " --depth 2 --quiet --checkpoint " + ck + " --queries " + q2);
+  r = vobb_cli("build " + mesh_path + " -o " + hits_path + " --depth 2 --quiet --checkpoint " + ck +
+               " --queries " + q2);
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_EQ(lines_of(r.err), 1u) << r.err;
   EXPECT_NE(r.err.find("checkpoint of another build"), std::string::npos) << r.err;
   EXPECT_FALSE(test::exists(hits_path));
   // The same recording resumes it.
-  r = vobb_cli("build " + mesh_path + " -o " + hits_path + " --depth 2 --checkpoint " + ck + " --queries " + q1);
+  r = vobb_cli("build " + mesh_path + " -o " + hits_path + " --depth 2 --checkpoint " + ck +
+               " --queries " + q1);
   EXPECT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.err.find("resuming from"), std::string::npos) << r.err;
   std::remove(hits_path.c_str());
@@ -423,7 +458,8 @@ TEST(QueryObjectiveCli, RecordBuildCollideAndRefusals) {
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("hold no colliders"), std::string::npos) << r.err;
   EXPECT_FALSE(test::exists(hits_path));
-  for (const std::string& p : {mesh_path, octa_path, base_path, hits_path, q1, q2, oq, report_path}) std::remove(p.c_str());
+  for (const std::string& p : {mesh_path, octa_path, base_path, hits_path, q1, q2, oq, report_path})
+    std::remove(p.c_str());
 }
 
 }  // namespace

@@ -8,8 +8,8 @@
 #include <cmath>
 #include <random>
 
-#include "data/analytic_meshes.h"
 #include "builder/obbtree_builder.h"
+#include "data/analytic_meshes.h"
 
 namespace vobb::collision {
 namespace {
@@ -18,7 +18,8 @@ namespace {
 std::vector<int32_t> every_face(const Mesh& mesh, const PreparedCollider& c) {
   std::vector<int32_t> out;
   for (size_t f = 0; f < mesh.faces.size(); ++f)
-    if (touches_triangle(c, mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2))) out.push_back(static_cast<int32_t>(f));
+    if (touches_triangle(c, mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2)))
+      out.push_back(static_cast<int32_t>(f));
   return out;
 }
 
@@ -34,7 +35,8 @@ TEST_P(BruteForceAtScale, EqualsTouchesTriangleOnEveryFace) {
   Mesh soup;
   for (int f = 0; f < 1000; ++f) {
     const Vec3 a(u(rng), u(rng), u(rng));
-    for (int k = 0; k < 3; ++k) soup.vertices.push_back(s * (k == 0 ? a : Vec3(a + 0.05 * Vec3(u(rng), u(rng), u(rng)))));
+    for (int k = 0; k < 3; ++k)
+      soup.vertices.push_back(s * (k == 0 ? a : Vec3(a + 0.05 * Vec3(u(rng), u(rng), u(rng)))));
     soup.faces.push_back({3 * f, 3 * f + 1, 3 * f + 2});
   }
   ASSERT_NE(soup.faces.size() % 256, 0u);
@@ -51,7 +53,8 @@ TEST_P(BruteForceAtScale, EqualsTouchesTriangleOnEveryFace) {
       c.radius = size;
     } else {
       c.shape = ColliderShape::kBox;
-      const Eigen::Matrix3d r = Eigen::Quaterniond(u(rng), u(rng), u(rng), u(rng)).normalized().toRotationMatrix();
+      const Eigen::Matrix3d r =
+          Eigen::Quaterniond(u(rng), u(rng), u(rng), u(rng)).normalized().toRotationMatrix();
       for (int k = 0; k < 3; ++k) {
         c.axes[k] = r.col(k);
         c.half[k] = size * (0.5 + 0.5 * (u(rng) + 1) / 2);
@@ -70,7 +73,8 @@ TEST_P(BruteForceAtScale, EqualsTouchesTriangleOnEveryFace) {
   EXPECT_GT(big, 10u);
 }
 
-INSTANTIATE_TEST_SUITE_P(Scales, BruteForceAtScale, ::testing::Values(1.0, std::ldexp(1.0, -140), std::ldexp(1.0, 200)));
+INSTANTIATE_TEST_SUITE_P(Scales, BruteForceAtScale,
+                         ::testing::Values(1.0, std::ldexp(1.0, -140), std::ldexp(1.0, 200)));
 
 // The traversal finds what brute force finds, on the baseline tree of a torus.
 TEST(TreeTraversal, FindsWhatBruteForceFinds) {

@@ -28,7 +28,9 @@ TEST(WriteFileAtomic, ReplacesTheFileAndLeavesNoTemporary) {
   ASSERT_TRUE(write_file_atomic(path, "first"));
   ASSERT_TRUE(write_file_atomic(path, "second"));
   EXPECT_EQ(slurp(path), "second");
-  EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir), std::filesystem::directory_iterator()), 1);
+  EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir),
+                          std::filesystem::directory_iterator()),
+            1);
   // A name of 255 bytes (NAME_MAX) is valid: the temporary file's own name must not depend on it.
   const std::string longest = (dir / std::string(255, 'n')).string();
   EXPECT_TRUE(write_file_atomic(longest, "long")) << "a valid name refused";
@@ -63,7 +65,8 @@ TEST(WriteFileAtomic, FollowsAChainOfLinksToAFileNotThereYet) {
   std::filesystem::create_symlink("target.txt", dir / "sub" / "inner.txt");  // relative to sub/
   ASSERT_TRUE(write_file_atomic((dir / "outer.txt").string(), "chained"));
   EXPECT_TRUE(std::filesystem::is_symlink(std::filesystem::symlink_status(dir / "outer.txt")));
-  EXPECT_TRUE(std::filesystem::is_symlink(std::filesystem::symlink_status(dir / "sub" / "inner.txt")));
+  EXPECT_TRUE(
+      std::filesystem::is_symlink(std::filesystem::symlink_status(dir / "sub" / "inner.txt")));
   EXPECT_EQ(slurp((dir / "sub" / "target.txt").string()), "chained");
   std::string target;
   ASSERT_TRUE(output_target((dir / "outer.txt").string(), &target));
@@ -125,8 +128,9 @@ TEST(RemoveStrayTemporaries, RemovesOnlyUnheldOldFilesOfThatName) {
   const std::string mine = std::to_string(::getpid());
   const std::vector<std::string> gone = {".vobb-12345-0.tmp", ".vobb-" + mine + "-17.tmp"};
   const std::string held = ".vobb-777-1.tmp", fresh = ".vobb-778-2.tmp";
-  const std::vector<std::string> alike = {".vobb-12345.tmp", ".vobb--0.tmp", ".vobb-12345-.tmp", ".vobb-12345-1x.tmp",
-                                          "vobb-12345-0.tmp", ".vobb-12345-0.tmpx", "state.json"};
+  const std::vector<std::string> alike = {
+      ".vobb-12345.tmp",  ".vobb--0.tmp",       ".vobb-12345-.tmp", ".vobb-12345-1x.tmp",
+      "vobb-12345-0.tmp", ".vobb-12345-0.tmpx", "state.json"};
   const auto old = fs::file_time_type::clock::now() - std::chrono::seconds(2 * kStrayAgeSeconds);
   // Made plainly (write_file_atomic's own temporaries are named like this process's file).
   for (const std::string& name : gone) std::ofstream(dir / name) << "half";

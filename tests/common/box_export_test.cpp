@@ -40,7 +40,8 @@ TEST(BoxExport, BoxesReadBackAsOutwardSolids) {
   for (int i = 0; i < 24; ++i) {
     Obb b;
     b.center = Vec3(u(rng), u(rng), u(rng)) * (i < 12 ? 3.0 : 100.0);
-    b.axes = orthonormalize({Vec3(u(rng), u(rng), u(rng)), Vec3(u(rng), u(rng), u(rng)), Vec3::Zero()});
+    b.axes =
+        orthonormalize({Vec3(u(rng), u(rng), u(rng)), Vec3(u(rng), u(rng), u(rng)), Vec3::Zero()});
     b.half = Vec3(0.01 + std::abs(u(rng)), 0.01 + std::abs(u(rng)), 0.01 + std::abs(u(rng)));
     // Every third box left-handed (its third axis negated), as a tree or box file may give it:
     // its quads are written reversed, so that it too reads back as an outward solid.
@@ -66,16 +67,20 @@ TEST(BoxExport, BoxesReadBackAsOutwardSolids) {
       double m = 0.0, p = 0.0;
       for (int j = 0; j < 3; ++j)
         m = std::max(m, std::abs(b.center[j]) + b.half[0] * std::abs(b.axes[0][j]) +
-                            b.half[1] * std::abs(b.axes[1][j]) + b.half[2] * std::abs(b.axes[2][j]));
+                            b.half[1] * std::abs(b.axes[1][j]) +
+                            b.half[2] * std::abs(b.axes[2][j]));
       for (const Vec3& c : corners(b)) p = std::max(p, c.norm());
       const double delta = std::sqrt(3.0) * gamma6 * m;
-      const double area = 8 * (b.half[0] * b.half[1] + b.half[1] * b.half[2] + b.half[0] * b.half[2]);
+      const double area =
+          8 * (b.half[0] * b.half[1] + b.half[1] * b.half[2] + b.half[0] * b.half[2]);
       // Evaluating the bound takes fewer than 32 roundings; (1 + 64 u) covers them.
-      const double bound = (1 + 64 * kU) * (area * delta + 2 * (3 * p * delta * delta + delta * delta * delta));
+      const double bound =
+          (1 + 64 * kU) * (area * delta + 2 * (3 * p * delta * delta + delta * delta * delta));
       const ExactBoxFrame frame(b);
       const Rational exact = 8 * abs(frame.det);
       const Rational diff = abs(r.volume - exact);
-      EXPECT_LE(diff, Rational(bound)) << "off by " << to_double_nearest(diff) << ", bound " << bound;
+      EXPECT_LE(diff, Rational(bound))
+          << "off by " << to_double_nearest(diff) << ", bound " << bound;
       // The bound is not vacuous: it is below a millionth of the volume.
       EXPECT_LT(bound, 1e-6 * volume(b));
     }

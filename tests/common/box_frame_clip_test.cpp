@@ -27,19 +27,24 @@ Point<NT> pt(double x, double y, double z) {
 TEST(BoxFrameClip, FaceTermsInClosedForm) {
   const Rational R(1);
   Rational t;
-  const Point<Rational> mid[3] = {pt<Rational>(0, 0, 0.5), pt<Rational>(1, 0, 0.5), pt<Rational>(0, 1, 0.5)};
+  const Point<Rational> mid[3] = {pt<Rational>(0, 0, 0.5), pt<Rational>(1, 0, 0.5),
+                                  pt<Rational>(0, 1, 0.5)};
   ASSERT_TRUE(box_clip::face_term6(mid, R, &t));
   EXPECT_EQ(t, Rational(9, 2));
-  const Point<Rational> top[3] = {pt<Rational>(0, 0, 3), pt<Rational>(1, 0, 3), pt<Rational>(0, 1, 3)};
+  const Point<Rational> top[3] = {pt<Rational>(0, 0, 3), pt<Rational>(1, 0, 3),
+                                  pt<Rational>(0, 1, 3)};
   ASSERT_TRUE(box_clip::face_term6(top, R, &t));
   EXPECT_EQ(t, Rational(6));
-  const Point<Rational> below[3] = {pt<Rational>(0, 0, -3), pt<Rational>(1, 0, -3), pt<Rational>(0, 1, -3)};
+  const Point<Rational> below[3] = {pt<Rational>(0, 0, -3), pt<Rational>(1, 0, -3),
+                                    pt<Rational>(0, 1, -3)};
   EXPECT_FALSE(box_clip::face_term6(below, R, &t));
-  const Point<Rational> wide[3] = {pt<Rational>(0, 0, 0.5), pt<Rational>(2, 0, 0.5), pt<Rational>(0, 1, 0.5)};
+  const Point<Rational> wide[3] = {pt<Rational>(0, 0, 0.5), pt<Rational>(2, 0, 0.5),
+                                   pt<Rational>(0, 1, 0.5)};
   ASSERT_TRUE(box_clip::face_term6(wide, R, &t));
   EXPECT_EQ(t, Rational(27, 4));
   // The same in double: every value here is a small dyadic, so double is exact too.
-  const Point<double> wide_d[3] = {pt<double>(0, 0, 0.5), pt<double>(2, 0, 0.5), pt<double>(0, 1, 0.5)};
+  const Point<double> wide_d[3] = {pt<double>(0, 0, 0.5), pt<double>(2, 0, 0.5),
+                                   pt<double>(0, 1, 0.5)};
   double td = 0;
   ASSERT_TRUE(box_clip::face_term6(wide_d, 1.0, &td));
   EXPECT_EQ(td, 6.75);
@@ -53,10 +58,15 @@ TEST(BoxFrameClip, InconsistentSignsCannotOverflowThePolygon) {
   in.n = box_clip::kMaxPolygon;
   for (int i = 0; i < in.n; ++i) in.v[i] = pt<double>(i, 0, 0);
   int call = 0;
-  auto alternating = [&](const Point<double>&, int, int, int, const double&) { return call++ % 2 ? 1 : -1; };
-  EXPECT_THROW(box_clip::detail::clip(alternating, &in, 0, 1, 1, 1.0, &out), box_clip::PolygonOverflow);
+  auto alternating = [&](const Point<double>&, int, int, int, const double&) {
+    return call++ % 2 ? 1 : -1;
+  };
+  EXPECT_THROW(box_clip::detail::clip(alternating, &in, 0, 1, 1, 1.0, &out),
+               box_clip::PolygonOverflow);
   // Consistent signs on the same polygon: at most one vertex more, no throw.
-  auto exact = [](const Point<double>& p, int, int, int, const double&) { return p.x[0] > 4 ? 1 : -1; };
+  auto exact = [](const Point<double>& p, int, int, int, const double&) {
+    return p.x[0] > 4 ? 1 : -1;
+  };
   const Polygon<double>* r = box_clip::detail::clip(exact, &in, 0, 1, 1, 1.0, &out);
   EXPECT_LE(r->n, box_clip::kMaxPolygon);
 }

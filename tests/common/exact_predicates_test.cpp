@@ -76,7 +76,8 @@ TEST(Orient3d, SubnormalCoordinatesMatchRationalReference) {
   for (int trial = 0; trial < 200000; ++trial) {
     Vec3 p[4];
     for (auto& q : p) q = Vec3(u(rng), u(rng), tiny(rng) * std::ldexp(1.0, -1074));
-    ASSERT_EQ(orient3d(p[0], p[1], p[2], p[3]), reference_orient3d(p[0], p[1], p[2], p[3])) << trial;
+    ASSERT_EQ(orient3d(p[0], p[1], p[2], p[3]), reference_orient3d(p[0], p[1], p[2], p[3]))
+        << trial;
   }
 }
 
@@ -111,19 +112,22 @@ TEST(ToDoubleNearest, RoundsToNearestNotTowardZero) {
 TEST(ToDoubleNearest, SubnormalsRoundOnce) {
   const Rational tiny = Rational(1) / Rational(mpz_class(1) << 1074);  // 2^-1074
   const double least = std::ldexp(1.0, -1074);
-  const Rational just_above_half = (Rational(1, 2) + Rational(1) / Rational(mpz_class(1) << 60)) * tiny;
+  const Rational just_above_half =
+      (Rational(1, 2) + Rational(1) / Rational(mpz_class(1) << 60)) * tiny;
   EXPECT_EQ(to_double_nearest(just_above_half), least);
   EXPECT_EQ(to_double_nearest(-just_above_half), -least);
-  EXPECT_EQ(to_double_nearest(Rational(1, 2) * tiny), 0.0);              // tie: to even (0)
-  EXPECT_EQ(to_double_nearest(Rational(3, 2) * tiny), 2 * least);        // tie: to even (2)
-  EXPECT_EQ(to_double_nearest(Rational(5, 2) * tiny), 2 * least);        // tie: to even (2)
+  EXPECT_EQ(to_double_nearest(Rational(1, 2) * tiny), 0.0);        // tie: to even (0)
+  EXPECT_EQ(to_double_nearest(Rational(3, 2) * tiny), 2 * least);  // tie: to even (2)
+  EXPECT_EQ(to_double_nearest(Rational(5, 2) * tiny), 2 * least);  // tie: to even (2)
   EXPECT_EQ(to_double_nearest(Rational(7, 3) * tiny), 2 * least);
   // The top of the subnormal range rounds up into the least normal double.
   const Rational least_normal = Rational(1) / Rational(mpz_class(1) << 1022);
   EXPECT_EQ(to_double_nearest(least_normal - Rational(1, 4) * tiny), std::ldexp(1.0, -1022));
-  EXPECT_EQ(to_double_nearest(least_normal - Rational(3, 4) * tiny), std::ldexp(1.0, -1022) - least);
+  EXPECT_EQ(to_double_nearest(least_normal - Rational(3, 4) * tiny),
+            std::ldexp(1.0, -1022) - least);
   // Every subnormal double converts back to itself.
-  for (double d : {least, 3 * least, std::ldexp(1.0, -1030) + least, std::ldexp(1.0, -1022) - least})
+  for (double d :
+       {least, 3 * least, std::ldexp(1.0, -1030) + least, std::ldexp(1.0, -1022) - least})
     EXPECT_EQ(to_double_nearest(Rational(d)), d);
 }
 

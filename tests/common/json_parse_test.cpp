@@ -48,7 +48,8 @@ TEST(JsonParse, VeryDeepDocumentIsRefusedWithoutDeepRecursion) {
 // callback parser that could also cut depth takes time quadratic in such an array.)
 TEST(JsonParse, LongArrayOfObjectsIsReadWhole) {
   std::string text = "[";
-  for (int i = 0; i < 200000; ++i) text += (i ? ",{\"a\":[" : "{\"a\":[") + std::to_string(i) + "]}";
+  for (int i = 0; i < 200000; ++i)
+    text += (i ? ",{\"a\":[" : "{\"a\":[") + std::to_string(i) + "]}";
   text += "]";
   nlohmann::json j;
   ASSERT_TRUE(parse_json_within(text, 2, &j));

@@ -132,7 +132,7 @@ TEST(ExactBoxContainment, FlatBoxesAreClosedRectanglesSegmentsAndPoints) {
   Obb seg = rect;
   seg.half = Vec3(0, 0, 2);
   const ExactBoxContainment in_seg(seg);
-  EXPECT_TRUE(in_seg.contains(Vec3(1, 2, 5)));   // an end
+  EXPECT_TRUE(in_seg.contains(Vec3(1, 2, 5)));  // an end
   EXPECT_TRUE(in_seg.contains(Vec3(1, 2, 1.5)));
   EXPECT_FALSE(in_seg.contains(Vec3(1, 2, std::nextafter(5.0, 6.0))));
   EXPECT_FALSE(in_seg.contains(Vec3(std::nextafter(1.0, 2.0), 2, 4)));

@@ -26,7 +26,9 @@ RgbaImage pattern(int width, int height, bool opaque) {
 
 // The colour type of a PNG (byte 25: the 8-byte signature, the IHDR chunk's length and type,
 // width, height and bit depth come first; PNG specification §11.2.2): 2 is RGB, 6 is RGBA.
-int colour_type(const std::string& png) { return png.size() > 25 ? static_cast<uint8_t>(png[25]) : -1; }
+int colour_type(const std::string& png) {
+  return png.size() > 25 ? static_cast<uint8_t>(png[25]) : -1;
+}
 
 void expect_one_line_naming(const Status& s, const std::string& name) {
   EXPECT_FALSE(s);
@@ -100,7 +102,8 @@ TEST(PngIo, ReadsGreyFilesOfOtherWritersAsRgba) {
   image.width = 2;
   image.height = 1;
   image.format = PNG_FORMAT_GA;
-  ASSERT_NE(png_image_write_to_file(&image, path.c_str(), 0, grey_alpha, 0, nullptr), 0) << image.message;
+  ASSERT_NE(png_image_write_to_file(&image, path.c_str(), 0, grey_alpha, 0, nullptr), 0)
+      << image.message;
   r = read_png(path, &back);
   std::remove(path.c_str());
   ASSERT_TRUE(r) << r.message();

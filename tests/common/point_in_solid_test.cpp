@@ -47,8 +47,8 @@ TEST(LocatePoint, EveryPointOfALatticeAroundACubeWithACavity) {
   EXPECT_GT(counts[static_cast<int>(Location::kInside)], 1000);
   EXPECT_GT(counts[static_cast<int>(Location::kOutside)], 1000);
   EXPECT_GT(counts[static_cast<int>(Location::kOnSurface)], 1000);
-  for (const Vec3& far : {Vec3(1e6, 2, 2), Vec3(-1e6, 2, 2), Vec3(2, 1e6, 2), Vec3(2, -1e6, 2), Vec3(2, 2, 1e6),
-                          Vec3(2, 2, -1e6), Vec3(-3e5, -3e5, -3e5)})
+  for (const Vec3& far : {Vec3(1e6, 2, 2), Vec3(-1e6, 2, 2), Vec3(2, 1e6, 2), Vec3(2, -1e6, 2),
+                          Vec3(2, 2, 1e6), Vec3(2, 2, -1e6), Vec3(-3e5, -3e5, -3e5)})
     EXPECT_EQ(locate_point(solid.mesh, faces, far), Location::kOutside) << far.transpose();
 }
 
@@ -57,14 +57,20 @@ TEST(LocatePoint, PointsOneUlpOffAFace) {
   const analytic::AnalyticMesh solid = analytic::cube_with_cavity(4.0, 1.0, 3.0);
   const AabbTree faces = AabbTree::over_faces(solid.mesh);
   for (double y : {0.5, 1.7, 3.25}) {
-    EXPECT_EQ(locate_point(solid.mesh, faces, Vec3(std::nextafter(4.0, 5.0), y, 0.5)), Location::kOutside);
-    EXPECT_EQ(locate_point(solid.mesh, faces, Vec3(std::nextafter(4.0, 3.0), y, 0.5)), Location::kInside);
-    EXPECT_EQ(locate_point(solid.mesh, faces, Vec3(std::nextafter(0.0, -1.0), y, 0.5)), Location::kOutside);
-    EXPECT_EQ(locate_point(solid.mesh, faces, Vec3(std::nextafter(0.0, 1.0), y, 0.5)), Location::kInside);
+    EXPECT_EQ(locate_point(solid.mesh, faces, Vec3(std::nextafter(4.0, 5.0), y, 0.5)),
+              Location::kOutside);
+    EXPECT_EQ(locate_point(solid.mesh, faces, Vec3(std::nextafter(4.0, 3.0), y, 0.5)),
+              Location::kInside);
+    EXPECT_EQ(locate_point(solid.mesh, faces, Vec3(std::nextafter(0.0, -1.0), y, 0.5)),
+              Location::kOutside);
+    EXPECT_EQ(locate_point(solid.mesh, faces, Vec3(std::nextafter(0.0, 1.0), y, 0.5)),
+              Location::kInside);
   }
   // The cavity's face x = 3, from the cavity and from the material.
-  EXPECT_EQ(locate_point(solid.mesh, faces, Vec3(std::nextafter(3.0, 2.0), 2, 2)), Location::kOutside);
-  EXPECT_EQ(locate_point(solid.mesh, faces, Vec3(std::nextafter(3.0, 4.0), 2, 2)), Location::kInside);
+  EXPECT_EQ(locate_point(solid.mesh, faces, Vec3(std::nextafter(3.0, 2.0), 2, 2)),
+            Location::kOutside);
+  EXPECT_EQ(locate_point(solid.mesh, faces, Vec3(std::nextafter(3.0, 4.0), 2, 2)),
+            Location::kInside);
 }
 
 }  // namespace

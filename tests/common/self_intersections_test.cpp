@@ -16,8 +16,9 @@ namespace {
 // touching elsewhere is an intersection.
 TEST(FacesIntersect, SharedEdgeAndVertexCases) {
   Mesh m;
-  m.vertices = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, -1, 0), Vec3(0.5, 0.5, 0),
-                Vec3(0, 0, 1), Vec3(0.2, 0.2, -1), Vec3(0.2, 0.2, 1), Vec3(-1, -1, 0)};
+  m.vertices = {Vec3(0, 0, 0),      Vec3(1, 0, 0),     Vec3(0, 1, 0),
+                Vec3(0, -1, 0),     Vec3(0.5, 0.5, 0), Vec3(0, 0, 1),
+                Vec3(0.2, 0.2, -1), Vec3(0.2, 0.2, 1), Vec3(-1, -1, 0)};
   m.faces = {
       {0, 1, 2},  // 0: base
       {1, 0, 3},  // 1: shares edge 0-1, coplanar, other side: fine
@@ -35,9 +36,15 @@ TEST(FacesIntersect, SharedEdgeAndVertexCases) {
 
 TEST(FacesIntersect, DisjointAndTouchingWithoutSharedVertices) {
   Mesh m;
-  m.vertices = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0),
-                Vec3(0.25, 0.25, 0), Vec3(0.25, 0.25, 1), Vec3(1, 1, 1),      // touches at a point
-                Vec3(0.25, 0.25, 1e-300), Vec3(0.3, 0.25, 1), Vec3(1, 1, 1)};  // just above
+  m.vertices = {Vec3(0, 0, 0),
+                Vec3(1, 0, 0),
+                Vec3(0, 1, 0),
+                Vec3(0.25, 0.25, 0),
+                Vec3(0.25, 0.25, 1),
+                Vec3(1, 1, 1),  // touches at a point
+                Vec3(0.25, 0.25, 1e-300),
+                Vec3(0.3, 0.25, 1),
+                Vec3(1, 1, 1)};  // just above
   m.faces = {{0, 1, 2}, {3, 4, 5}, {6, 7, 8}};
   EXPECT_TRUE(faces_intersect(m, 0, 1));
   EXPECT_FALSE(faces_intersect(m, 0, 2));
@@ -169,7 +176,10 @@ TEST(FindSelfIntersections, AgreesWithEveryPairOnExactlyCoplanarFacesOfAnEdge) {
   m.vertices = {Vec3(0, 0, 0), Vec3(0, 0, 4)};
   for (int i = 0; i < 40; ++i) {
     const int s = side(rng), r = grid(rng), z = grid(rng) - 2;
-    const Vec3 dir = s == 0 ? Vec3(1, 0, 0) : s == 1 ? Vec3(0, 1, 0) : s == 2 ? Vec3(-1, 0, 0) : Vec3(0, -1, 0);
+    const Vec3 dir = s == 0   ? Vec3(1, 0, 0)
+                     : s == 1 ? Vec3(0, 1, 0)
+                     : s == 2 ? Vec3(-1, 0, 0)
+                              : Vec3(0, -1, 0);
     m.vertices.push_back(r * dir + Vec3(0, 0, z));
     m.faces.push_back({0, 1, static_cast<int32_t>(m.vertices.size()) - 1});
   }
@@ -263,10 +273,18 @@ TEST(FindSelfIntersections, AgreesWithEveryPairOnRimFanCylinders) {
       Vec3& t = m.vertices[2 * rim(rng) + 1];
       const double r = shrink(rng);
       switch ((trial + moved) % 4) {
-        case 0: t = Vec3(r * t.x(), r * t.y(), -1.0 - depth(rng)); break;
-        case 1: t = Vec3(r * t.x(), r * t.y(), -1.0); break;
-        case 2: t = Vec3(r * t.x(), r * t.y(), std::nextafter(-1.0, -2.0)); break;
-        default: t = m.vertices[2 * rim(rng)]; break;
+        case 0:
+          t = Vec3(r * t.x(), r * t.y(), -1.0 - depth(rng));
+          break;
+        case 1:
+          t = Vec3(r * t.x(), r * t.y(), -1.0);
+          break;
+        case 2:
+          t = Vec3(r * t.x(), r * t.y(), std::nextafter(-1.0, -2.0));
+          break;
+        default:
+          t = m.vertices[2 * rim(rng)];
+          break;
       }
     }
     expect_agrees_with_every_pair(m, "trial " + std::to_string(trial));
@@ -297,12 +315,14 @@ TEST(FindSelfIntersections, WorkAroundHighValenceVerticesGrowsLikeNLogN) {
     const char* name;
     Mesh (*make)(int);
   };
-  for (const Shape& s : {Shape{"double cone", double_cone}, Shape{"fan-capped cylinder", fan_capped_cylinder},
-                         Shape{"rim-fan cylinder", rim_fan_cylinder}, Shape{"crowded edge", crowded_edge}}) {
+  for (const Shape& s :
+       {Shape{"double cone", double_cone}, Shape{"fan-capped cylinder", fan_capped_cylinder},
+        Shape{"rim-fan cylinder", rim_fan_cylinder}, Shape{"crowded edge", crowded_edge}}) {
     size_t work[2];
     for (int i = 0; i < 2; ++i) {
       const Mesh m = s.make(1024 << i);
-      const SelfIntersectionSearch r = find_self_intersections(m, std::vector<char>(m.faces.size(), 0));
+      const SelfIntersectionSearch r =
+          find_self_intersections(m, std::vector<char>(m.faces.size(), 0));
       EXPECT_EQ(r.pairs, 0u) << s.name;  // no two faces meet beyond their shared vertices
       work[i] = r.exact_tests + r.filter_steps;
     }

@@ -113,7 +113,8 @@ TEST(Solidity, CountOfSelfIntersectionsStopsAtItsLimit) {
   ASSERT_NE(found, nullptr) << r.verdict();
   EXPECT_TRUE(found->at_least);
   EXPECT_EQ(found->count, kSelfIntersectionsCounted);
-  EXPECT_NE(r.verdict().find("self-intersecting: at least 1000000 pairs of faces"), std::string::npos)
+  EXPECT_NE(r.verdict().find("self-intersecting: at least 1000000 pairs of faces"),
+            std::string::npos)
       << r.verdict();
   // Below the limit the count is exact and says so.
   const SolidityReport two = check_solidity(append(cube().mesh, cube(1, Vec3(0.5, 0.5, 0.5)).mesh));
@@ -193,7 +194,8 @@ TEST(Solidity, RealMeshVerdictsMatchTheCommittedList) {
     std::getline(in, faces, '\t');
     std::getline(in, verdict);
     if (!test::exists(test::real_mesh(name))) {
-      if (test::real_meshes_required()) ADD_FAILURE() << name << " is absent (VOBB_REQUIRE_REAL_MESHES=1)";
+      if (test::real_meshes_required())
+        ADD_FAILURE() << name << " is absent (VOBB_REQUIRE_REAL_MESHES=1)";
       continue;
     }
     LoadedMesh lm;

@@ -28,9 +28,16 @@ TEST(TextUtil, FileNameParts) {
 // The shortest form must read back as the same double, bit for bit, over the whole range:
 // subnormals, the extremes, both zeros and random bit patterns.
 TEST(TextUtil, FormatDoubleReadsBackExactly) {
-  std::vector<double> values = {0.0, -0.0, 0.1, 1.0 / 3, -2.5e-300, 1e300,
-                                std::numeric_limits<double>::denorm_min(), std::numeric_limits<double>::min(),
-                                std::numeric_limits<double>::max(), -std::numeric_limits<double>::max()};
+  std::vector<double> values = {0.0,
+                                -0.0,
+                                0.1,
+                                1.0 / 3,
+                                -2.5e-300,
+                                1e300,
+                                std::numeric_limits<double>::denorm_min(),
+                                std::numeric_limits<double>::min(),
+                                std::numeric_limits<double>::max(),
+                                -std::numeric_limits<double>::max()};
   std::mt19937_64 rng(7);
   while (values.size() < 20000) {
     const uint64_t bits = rng();
@@ -76,9 +83,10 @@ TEST(TextUtil, OnlyRegularFilesAreRead) {
   struct Case {
     std::string path, says;
   };
-  for (const Case& c : {Case{fifo, "x: not a regular file"}, Case{"/dev/zero", "x: not a regular file"},
-                        Case{::testing::TempDir(), "x: is a directory, not a mesh"},
-                        Case{test::temp_path("tu_missing"), "x: cannot open: No such file or directory"}}) {
+  for (const Case& c :
+       {Case{fifo, "x: not a regular file"}, Case{"/dev/zero", "x: not a regular file"},
+        Case{::testing::TempDir(), "x: is a directory, not a mesh"},
+        Case{test::temp_path("tu_missing"), "x: cannot open: No such file or directory"}}) {
     const Status s = check_regular_file(c.path, "x", "mesh", &size);
     EXPECT_FALSE(s) << c.path;
     EXPECT_EQ(s.message(), c.says) << c.path;

@@ -1,7 +1,6 @@
 #include "common/tree_io.h"
 
 #include <gtest/gtest.h>
-
 #include <sys/stat.h>
 
 #include <cstdio>
@@ -123,18 +122,20 @@ TEST(TreeIo, RefusesBrokenTreesWithOneLine) {
   // A claimed triangle count far beyond the faces listed is refused without sizing memory by it.
   refused(edit("\"triangles\":8", "\"triangles\":2147483647"), "the mesh has 2147483647 triangles");
   // DESIGN §7: axes only nearly orthonormal; a scaled or sheared frame is not a box.
-  refused(edit("\"axes\":[[", "\"axes\":[[10,0,0],[0,1,0],[0,0,1]],\"was\":[["), "axes are not orthonormal");
+  refused(edit("\"axes\":[[", "\"axes\":[[10,0,0],[0,1,0],[0,0,1]],\"was\":[["),
+          "axes are not orthonormal");
   // Boxes as far out as coordinates may be (solidity.h), and no further.
   refused(edit("\"half_extents\":[", "\"half_extents\":[1e200,1,1],\"was\":["), "extends beyond");
 }
 
 TEST(BoxFile, RefusesBoxesThatAreNotBoxes) {
   const std::string path = test::temp_path("bad_boxes.json");
-  for (const char* box : {R"({"center":[0,0,0],"axes":[[1,0,0],[0,1,0],[0,1,0]],"half_extents":[1,1,1]})",
-                          R"({"center":[0,0,0],"axes":[[2,0,0],[0,1,0],[0,0,1]],"half_extents":[1,1,1]})",
-                          R"({"center":[0,0,0],"axes":[[1,0,0],[0,1,0],[0,0,1]],"half_extents":[1e103,1,1]})",
-                          // subnormal: 1 / h overflows in the box's frame (fast/cubemap.h)
-                          R"({"center":[0,0,0],"axes":[[1,0,0],[0,1,0],[0,0,1]],"half_extents":[1e-310,1,1]})"}) {
+  for (const char* box :
+       {R"({"center":[0,0,0],"axes":[[1,0,0],[0,1,0],[0,1,0]],"half_extents":[1,1,1]})",
+        R"({"center":[0,0,0],"axes":[[2,0,0],[0,1,0],[0,0,1]],"half_extents":[1,1,1]})",
+        R"({"center":[0,0,0],"axes":[[1,0,0],[0,1,0],[0,0,1]],"half_extents":[1e103,1,1]})",
+        // subnormal: 1 / h overflows in the box's frame (fast/cubemap.h)
+        R"({"center":[0,0,0],"axes":[[1,0,0],[0,1,0],[0,0,1]],"half_extents":[1e-310,1,1]})"}) {
     std::ofstream(path) << "{\"boxes\":[" << box << "]}";
     std::vector<Obb> boxes;
     const Status s = read_boxes(path, &boxes);
@@ -143,8 +144,9 @@ TEST(BoxFile, RefusesBoxesThatAreNotBoxes) {
   }
   // Axes as a 6-digit writer leaves them are still accepted, and so are flat boxes (a zero half
   // extent) and tiny ones (the least normal double).
-  std::ofstream(path) << R"({"boxes":[{"center":[0,0,0],"axes":[[0.6,0.8,0],[-0.8,0.6,0],[0,0,1]],"half_extents":[1,1,1]},)"
-                      << R"({"center":[0,0,0],"axes":[[1,0,0],[0,1,0],[0,0,1]],"half_extents":[0,2.2250738585072014e-308,1]}]})";
+  std::ofstream(path)
+      << R"({"boxes":[{"center":[0,0,0],"axes":[[0.6,0.8,0],[-0.8,0.6,0],[0,0,1]],"half_extents":[1,1,1]},)"
+      << R"({"center":[0,0,0],"axes":[[1,0,0],[0,1,0],[0,0,1]],"half_extents":[0,2.2250738585072014e-308,1]}]})";
   std::vector<Obb> boxes;
   EXPECT_TRUE(read_boxes(path, &boxes));
   EXPECT_EQ(boxes.size(), 2u);
@@ -173,7 +175,8 @@ TEST(TreeIo, OnlyRegularFilesAreRead) {
   EXPECT_EQ(read_tree(folder, &t).message(), name + ": is a directory, not a tree file");
   EXPECT_EQ(read_boxes(folder, &boxes).message(), name + ": is a directory, not a box file");
   const std::string absent = test::temp_path("absent_tree.json");
-  EXPECT_EQ(read_tree(absent, &t).message(), basename_of(absent) + ": cannot open: No such file or directory");
+  EXPECT_EQ(read_tree(absent, &t).message(),
+            basename_of(absent) + ": cannot open: No such file or directory");
   std::remove(fifo.c_str());
   ::rmdir(folder.c_str());
 }

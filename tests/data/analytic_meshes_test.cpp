@@ -29,7 +29,9 @@ TEST(AnalyticMeshes, ClosedFormsAtOtherSizes) {
 TEST(AnalyticMeshes, TorusHasGenusOneAndCavityTwoShells) {
   const SolidityReport torus = check_solidity(polygonal_torus().mesh);
   // Euler characteristic V - E + F = 2 - 2g.
-  EXPECT_EQ(static_cast<long>(torus.vertices) - static_cast<long>(torus.edges) + static_cast<long>(torus.faces), 0);
+  EXPECT_EQ(static_cast<long>(torus.vertices) - static_cast<long>(torus.edges) +
+                static_cast<long>(torus.faces),
+            0);
   EXPECT_EQ(check_solidity(cube_with_cavity().mesh).shells, 2u);
 }
 

@@ -1,33 +1,31 @@
 #include "exact/certify.h"
 
 #include <gtest/gtest.h>
-#include <tbb/task_arena.h>
-
-#include <atomic>
 #include <sys/stat.h>
+#include <tbb/task_arena.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cmath>
-#include <limits>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <mutex>
+#include <nlohmann/json.hpp>
 #include <set>
 #include <stdexcept>
 #include <string>
 
-#include <nlohmann/json.hpp>
-
+#include "builder/obbtree_builder.h"
+#include "builder/variational_builder.h"
 #include "common/io/mesh_io.h"
 #include "common/sha256.h"
 #include "common/tree.h"
 #include "data/analytic_meshes.h"
 #include "fast/cpu_estimator.h"
-#include "builder/obbtree_builder.h"
 #include "fast/poly_solver.h"
-#include "builder/variational_builder.h"
 #include "special_position.h"
 #include "test_common.h"
 
@@ -121,13 +119,15 @@ TEST(Certify, HandMadeTreeHasClosedFormValues) {
 // is at most the baseline's, compared as rationals. Not a theorem (the builder minimises an
 // estimate of Σ OBV, not OMV), so a regression in the builder shows up here.
 TEST(Certify, VariationalTreeCertifiesAndBeatsTheBaselineExactly) {
-  for (const analytic::AnalyticMesh& am : {analytic::polygonal_torus(), analytic::cube_with_cavity()}) {
+  for (const analytic::AnalyticMesh& am :
+       {analytic::polygonal_torus(), analytic::cube_with_cavity()}) {
     SCOPED_TRACE(am.name);
     const Mesh& mesh = am.mesh;
     const CpuObvEstimator cpu(mesh);
     VariationalOptions vo;
     vo.depth = 3;
-    const Tree v = build_variational(mesh, vo, [&](const std::vector<Obb>& b) { return cpu.estimate(b, 16); });
+    const Tree v =
+        build_variational(mesh, vo, [&](const std::vector<Obb>& b) { return cpu.estimate(b, 16); });
     ObbTreeOptions bo;
     bo.depth = 3;
     const Tree base = build_obbtree(mesh, bo);
@@ -214,7 +214,8 @@ TEST_F(CertifyTorus, MemoryForOneNefPolyhedronCertifiesOnOneThread) {
   EXPECT_EQ(count("layers on 1 threads, not 4:"), 1u);
   EXPECT_EQ(count("Nef polyhedron of the mesh built"), 1u) << "one thread, one Nef polyhedron";
   ASSERT_EQ(tight.layers.size(), free.layers.size());
-  for (size_t i = 0; i < free.layers.size(); ++i) EXPECT_EQ(tight.layers[i].omv, free.layers[i].omv) << "layer " << i;
+  for (size_t i = 0; i < free.layers.size(); ++i)
+    EXPECT_EQ(tight.layers[i].omv, free.layers[i].omv) << "layer " << i;
   EXPECT_EQ(tight.weighted_error, free.weighted_error);
 }
 
@@ -282,7 +283,9 @@ TEST_F(CertifyTorus, ResumingFromAnyCheckpointGivesTheSameCertificate) {
     int layer_lines = 0, obv_lines = 0;
     r.progress = [&](const std::string& line) {
       layer_lines += line.rfind("layer ", 0) == 0 ? 1 : 0;
-      obv_lines += line.rfind("OBV of", 0) == 0 && line.find("from the checkpoint") == std::string::npos ? 1 : 0;
+      obv_lines +=
+          line.rfind("OBV of", 0) == 0 && line.find("from the checkpoint") == std::string::npos ? 1
+                                                                                                : 0;
     };
     const Certificate c = certify(m, t, r);
     EXPECT_EQ(layer_lines, static_cast<int>(5 - k)) << "state with " << k << " layers";
@@ -299,7 +302,8 @@ TEST_F(CertifyTorus, ResumingFromAnyCheckpointGivesTheSameCertificate) {
       EXPECT_EQ(b.omv_path, a.omv_path);
       EXPECT_EQ(b.paths_agree, a.paths_agree);
     }
-    for (const LayerCertificate& l : saved[k].layers) EXPECT_EQ(c.layers[l.level].seconds, l.seconds);
+    for (const LayerCertificate& l : saved[k].layers)
+      EXPECT_EQ(c.layers[l.level].seconds, l.seconds);
     EXPECT_EQ(c.weighted_error, full.weighted_error);
     EXPECT_EQ(c.containment.violations, full.containment.violations);
     EXPECT_EQ(c.containment.checked_pairs, full.containment.checked_pairs);
@@ -318,7 +322,9 @@ TEST_F(CertifyTorus, ResumingFromAnyCheckpointGivesTheSameCertificate) {
   std::system(("rm -rf " + dir).c_str());
 }
 
-void write_text(const std::string& path, const std::string& text) { std::ofstream(path, std::ios::binary) << text; }
+void write_text(const std::string& path, const std::string& text) {
+  std::ofstream(path, std::ios::binary) << text;
+}
 
 // A file's checksum is the SHA-256 of its compact JSON without the field (certify.h); a test
 // that edits a file signs it again, so that the structure checks, not the checksum, refuse it.
@@ -326,6 +332,111 @@ void sign(nlohmann::json* j) {
   j->erase("sha256");
   const std::string body = j->dump();
   (*j)["sha256"] = sha256_hex(body.data(), body.size());
+}
+
+struct CheckpointEdit {
+  const char* why;  // what the message must name
+  bool in_obv;      // the file edited: obv.json, else layers.json
+  std::function<void(nlohmann::json&)> edit;
+};
+
+// Edits of a checkpoint that load() must refuse, each signed again after it is made.
+std::vector<CheckpointEdit> checkpoint_edits() {
+  return {
+      // Fields of another type where the format is named: refused in one line, not thrown.
+      {"not a vobb certify checkpoint", true, [](nlohmann::json& j) { j["format"] = 5; }},
+      {"not a vobb certify checkpoint", false, [](nlohmann::json& j) { j["version"] = "1"; }},
+      {"no fingerprint", true, [](nlohmann::json& j) { j.erase("fingerprint"); }},
+      {"no fingerprint", false, [](nlohmann::json& j) { j["fingerprint"] = 7; }},
+      {"unknown field", false, [](nlohmann::json& j) { j["extra"] = 1; }},
+      {"unknown field", true, [](nlohmann::json& j) { j["extra"] = 1; }},
+      {"boxes for a tree", true, [](nlohmann::json& j) { j["obv"].erase(j["obv"].size() - 1); }},
+      {"older vobb (format 1", true, [](nlohmann::json& j) { j["version"] = 1; }},
+      {"older vobb (format 1", false, [](nlohmann::json& j) { j["version"] = 1; }},
+      {"not an enclosure", true, [](nlohmann::json& j) { j["obv"][0] = "1/0"; }},
+      {"not an enclosure", true,
+       [](nlohmann::json& j) {
+         j["obv"][0]["enclosure"] = {"0x1p1", "0x1p0"};
+       }},
+      {"not an enclosure", true,
+       [](nlohmann::json& j) {
+         j["obv"][0]["enclosure"] = {"0x1p0", "two"};
+       }},
+      {"outside its enclosure", true,
+       [](nlohmann::json& j) { j["obv"][0]["rational"] = "12345/7"; }},
+      {"outside its enclosure", true, [](nlohmann::json& j) { j["obv"][0]["rational"] = "1/0"; }},
+      {"exact, without its rational", true,
+       [](nlohmann::json& j) {
+         j["obv"][0]["exact"] = true;
+         j["obv"][0].erase("rational");
+       }},
+      // A valid obv.json of other values: layers.json names the one it was saved with.
+      {"another obv.json", true,
+       [](nlohmann::json& j) {
+         j["obv"][0]["enclosure"] = {"0x1p0", "0x1p1"};
+       }},
+      {"not an integer in 0..4", false, [](nlohmann::json& j) { j["layers"][0]["level"] = 5; }},
+      {"given twice", false, [](nlohmann::json& j) { j["layers"][1] = j["layers"][0]; }},
+      {"box count", false,
+       [](nlohmann::json& j) { j["layers"][0]["boxes"] = j["layers"][0]["boxes"].get<int>() + 1; }},
+      {"sum of OBV is not the sum", false,
+       [](nlohmann::json& j) {
+         j["layers"][0]["sum_obv_enclosure"] = {"0x1p0", "0x1p1"};
+       }},
+      {"sum of OBV lies outside its enclosure", false,
+       [](nlohmann::json& j) {
+         j["layers"][0]["sum_obv"] =
+             Rational(Rational(j["layers"][0]["sum_obv"].get<std::string>()) + 1).get_str();
+       }},
+      {"an enclosure is not one", false,
+       [](nlohmann::json& j) { j["layers"][0]["omv_enclosure"] = "7"; }},
+      // Values that do not follow from the layer's own: its verdict, a double, an enclosure.
+      {"its bound does not follow from its values", false,
+       [](nlohmann::json& j) {
+         j["layers"][0]["upper_bound"] = !j["layers"][0]["upper_bound"].get<bool>();
+       }},
+      {"a double is not its value rounded", false,
+       [](nlohmann::json& j) { j["layers"][0]["omv_nearest"] = 12345.0; }},
+      {"a double is not its value rounded", false,
+       [](nlohmann::json& j) { j["layers"][0]["overlap_nearest"] = -1.0; }},
+      {"OMV's enclosure is not the sum of OBV's less the overlap's", false,
+       [](nlohmann::json& j) {
+         j["layers"][0]["overlap_enclosure"] = {"0x1p-60", "0x1p-59"};
+       }},
+      {"neither filter nor exact", false,
+       [](nlohmann::json& j) { j["layers"][0]["omv_rounded_by"] = "guess"; }},
+      {"rationals in a layer that says it has none", false,
+       [](nlohmann::json& j) {
+         j["layers"][0]["rational"] = false;
+         j["layers"][0]["omv_path"] = "filtered";
+         j["layers"][0].erase("omv_clip");
+         j["layers"][0].erase("paths_agree");
+       }},
+      {"contradicts", false, [](nlohmann::json& j) { j["layers"][0]["paths_agree"] = false; }},
+      {"unknown path", false,
+       [](nlohmann::json& j) {
+         j["layers"][0]["omv_path"] = "guess";
+         j["layers"][0].erase("omv_clip");  // fields of "both" alone, refused first otherwise
+         j["layers"][0].erase("paths_agree");
+       }},
+      {"seconds", false, [](nlohmann::json& j) { j["layers"][0]["seconds"] = -1; }},
+      {"unknown field 'extra'", false, [](nlohmann::json& j) { j["layers"][0]["extra"] = 1; }},
+      {"not an object", false, [](nlohmann::json& j) { j["layers"][0] = 5; }},
+      {"not an integer", false, [](nlohmann::json& j) { j["layers"][0]["level"] = "1"; }},
+      {"type must be boolean", false,
+       [](nlohmann::json& j) { j["layers"][0]["paths_agree"] = "yes"; }},
+      {"a second path's OMV", false, [](nlohmann::json& j) { j["layers"][0]["omv_path"] = "nef"; }},
+      {"'paths_agree' not found", false,
+       [](nlohmann::json& j) { j["layers"][0].erase("paths_agree"); }},
+      // Nested past the limit (8; a file is 3 deep): refused as it is parsed, so that 10^5
+      // levels cannot overflow the stack in the checksum (JsonParse tests the depth itself).
+      {"nested deeper", true,
+       [](nlohmann::json& j) {
+         j["obv"] = nlohmann::json::array();
+         for (int i = 0; i < 8; ++i)
+           j["obv"] = nlohmann::json::array({j["obv"]});  // depth 9: limit 8
+       }},
+  };
 }
 
 // A state of another certification, a damaged file, and signed files that do not fit the tree,
@@ -365,7 +476,8 @@ TEST_F(CertifyTorus, DamagedOrForeignCheckpointsAreRefused) {
     EXPECT_NE(r.message().find(why), std::string::npos) << r.message();
     EXPECT_NE(r.message().find(file), std::string::npos) << r.message();
     EXPECT_EQ(r.message().find('\n'), std::string::npos) << r.message();
-    EXPECT_EQ(r.message().find("json.exception"), std::string::npos) << r.message();  // our words, not the parser's tag
+    EXPECT_EQ(r.message().find("json.exception"), std::string::npos)
+        << r.message();  // our words, not the parser's tag
   };
   // A digit changed and not signed: the checksum refuses it.
   {
@@ -378,80 +490,16 @@ TEST_F(CertifyTorus, DamagedOrForeignCheckpointsAreRefused) {
     EXPECT_NE(files.message().find("checksum"), std::string::npos) << files.message();
     restore();
   }
-  struct Edit {
-    const char* why;  // what the message must name
-    bool in_obv;      // the file edited: obv.json, else layers.json
-    std::function<void(nlohmann::json&)> edit;
-  };
-  const std::vector<Edit> edits = {
-      // Fields of another type where the format is named: refused in one line, not thrown.
-      {"not a vobb certify checkpoint", true, [](nlohmann::json& j) { j["format"] = 5; }},
-      {"not a vobb certify checkpoint", false, [](nlohmann::json& j) { j["version"] = "1"; }},
-      {"no fingerprint", true, [](nlohmann::json& j) { j.erase("fingerprint"); }},
-      {"no fingerprint", false, [](nlohmann::json& j) { j["fingerprint"] = 7; }},
-      {"unknown field", false, [](nlohmann::json& j) { j["extra"] = 1; }},
-      {"unknown field", true, [](nlohmann::json& j) { j["extra"] = 1; }},
-      {"boxes for a tree", true, [](nlohmann::json& j) { j["obv"].erase(j["obv"].size() - 1); }},
-      {"older vobb (format 1", true, [](nlohmann::json& j) { j["version"] = 1; }},
-      {"older vobb (format 1", false, [](nlohmann::json& j) { j["version"] = 1; }},
-      {"not an enclosure", true, [](nlohmann::json& j) { j["obv"][0] = "1/0"; }},
-      {"not an enclosure", true, [](nlohmann::json& j) { j["obv"][0]["enclosure"] = {"0x1p1", "0x1p0"}; }},
-      {"not an enclosure", true, [](nlohmann::json& j) { j["obv"][0]["enclosure"] = {"0x1p0", "two"}; }},
-      {"outside its enclosure", true, [](nlohmann::json& j) { j["obv"][0]["rational"] = "12345/7"; }},
-      {"outside its enclosure", true, [](nlohmann::json& j) { j["obv"][0]["rational"] = "1/0"; }},
-      {"exact, without its rational", true, [](nlohmann::json& j) {
-         j["obv"][0]["exact"] = true;
-         j["obv"][0].erase("rational");
-       }},
-      // A valid obv.json of other values: layers.json names the one it was saved with.
-      {"another obv.json", true, [](nlohmann::json& j) { j["obv"][0]["enclosure"] = {"0x1p0", "0x1p1"}; }},
-      {"not an integer in 0..4", false, [](nlohmann::json& j) { j["layers"][0]["level"] = 5; }},
-      {"given twice", false, [](nlohmann::json& j) { j["layers"][1] = j["layers"][0]; }},
-      {"box count", false, [](nlohmann::json& j) { j["layers"][0]["boxes"] = j["layers"][0]["boxes"].get<int>() + 1; }},
-      {"sum of OBV is not the sum", false, [](nlohmann::json& j) { j["layers"][0]["sum_obv_enclosure"] = {"0x1p0", "0x1p1"}; }},
-      {"sum of OBV lies outside its enclosure", false, [](nlohmann::json& j) {
-         j["layers"][0]["sum_obv"] = Rational(Rational(j["layers"][0]["sum_obv"].get<std::string>()) + 1).get_str();
-       }},
-      {"an enclosure is not one", false, [](nlohmann::json& j) { j["layers"][0]["omv_enclosure"] = "7"; }},
-      // Values that do not follow from the layer's own: its verdict, a double, an enclosure.
-      {"its bound does not follow from its values", false,
-       [](nlohmann::json& j) { j["layers"][0]["upper_bound"] = !j["layers"][0]["upper_bound"].get<bool>(); }},
-      {"a double is not its value rounded", false, [](nlohmann::json& j) { j["layers"][0]["omv_nearest"] = 12345.0; }},
-      {"a double is not its value rounded", false, [](nlohmann::json& j) { j["layers"][0]["overlap_nearest"] = -1.0; }},
-      {"OMV's enclosure is not the sum of OBV's less the overlap's", false,
-       [](nlohmann::json& j) { j["layers"][0]["overlap_enclosure"] = {"0x1p-60", "0x1p-59"}; }},
-      {"neither filter nor exact", false, [](nlohmann::json& j) { j["layers"][0]["omv_rounded_by"] = "guess"; }},
-      {"rationals in a layer that says it has none", false, [](nlohmann::json& j) {
-         j["layers"][0]["rational"] = false;
-         j["layers"][0]["omv_path"] = "filtered";
-         j["layers"][0].erase("omv_clip");
-         j["layers"][0].erase("paths_agree");
-       }},
-      {"contradicts", false, [](nlohmann::json& j) { j["layers"][0]["paths_agree"] = false; }},
-      {"unknown path", false, [](nlohmann::json& j) {
-         j["layers"][0]["omv_path"] = "guess";
-         j["layers"][0].erase("omv_clip");  // fields of "both" alone, refused first otherwise
-         j["layers"][0].erase("paths_agree");
-       }},
-      {"seconds", false, [](nlohmann::json& j) { j["layers"][0]["seconds"] = -1; }},
-      {"unknown field 'extra'", false, [](nlohmann::json& j) { j["layers"][0]["extra"] = 1; }},
-      {"not an object", false, [](nlohmann::json& j) { j["layers"][0] = 5; }},
-      {"not an integer", false, [](nlohmann::json& j) { j["layers"][0]["level"] = "1"; }},
-      {"type must be boolean", false, [](nlohmann::json& j) { j["layers"][0]["paths_agree"] = "yes"; }},
-      {"a second path's OMV", false, [](nlohmann::json& j) { j["layers"][0]["omv_path"] = "nef"; }},
-      {"'paths_agree' not found", false, [](nlohmann::json& j) { j["layers"][0].erase("paths_agree"); }},
-      // Nested past the limit (8; a file is 3 deep): refused as it is parsed, so that 10^5
-      // levels cannot overflow the stack in the checksum (JsonParse tests the depth itself).
-      {"nested deeper", true, [](nlohmann::json& j) {
-         j["obv"] = nlohmann::json::array();
-         for (int i = 0; i < 8; ++i) j["obv"] = nlohmann::json::array({j["obv"]});  // depth 9: limit 8
-       }},
-  };
+  const std::vector<CheckpointEdit> edits = checkpoint_edits();
   // Damage check_files can find without the tree (it runs before compare's long work): the
   // file-level edits above and a layers.json of another obv.json.
-  const std::set<std::string> file_level = {"not a vobb certify checkpoint", "no fingerprint", "unknown field",
-                                            "another obv.json", "nested deeper", "older vobb (format 1"};
-  for (const Edit& e : edits) {
+  const std::set<std::string> file_level = {"not a vobb certify checkpoint",
+                                            "no fingerprint",
+                                            "unknown field",
+                                            "another obv.json",
+                                            "nested deeper",
+                                            "older vobb (format 1"};
+  for (const CheckpointEdit& e : edits) {
     nlohmann::json j = e.in_obv ? obv : layers;
     e.edit(j);
     sign(&j);
@@ -466,7 +514,8 @@ TEST_F(CertifyTorus, DamagedOrForeignCheckpointsAreRefused) {
   }
   ASSERT_EQ(::unlink(obv_file.c_str()), 0);
   refused("without the boxes' OBV", layers_file);
-  EXPECT_NE(CertifyCheckpoint::check_files(dir).message().find("without the boxes' OBV"), std::string::npos);
+  EXPECT_NE(CertifyCheckpoint::check_files(dir).message().find("without the boxes' OBV"),
+            std::string::npos);
   restore();
   // The unedited files, signed the same way, are read: the edits, not the signing, were refused.
   {
@@ -501,12 +550,16 @@ TEST_F(CertifyTorus, ResumedLayersThatDoNotMatchThisRunAreCertifiedAgain) {
   f.overlapping_boxes = 0;
   f.omv_enclosure = f.sum_obv_enclosure;
   f.omv_nearest = f.sum_obv_nearest;
-  ASSERT_NE(f.omv_nearest, all.layers[forged].omv_nearest) << "the forged OMV must differ for the test to mean anything";
-  auto resumed = [&](CertifyOptions o, const CertifyState& st, int* layer_lines, std::string* note) {
+  ASSERT_NE(f.omv_nearest, all.layers[forged].omv_nearest)
+      << "the forged OMV must differ for the test to mean anything";
+  auto resumed = [&](CertifyOptions o, const CertifyState& st, int* layer_lines,
+                     std::string* note) {
     o.resume = &st;
     o.progress = [&](const std::string& line) {
       *layer_lines += line.rfind("layer ", 0) == 0 ? 1 : 0;
-      if (line.find("from the checkpoint") != std::string::npos && line.find("layers") != std::string::npos) *note = line;
+      if (line.find("from the checkpoint") != std::string::npos &&
+          line.find("layers") != std::string::npos)
+        *note = line;
     };
     return certify(m, t, o);
   };
@@ -514,12 +567,16 @@ TEST_F(CertifyTorus, ResumedLayersThatDoNotMatchThisRunAreCertifiedAgain) {
   std::string note;
   const Certificate c = resumed(automatic, state, &lines, &note);
   EXPECT_EQ(lines, 1);
-  EXPECT_NE(note.find("4 of 5 layers: from the checkpoint; 1 saved layers do not match this run"), std::string::npos) << note;
+  EXPECT_NE(note.find("4 of 5 layers: from the checkpoint; 1 saved layers do not match this run"),
+            std::string::npos)
+      << note;
   ASSERT_EQ(c.layers.size(), full.layers.size());
   for (size_t i = 0; i < c.layers.size(); ++i) {
     EXPECT_EQ(c.layers[i].omv_nearest, full.layers[i].omv_nearest) << "layer " << i;
-    EXPECT_EQ(c.layers[i].omv_enclosure.lo_rational(), full.layers[i].omv_enclosure.lo_rational()) << "layer " << i;
-    EXPECT_EQ(c.layers[i].omv_enclosure.hi_rational(), full.layers[i].omv_enclosure.hi_rational()) << "layer " << i;
+    EXPECT_EQ(c.layers[i].omv_enclosure.lo_rational(), full.layers[i].omv_enclosure.lo_rational())
+        << "layer " << i;
+    EXPECT_EQ(c.layers[i].omv_enclosure.hi_rational(), full.layers[i].omv_enclosure.hi_rational())
+        << "layer " << i;
     EXPECT_EQ(c.layers[i].omv_path, full.layers[i].omv_path) << "layer " << i;
     EXPECT_EQ(c.layers[i].overlapping_boxes, full.layers[i].overlapping_boxes) << "layer " << i;
   }
@@ -534,7 +591,8 @@ TEST_F(CertifyTorus, ResumedLayersThatDoNotMatchThisRunAreCertifiedAgain) {
   for (size_t i = 0; i < k.layers.size(); ++i) {
     EXPECT_TRUE(full.layers[i].omv_enclosure.contains(k.layers[i].omv)) << "layer " << i;
     EXPECT_EQ(k.layers[i].omv_nearest, full.layers[i].omv_nearest) << "layer " << i;
-    EXPECT_EQ(k.layers[i].omv_path, full.layers[i].omv_path == "filtered" ? "clip" : "none") << "layer " << i;
+    EXPECT_EQ(k.layers[i].omv_path, full.layers[i].omv_path == "filtered" ? "clip" : "none")
+        << "layer " << i;
   }
 }
 
@@ -543,7 +601,7 @@ TEST_F(CertifyTorus, ResumedLayersThatDoNotMatchThisRunAreCertifiedAgain) {
 TEST(Certify, LayerWorkersFitTheirNefPolyhedraInMemory) {
   const double nef = kNefBytesPerFace * 1000;  // one Nef polyhedron of a 1,000-face mesh
   EXPECT_EQ(layer_workers(5, 2, true, 1000, 1e15), 2);
-  EXPECT_EQ(layer_workers(1, 16, true, 1000, 1e15), 1);   // one layer to do
+  EXPECT_EQ(layer_workers(1, 16, true, 1000, 1e15), 1);  // one layer to do
   EXPECT_EQ(layer_workers(8, 8, true, 1000, 3 * nef), 3);
   EXPECT_EQ(layer_workers(8, 8, true, 1000, 3 * nef - 1), 2);
   EXPECT_EQ(layer_workers(8, 8, true, 1000, 0.5 * nef), 1);  // not even one fits: still one
@@ -566,7 +624,8 @@ TEST(Certify, RootLayerOfTheCubeIsExact) {
   const Obb& b = t.nodes[0].box;
   for (const Vec3& a : b.axes) ASSERT_EQ(a.cwiseAbs().sum(), 1.0) << a.transpose();
   for (const Vec3& a : b.axes) ASSERT_EQ(a.cwiseAbs().maxCoeff(), 1.0) << a.transpose();
-  const Rational box_volume = Rational(2 * b.half[0]) * Rational(2 * b.half[1]) * Rational(2 * b.half[2]);
+  const Rational box_volume =
+      Rational(2 * b.half[0]) * Rational(2 * b.half[1]) * Rational(2 * b.half[2]);
   const Certificate c = certify(m, t, CertifyOptions());
   ASSERT_EQ(c.layers.size(), 1u);
   EXPECT_TRUE(c.layers[0].omv_enclosure.contains(box_volume - 1));
@@ -641,7 +700,8 @@ TEST_P(CertifyReal, FilteredCertificateIsNefsRoundedOnBothBuildersTrees) {
   vo.depth = 8;
   {
     SCOPED_TRACE("variational");
-    expect_filtered_matches_nef(m, build_variational(m, vo, [&](const std::vector<Obb>& b) { return poly.estimate(b); }));
+    expect_filtered_matches_nef(
+        m, build_variational(m, vo, [&](const std::vector<Obb>& b) { return poly.estimate(b); }));
   }
 }
 

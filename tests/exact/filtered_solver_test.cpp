@@ -15,7 +15,9 @@ namespace vobb::exact {
 namespace {
 
 // Whether a reported double enclosure [lo, hi] holds q.
-bool holds(double lo, double hi, const Rational& q) { return Rational(lo) <= q && q <= Rational(hi); }
+bool holds(double lo, double hi, const Rational& q) {
+  return Rational(lo) <= q && q <= Rational(hi);
+}
 
 // `n` random boxes about the mesh: centres at random vertices, turned about random axes, half
 // extents `size` times the bounds' diagonal, each side scaled by 0.5..1.
@@ -54,13 +56,15 @@ TEST(FilteredSolver, EnclosesEveryExactObvOnAnalyticMeshes) {
   for (const analytic::AnalyticMesh& am : analytic::all()) {
     SCOPED_TRACE(am.name);
     const FilteredSolver fs(am.mesh);
-    for (double size : {0.05, 0.2, 0.6}) expect_obv_enclosed(fs, random_boxes(am.mesh, 3, 40, size));
+    for (double size : {0.05, 0.2, 0.6})
+      expect_obv_enclosed(fs, random_boxes(am.mesh, 3, 40, size));
   }
 }
 
 // Each box's overlap term (its part inside earlier boxes, outside the solid): the clipping
 // path's rational lies in the filter's enclosure.
-void expect_overlap_enclosed(const FilteredSolver& fs, const std::vector<Obb>& boxes, size_t* overlapping) {
+void expect_overlap_enclosed(const FilteredSolver& fs, const std::vector<Obb>& boxes,
+                             size_t* overlapping) {
   const std::vector<std::vector<int32_t>> earlier = fs.rational().earlier_neighbours(boxes);
   for (size_t j = 0; j < boxes.size(); ++j) {
     const Enclosed e = fs.overlap_term(boxes, j, earlier[j]);
@@ -75,7 +79,8 @@ TEST(FilteredSolver, EnclosesEveryExactOverlapTermOnAnalyticMeshes) {
   for (const analytic::AnalyticMesh& am : analytic::all()) {
     SCOPED_TRACE(am.name);
     const FilteredSolver fs(am.mesh);
-    for (uint64_t seed = 1; seed <= 6; ++seed) expect_overlap_enclosed(fs, random_boxes(am.mesh, seed, 4, 0.25), &overlapping);
+    for (uint64_t seed = 1; seed <= 6; ++seed)
+      expect_overlap_enclosed(fs, random_boxes(am.mesh, seed, 4, 0.25), &overlapping);
   }
   EXPECT_GT(overlapping, 20u) << "too few boxes overlapped: the overlap terms were hardly tested";
 }
@@ -97,7 +102,8 @@ TEST_P(FilteredReal, LayersOfRandomBoxesEncloseTheExactValues) {
   for (int n : {8, 32, 128}) {
     SCOPED_TRACE(n);
     // Sizes so that a layer covers about the mesh's bounds, as a tree's layer does.
-    const std::vector<Obb> boxes = random_boxes(m, 7 + n, n, 0.35 / std::cbrt(static_cast<double>(n)));
+    const std::vector<Obb> boxes =
+        random_boxes(m, 7 + n, n, 0.35 / std::cbrt(static_cast<double>(n)));
     expect_obv_enclosed(fs, boxes);
     if (n == 8) expect_overlap_enclosed(fs, boxes, &overlapping);
     const std::vector<std::vector<int32_t>> earlier = fs.rational().earlier_neighbours(boxes);
@@ -185,7 +191,8 @@ TEST(FilteredSolver, SliverOverlapIsRoundedIn256Bits) {
   EXPECT_EQ(narrow.bits, 128);
   EXPECT_EQ(wide.bits, 256);
   double d;
-  EXPECT_FALSE(narrow.value.nearest(&d)) << "128 bits rounded the sliver: the test no longer tests refinement";
+  EXPECT_FALSE(narrow.value.nearest(&d))
+      << "128 bits rounded the sliver: the test no longer tests refinement";
   ASSERT_TRUE(wide.value.nearest(&d));
   EXPECT_EQ(d, to_double_nearest(q));
 }

@@ -36,7 +36,8 @@ TEST(MpInterval, EveryOperationEnclosesTheExactResult) {
     // wide, scaled to about +-2^-128 * 2^140 = +-4096, so a value of magnitude below that gets
     // an enclosure straddling 0 (the products' four-candidate case) and larger ones keep their
     // sign. The exact values stay a and b.
-    const MpInterval third(Rational(1, 3)), spread = (third - third) * MpInterval(std::ldexp(1.0, 140));
+    const MpInterval third(Rational(1, 3)),
+        spread = (third - third) * MpInterval(std::ldexp(1.0, 140));
     const MpInterval wx = x + spread, wy = y + spread;
     ASSERT_TRUE((wx * wy).contains(a * b));
     ASSERT_TRUE((wx * y).contains(a * b));

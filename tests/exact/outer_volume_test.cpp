@@ -53,10 +53,12 @@ TEST(ExactObv, AxisAlignedBoxOverlappingTheCubeByAKnownAmount) {
 
 TEST(ExactOmv, TwoOverlappingBoxesCountTheirOverlapOnce) {
   const Mesh m = far_tetrahedron();
-  const std::vector<Obb> boxes = {aabox(Vec3(0, 0, 0), Vec3(2, 2, 2)), aabox(Vec3(1, 1, 1), Vec3(3, 3, 3))};
+  const std::vector<Obb> boxes = {aabox(Vec3(0, 0, 0), Vec3(2, 2, 2)),
+                                  aabox(Vec3(1, 1, 1), Vec3(3, 3, 3))};
   EXPECT_EQ(ClipSolver(m).omv(boxes), 15);  // 8 + 8 - 1
   EXPECT_EQ(NefSolver(m).omv(boxes), 15);
-  const std::vector<Obb> nested = {aabox(Vec3(0, 0, 0), Vec3(2, 2, 2)), aabox(Vec3(0.5, 0.5, 0.5), Vec3(1, 1, 1))};
+  const std::vector<Obb> nested = {aabox(Vec3(0, 0, 0), Vec3(2, 2, 2)),
+                                   aabox(Vec3(0.5, 0.5, 0.5), Vec3(1, 1, 1))};
   EXPECT_EQ(ClipSolver(m).omv(nested), 8);
   EXPECT_EQ(NefSolver(m).omv(nested), 8);
 }
@@ -124,7 +126,8 @@ TEST(ExactObv, FaceReachingIntoABoxWhoseFrameIsSubnormal) {
   Obb box;
   box.center = Vec3(-0.10212525489764322, 0.5, 0.5);
   box.half = Vec3(0.10212525489764324, 1.1951044021640368e-159, 1.1951044021640368e-159);
-  const Rational whole = Rational(8) * Rational(box.half[0]) * Rational(box.half[1]) * Rational(box.half[2]);
+  const Rational whole =
+      Rational(8) * Rational(box.half[0]) * Rational(box.half[1]) * Rational(box.half[2]);
   const Rational clip = ClipSolver(m).obv(box);
   EXPECT_LT(clip, whole) << "the face inside the box was dropped";
   EXPECT_EQ(clip, NefSolver(m).obv(box));
@@ -148,10 +151,12 @@ TEST(ConvexCell, ClassifyIsNeverWrongWithSubnormalVertices) {
     h.set_shadow();
     const Vec3 a0 = Vec3(uni(rng), uni(rng), uni(rng)).cross(normal).normalized();
     Obb b;
-    b.center = Vec3(least * static_cast<int>(rng() % 21 - 10), least * static_cast<int>(rng() % 21 - 10),
-                    least * static_cast<int>(rng() % 21 - 10));
+    b.center =
+        Vec3(least * static_cast<int>(rng() % 21 - 10), least * static_cast<int>(rng() % 21 - 10),
+             least * static_cast<int>(rng() % 21 - 10));
     b.axes = {a0, normal, a0.cross(normal).normalized()};
-    b.half = Vec3(1e-312 * (1 + uni(rng)), least * (1 + static_cast<int>(rng() % 3)), 1e-312 * (1 + uni(rng)));
+    b.half = Vec3(1e-312 * (1 + uni(rng)), least * (1 + static_cast<int>(rng() % 3)),
+                  1e-312 * (1 + uni(rng)));
     const ConvexCell cell = ConvexCell::from_box(b);
     if (cell.empty()) continue;
     const Side side = cell.classify(h);
@@ -185,7 +190,8 @@ TEST(ExactOmv, OverlapCellsSumToTheOverlapTermNotTheTwiceCoveredVolume) {
 TEST(ExactObv, CubeWithCavity) {
   const Mesh m = analytic::cube_with_cavity(4, 1, 3).mesh;
   // The cavity itself is all outside volume; a box around it has the cavity's 8 outside.
-  for (const Obb& b : {aabox(Vec3(1, 1, 1), Vec3(3, 3, 3)), aabox(Vec3(0.5, 0.5, 0.5), Vec3(3.5, 3.5, 3.5))}) {
+  for (const Obb& b :
+       {aabox(Vec3(1, 1, 1), Vec3(3, 3, 3)), aabox(Vec3(0.5, 0.5, 0.5), Vec3(3.5, 3.5, 3.5))}) {
     EXPECT_EQ(ClipSolver(m).obv(b), 8);
     EXPECT_EQ(NefSolver(m).obv(b), 8);
   }
@@ -235,7 +241,8 @@ std::vector<std::vector<Obb>> random_box_sets(const Mesh& m, uint64_t seed, int 
       Obb b;
       const double size = std::exp(logsize(rng));
       b.center = anchor + 0.5 * size * Vec3(n(rng), n(rng), n(rng));
-      b.axes = orthonormalize({Vec3(n(rng), n(rng), n(rng)), Vec3(n(rng), n(rng), n(rng)), Vec3::Zero()});
+      b.axes = orthonormalize(
+          {Vec3(n(rng), n(rng), n(rng)), Vec3(n(rng), n(rng), n(rng)), Vec3::Zero()});
       b.half = size * Vec3(std::exp(0.5 * n(rng)), std::exp(0.5 * n(rng)), std::exp(0.5 * n(rng)));
       boxes.push_back(b);
     }
@@ -278,8 +285,9 @@ TEST(ExactPaths, AgreeOnRandomBoxSetsFarFromTheOrigin) {
 // dyadic): faces in the planes of the mesh's faces, a box that is the cube or the cavity,
 // centres on vertices, edges and faces, and the same boxes turned by 1e-9 rad, so that each
 // face that lay in a mesh plane now crosses it at a grazing angle (corners a few 1e-9 off
-// it). Where the value has a closed form both paths must give it; turned, they must agree. (A differential fuzz of some 4,500 such boxes on 22 meshes
-// found no disagreement; these are its kinds, kept as a regression test.)
+// it). Where the value has a closed form both paths must give it; turned, they must agree. (A
+// differential fuzz of some 4,500 such boxes on 22 meshes found no disagreement; these are its
+// kinds, kept as a regression test.)
 TEST(ExactPaths, AgreeOnBoxesInSpecialPosition) {
   const Mesh m = analytic::cube_with_cavity().mesh;
   const ClipSolver clip(m);
@@ -288,15 +296,15 @@ TEST(ExactPaths, AgreeOnBoxesInSpecialPosition) {
     Vec3 lo, hi;
     Rational obv;  // closed form: the box's volume in the cavity or outside [0, 4]^3
   } cases[] = {
-      {Vec3(0, 0, 0), Vec3(4, 4, 4), 8},                      // the cube itself: the cavity
-      {Vec3(1, 1, 1), Vec3(3, 3, 3), 8},                      // the cavity itself
-      {Vec3(0, 0, 0), Vec3(1, 1, 1), 0},                      // solid, faces on the walls
+      {Vec3(0, 0, 0), Vec3(4, 4, 4), 8},                           // the cube itself: the cavity
+      {Vec3(1, 1, 1), Vec3(3, 3, 3), 8},                           // the cavity itself
+      {Vec3(0, 0, 0), Vec3(1, 1, 1), 0},                           // solid, faces on the walls
       {Vec3(0.5, 0.5, 0.5), Vec3(1.5, 1.5, 1.5), Rational(1, 8)},  // a cavity corner
-      {Vec3(-1, -1, -1), Vec3(1, 1, 1), 7},                   // centred on the cube's vertex
-      {Vec3(-1, -1, 0), Vec3(1, 1, 2), 6},                    // centred on an edge (z = 1)
-      {Vec3(1, -1, 1), Vec3(3, 1, 3), 4},                     // centred on a face (y = 0)
-      {Vec3(1, 1, 1), Vec3(2, 2, 2), 1},                      // a cavity corner's cube, faces on its walls
-      {Vec3(3, 3, 3), Vec3(5, 5, 5), 7},                      // centred on the cube's far vertex
+      {Vec3(-1, -1, -1), Vec3(1, 1, 1), 7},                        // centred on the cube's vertex
+      {Vec3(-1, -1, 0), Vec3(1, 1, 2), 6},                         // centred on an edge (z = 1)
+      {Vec3(1, -1, 1), Vec3(3, 1, 3), 4},                          // centred on a face (y = 0)
+      {Vec3(1, 1, 1), Vec3(2, 2, 2), 1},  // a cavity corner's cube, faces on its walls
+      {Vec3(3, 3, 3), Vec3(5, 5, 5), 7},  // centred on the cube's far vertex
   };
   for (const auto& c : cases) {
     const Obb b = aabox(c.lo, c.hi);
@@ -311,9 +319,12 @@ TEST(ExactPaths, AgreeOnBoxesInSpecialPosition) {
   }
   // Layers whose boxes overlap in part, share a face, or one of which holds the other: the
   // cavity's volume, once.
-  const std::vector<Obb> overlapping = {aabox(Vec3(0, 0, 0), Vec3(2, 2, 2)), aabox(Vec3(1, 1, 1), Vec3(3, 3, 3))};
-  const std::vector<Obb> halves = {aabox(Vec3(1, 1, 1), Vec3(2, 3, 3)), aabox(Vec3(2, 1, 1), Vec3(3, 3, 3))};
-  const std::vector<Obb> nested = {aabox(Vec3(0, 0, 0), Vec3(4, 4, 4)), aabox(Vec3(1, 1, 1), Vec3(3, 3, 3))};
+  const std::vector<Obb> overlapping = {aabox(Vec3(0, 0, 0), Vec3(2, 2, 2)),
+                                        aabox(Vec3(1, 1, 1), Vec3(3, 3, 3))};
+  const std::vector<Obb> halves = {aabox(Vec3(1, 1, 1), Vec3(2, 3, 3)),
+                                   aabox(Vec3(2, 1, 1), Vec3(3, 3, 3))};
+  const std::vector<Obb> nested = {aabox(Vec3(0, 0, 0), Vec3(4, 4, 4)),
+                                   aabox(Vec3(1, 1, 1), Vec3(3, 3, 3))};
   for (const auto& layer : {overlapping, halves, nested}) {
     EXPECT_EQ(clip.omv(layer), 8);
     EXPECT_EQ(nef.omv(layer), 8);

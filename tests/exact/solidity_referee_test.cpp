@@ -1,7 +1,8 @@
 // CGAL as an outside referee for common/solidity.h on the real meshes of DESIGN §8, the four
-// it names as bad input and the clean ones: CGAL reads the OFF file itself (no welding), finds self-intersecting face pairs with
-// Polygon_mesh_processing::self_intersections and counts border edges, and those counts must
-// equal vobb's. This lives with the exact tests because they are the ones that link CGAL.
+// it names as bad input and the clean ones: CGAL reads the OFF file itself (no welding), finds
+// self-intersecting face pairs with Polygon_mesh_processing::self_intersections and counts border
+// edges, and those counts must equal vobb's. This lives with the exact tests because they are the
+// ones that link CGAL.
 //
 // One difference of definition is accounted for, not hidden: vobb welds exactly equal
 // vertices, so two faces that touch only at such a point share a vertex and do not count as
@@ -58,8 +59,10 @@ RefereeCounts cgal_counts(const std::string& path) {
     if (p != nullptr)
       for (std::size_t i : a)
         for (std::size_t j : b) at_common_point |= points[i] == *p && points[j] == *p;
-    if (at_common_point) ++out.touching_at_welded_vertex;
-    else ++out.self_intersecting_pairs;
+    if (at_common_point)
+      ++out.touching_at_welded_vertex;
+    else
+      ++out.self_intersecting_pairs;
   }
   std::vector<SurfaceMesh::Halfedge_index> border;
   PMP::border_halfedges(sm, std::back_inserter(border));
@@ -94,8 +97,9 @@ TEST_P(SolidityReferee, SelfIntersectionsAndBordersMatchCgal) {
 }
 
 INSTANTIATE_TEST_SUITE_P(RealMeshes, SolidityReferee,
-                         ::testing::Values("camel", "cow", "bull", "ChineseDragon-10kv", "dino", "elephant",
-                                           "knot1", "armadillo", "bunny00", "triceratops", "homer", "fandisk"),
+                         ::testing::Values("camel", "cow", "bull", "ChineseDragon-10kv", "dino",
+                                           "elephant", "knot1", "armadillo", "bunny00",
+                                           "triceratops", "homer", "fandisk"),
                          [](const auto& info) {
                            std::string n = info.param;
                            for (char& c : n)

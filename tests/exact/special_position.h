@@ -15,7 +15,9 @@
 
 namespace vobb::test {
 
-inline Obb box_through_vertex() { return rotated_box(Vec3(0, 0, 0), Vec3(1, 0.7, 0.3), 0.4, Vec3(1, 2, 3)); }
+inline Obb box_through_vertex() {
+  return rotated_box(Vec3(0, 0, 0), Vec3(1, 0.7, 0.3), 0.4, Vec3(1, 2, 3));
+}
 
 // A tetrahedron inside `b` (its other vertices within 0.15 of the centre, well inside the
 // smallest half extent 0.3) with vertex 0 at b's axis 0, on its +T_0 face; outward oriented.
@@ -32,7 +34,8 @@ inline Mesh tetrahedron_touching(const Obb& b) {
 // moved along a's axis 0 by 2 h_0, so that b's -T_0 face meets a's +T_0 face at that angle. The
 // cut points on edges that nearly parallel a plane carry the angle's inverse square into their
 // enclosures: 128 bits enclose the sliver's volume (about 4e-13) only to about 1e-15 of itself,
-// too wide to round it, and 256 bits to about 1e-54 (measured; tests/exact/filtered_solver_test.cpp).
+// too wide to round it, and 256 bits to about 1e-54 (measured;
+// tests/exact/filtered_solver_test.cpp).
 inline std::vector<Obb> sliver_pair() {
   const Obb a = rotated_box(Vec3(0.3, 0.2, 0.1), Vec3(0.5, 0.4, 0.3), 0.3, Vec3(1, 2, 3));
   Obb b = rotated_box(Vec3(0.3, 0.2, 0.1), Vec3(0.5, 0.4, 0.3), 0.3 + 1e-11, Vec3(1, 2, 3));

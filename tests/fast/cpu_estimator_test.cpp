@@ -1,6 +1,7 @@
 #include "fast/cpu_estimator.h"
 
 #include <gtest/gtest.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <cmath>
@@ -9,12 +10,10 @@
 #include <utility>
 #include <vector>
 
-#include <tbb/task_arena.h>
-
 #include "data/analytic_meshes.h"
 #include "fast/cubemap.h"
-#include "fast/texel_plan.h"
 #include "fast/estimator_test_util.h"
+#include "fast/texel_plan.h"
 
 namespace vobb {
 namespace {
@@ -37,7 +36,9 @@ TEST(CpuEstimator, DisjointBoxIsItsVolume) {
   const CpuObvEstimator est(m);
   const Obb b = aabox(Vec3(5, 5, 5), Vec3(1, 2, 0.5));
   for (int res : {1, 7, 32})
-    EXPECT_NEAR(est.estimate(b, res), volume(b), cpu_rounding_bound(BoxPlanner(m).plan(b, res), res)) << res;
+    EXPECT_NEAR(est.estimate(b, res), volume(b),
+                cpu_rounding_bound(BoxPlanner(m).plan(b, res), res))
+        << res;
   EXPECT_EQ(est.faces_used(), 0u);  // culling: nothing drawn for a box that meets no face
 }
 
@@ -80,7 +81,8 @@ TEST(CpuEstimator, OffCentreErrorShrinksWithResolution) {
       e[i] = std::abs(est.estimate(b, res) - 26);
       const BoxPlan plan = planner.plan(b, res);
       EXPECT_LE(e[i], resolution_bound(plan, res) + cpu_rounding_bound(plan, res) +
-                          test::aligned_plan_round_off(m, 6, b)) << c.transpose() << " m " << res;
+                          test::aligned_plan_round_off(m, 6, b))
+          << c.transpose() << " m " << res;
       ++i;
     }
     EXPECT_LT(4 * e[2], std::max(e[0], e[1])) << c.transpose();
@@ -99,7 +101,8 @@ TEST(CpuEstimator, FiniteAndConsistentForCentresOnFacesEdgesAndVertices) {
     const Obb b = aabox(c, h);
     const double v = est.estimate(b, 32);
     ASSERT_TRUE(std::isfinite(v));
-    const double round_v = cpu_rounding_bound(planner.plan(b, 32), 32) + test::aligned_plan_round_off(m, 6, b);
+    const double round_v =
+        cpu_rounding_bound(planner.plan(b, 32), 32) + test::aligned_plan_round_off(m, 6, b);
     // The same box nudged off the surface both ways: the value moves continuously, so it must
     // stay within the change of the exact OBV over the nudge (at most the box's face area times
     // the nudge) plus the estimator's error, which for this aligned geometry is round-off.
@@ -107,7 +110,8 @@ TEST(CpuEstimator, FiniteAndConsistentForCentresOnFacesEdgesAndVertices) {
     for (double eps : {1e-9, -1e-9}) {
       const Obb nudged = aabox(c + Vec3::Constant(eps), h);
       const double w = est.estimate(nudged, 32);
-      const double round_w = cpu_rounding_bound(planner.plan(nudged, 32), 32) + test::aligned_plan_round_off(m, 6, nudged);
+      const double round_w = cpu_rounding_bound(planner.plan(nudged, 32), 32) +
+                             test::aligned_plan_round_off(m, 6, nudged);
       // Moving the box by |eps| sqrt(3) changes its exact OBV by at most area |eps| sqrt(3).
       EXPECT_NEAR(v, w, area * std::sqrt(3.0) * std::abs(eps) + round_v + round_w) << c.transpose();
     }
@@ -157,39 +161,47 @@ TEST(CpuEstimator, SkippingRejectedTexelsChangesNoBit) {
   auto turned = [&](const Vec3& c, const Vec3& h) {
     Obb b;
     b.center = c;
-    b.axes = orthonormalize({Vec3(uni(rng), uni(rng), uni(rng)), Vec3(uni(rng), uni(rng), uni(rng)), Vec3::Zero()});
+    b.axes = orthonormalize(
+        {Vec3(uni(rng), uni(rng), uni(rng)), Vec3(uni(rng), uni(rng), uni(rng)), Vec3::Zero()});
     b.half = h;
     return b;
   };
   {
-    std::vector<Obb> boxes{aabox(Vec3::Zero(), Vec3(1.5, 1.5, 1.5)), aabox(Vec3::Zero(), Vec3(1, 2, 3))};
-    for (int i = 0; i < 6; ++i) boxes.push_back(turned(0.3 * Vec3(uni(rng), uni(rng), uni(rng)), Vec3(1.2, 0.9, 1.4)));
+    std::vector<Obb> boxes{aabox(Vec3::Zero(), Vec3(1.5, 1.5, 1.5)),
+                           aabox(Vec3::Zero(), Vec3(1, 2, 3))};
+    for (int i = 0; i < 6; ++i)
+      boxes.push_back(turned(0.3 * Vec3(uni(rng), uni(rng), uni(rng)), Vec3(1.2, 0.9, 1.4)));
     cases.emplace_back(analytic::octahedron().mesh, boxes);
   }
   {
     std::vector<Obb> boxes;
     for (int i = 0; i < 12; ++i) {
       const double thin = i % 3 == 0 ? 1e-8 : 1.0;  // faces seen nearly edge-on
-      boxes.push_back(turned(Vec3(2 * uni(rng), 2 * uni(rng), 0.3 * uni(rng)), Vec3(0.8, 0.6 * thin, 0.5)));
+      boxes.push_back(
+          turned(Vec3(2 * uni(rng), 2 * uni(rng), 0.3 * uni(rng)), Vec3(0.8, 0.6 * thin, 0.5)));
     }
     cases.emplace_back(analytic::polygonal_torus().mesh, boxes);
   }
   {
     std::vector<Obb> boxes;
-    for (int i = 0; i < 8; ++i) boxes.push_back(turned(Vec3(uni(rng), uni(rng), uni(rng)), Vec3(1.5, 1.1, 0.7)));
+    for (int i = 0; i < 8; ++i)
+      boxes.push_back(turned(Vec3(uni(rng), uni(rng), uni(rng)), Vec3(1.5, 1.1, 0.7)));
     cases.emplace_back(test::turned_cube(), boxes);
   }
   // Bipyramids over a 48-gon with both apexes on the ray of texel (5, 2) of face 0 at m = 8,
-  // which is a texel ray at every m = 8 (2k + 1) (as in RaysThroughAVertexOfManyFacesAreClaimedOnce):
-  // the rounded crosses at an apex put the ray on the wrong side of some of its edges, and
-  // the exact tests give it to one face; a skip decided without edge_tie would drop that hit.
+  // which is a texel ray at every m = 8 (2k + 1) (as in
+  // RaysThroughAVertexOfManyFacesAreClaimedOnce): the rounded crosses at an apex put the ray on the
+  // wrong side of some of its edges, and the exact tests give it to one face; a skip decided
+  // without edge_tie would drop that hit.
   const Vec3 on_ray = cubemap_direction(0, texel_center(5, 8), texel_center(2, 8));
   for (unsigned seed = 0; seed < 10; ++seed)
-    cases.emplace_back(test::bipyramid_on_ray(on_ray, 48, seed), std::vector<Obb>{aabox(Vec3::Zero(), Vec3(1, 1, 1))});
+    cases.emplace_back(test::bipyramid_on_ray(on_ray, 48, seed),
+                       std::vector<Obb>{aabox(Vec3::Zero(), Vec3(1, 1, 1))});
   // Tiny tetrahedra (1e-9 to 1e-12) at 0.3 along the ray of a texel of m = 8 (so of m = 24 too).
   for (int c = 0; c < 12; ++c) {
     const int face = c % 6, ti = (3 * c) % 8, tj = (5 * c + 1) % 8;
-    const Vec3 at = 0.3 * cubemap_direction(face, texel_center(ti, 8), texel_center(tj, 8)).normalized();
+    const Vec3 at =
+        0.3 * cubemap_direction(face, texel_center(ti, 8), texel_center(tj, 8)).normalized();
     Mesh tiny = analytic::tetrahedron(std::pow(10.0, -9 - c % 4)).mesh;
     for (Vec3& v : tiny.vertices) v += at;
     cases.emplace_back(tiny, std::vector<Obb>{aabox(Vec3::Zero(), Vec3(1, 1, 1))});
@@ -250,7 +262,8 @@ TEST(CpuEstimator, CandidateRunsHoldEveryPossibleColumn) {
       int lo = j1 + 1, hi = j0 - 1;  // the columns that satisfy all three, tested one by one
       for (int j = j0; j <= j1; ++j) {
         bool all = true;
-        for (int k = 0; k < 3; ++k) all = all && sigma * (row[k] + texel_center(j, m) * eb[k]) >= -tie[k];
+        for (int k = 0; k < 3; ++k)
+          all = all && sigma * (row[k] + texel_center(j, m) * eb[k]) >= -tie[k];
         if (all) lo = std::min(lo, j), hi = std::max(hi, j);
       }
       if (lo <= hi) {
@@ -259,7 +272,8 @@ TEST(CpuEstimator, CandidateRunsHoldEveryPossibleColumn) {
         ASSERT_GE(runs[side].hi, hi) << "trial " << trial << ", side " << side;
         exact += runs[side].lo == lo && runs[side].hi == hi;
       } else {
-        EXPECT_GT(runs[side].lo, runs[side].hi) << "trial " << trial << ": a run where no column can hit";
+        EXPECT_GT(runs[side].lo, runs[side].hi)
+            << "trial " << trial << ": a run where no column can hit";
       }
       ASSERT_GE(runs[side].lo, j0);
       ASSERT_LE(runs[side].hi, j1);
@@ -297,7 +311,8 @@ TEST(CpuEstimator, BatchEqualsSingleBoxesForAnyThreadCount) {
     std::vector<double> batch;
     arena.execute([&] { batch = est.estimate(boxes, 16); });
     ASSERT_EQ(batch.size(), single.size());
-    for (size_t i = 0; i < boxes.size(); ++i) EXPECT_EQ(batch[i], single[i]) << threads << " threads, box " << i;
+    for (size_t i = 0; i < boxes.size(); ++i)
+      EXPECT_EQ(batch[i], single[i]) << threads << " threads, box " << i;
     EXPECT_EQ(est.faces_used(), used) << threads;
   }
 }
@@ -322,8 +337,10 @@ TEST(CpuEstimator, RaysThroughVerticesAreClaimedOnce) {
   b.half = Vec3(2, 2, 2);
   Obb turned = b;
   const double a = 1e-9;
-  turned.axes = orthonormalize({Vec3(std::cos(a), std::sin(a), 0), Vec3(-std::sin(a), std::cos(a), 0), Vec3::Zero()});
-  for (int res : {1, 3, 9}) EXPECT_NEAR(est.estimate(b, res), est.estimate(turned, res), 1e-6 * volume(b)) << res;
+  turned.axes = orthonormalize(
+      {Vec3(std::cos(a), std::sin(a), 0), Vec3(-std::sin(a), std::cos(a), 0), Vec3::Zero()});
+  for (int res : {1, 3, 9})
+    EXPECT_NEAR(est.estimate(b, res), est.estimate(turned, res), 1e-6 * volume(b)) << res;
 }
 
 // A bipyramid over a 48-gon whose apexes lie exactly on one texel ray, their rim vertices
@@ -355,7 +372,8 @@ TEST(CpuEstimator, RaysThroughAVertexOfManyFacesAreClaimedOnce) {
     }
     EXPECT_EQ(entries, 1) << "seed " << seed;
     EXPECT_EQ(exits, 1) << "seed " << seed;
-    const double tol = 2 * 3e-6 + cpu_rounding_bound(plan, res) / (plan.frame.volume_scale * 4.0 / (3.0 * res * res));
+    const double tol = 2 * 3e-6 + cpu_rounding_bound(plan, res) /
+                                      (plan.frame.volume_scale * 4.0 / (3.0 * res * res));
     EXPECT_NEAR(sum, -(1 - 1.0 / 64) + (1 - 27.0 / 64), tol) << "seed " << seed;
   }
 }

@@ -6,8 +6,8 @@
 #include <random>
 #include <vector>
 
-#include "common/obb.h"
 #include "common/exact_predicates.h"
+#include "common/obb.h"
 
 namespace vobb {
 namespace {
@@ -44,8 +44,9 @@ TEST(RangeBound, CoversTheDistanceToBothEndsOfTheExactRange) {
                             make_box(Vec3(0x1p-400, 0x1p-400, 0x1p-300), identity),
                             make_box(Vec3(1, 0, 2), identity)};
   for (int i = 0; i < 20; ++i) {
-    std::array<Vec3, 3> axes = orthonormalize({Vec3(uniform() - 0.5, uniform() - 0.5, uniform() - 0.5),
-                                               Vec3(uniform() - 0.5, uniform() - 0.5, uniform() - 0.5), Vec3::Zero()});
+    std::array<Vec3, 3> axes =
+        orthonormalize({Vec3(uniform() - 0.5, uniform() - 0.5, uniform() - 0.5),
+                        Vec3(uniform() - 0.5, uniform() - 0.5, uniform() - 0.5), Vec3::Zero()});
     // Off by up to 1.5e-6 per component: each dot product within 2 sqrt(3) 1.5e-6 + 7e-12 <
     // 5.3e-6 of the identity's, inside box_defect's 1e-5.
     for (Vec3& a : axes)
@@ -58,7 +59,7 @@ TEST(RangeBound, CoversTheDistanceToBothEndsOfTheExactRange) {
     const double vd = to_double_nearest(v);
     for (double e : {-1.0, -vd, 0.0, 0.5 * vd, vd, 2 * vd, 3.0}) {
       const Rational bound(range_bound(box, e));
-      EXPECT_GE(bound, Rational(std::abs(e))) << e;          // the OBV 0
+      EXPECT_GE(bound, Rational(std::abs(e))) << e;           // the OBV 0
       EXPECT_GE(bound, Rational(abs(v - Rational(e)))) << e;  // the OBV V*
     }
   }

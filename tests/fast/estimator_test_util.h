@@ -36,7 +36,8 @@ inline Mesh bipyramid_on_ray(const Vec3& d, int k, unsigned seed) {
   mesh.vertices.push_back(0.25 * d);
   mesh.vertices.push_back(0.75 * d);
   for (int i = 0; i < k; ++i) {
-    const double a = 2 * M_PI * (i + 0.8 * jitter(rng)) / k, r = 0.02 * d.norm() * (1 + 0.1 * jitter(rng));
+    const double a = 2 * M_PI * (i + 0.8 * jitter(rng)) / k,
+                 r = 0.02 * d.norm() * (1 + 0.1 * jitter(rng));
     mesh.vertices.push_back(0.5 * d + r * std::cos(a) * e1 + r * std::sin(a) * e2);
   }
   for (int32_t i = 0; i < k; ++i) {
@@ -45,7 +46,8 @@ inline Mesh bipyramid_on_ray(const Vec3& d, int k, unsigned seed) {
     mesh.faces.push_back({1, w0, w1});
   }
   double vol = 0;  // six times the signed volume: positive when the faces point out
-  for (const Face& f : mesh.faces) vol += mesh.vertices[f[0]].dot(mesh.vertices[f[1]].cross(mesh.vertices[f[2]]));
+  for (const Face& f : mesh.faces)
+    vol += mesh.vertices[f[0]].dot(mesh.vertices[f[1]].cross(mesh.vertices[f[2]]));
   if (vol < 0)
     for (Face& f : mesh.faces) std::swap(f[1], f[2]);
   return mesh;
@@ -59,9 +61,14 @@ inline const Vec3 kTurnedA2(0.3700047386538593, -0.14667410116730417, -0.9173784
 inline Mesh turned_cube() {
   Mesh cube;
   for (int i = 0; i < 8; ++i)
-    cube.vertices.push_back((i & 1 ? 1 : -1) * kTurnedA2 + (i & 2 ? 1 : -1) * kTurnedA0 + (i & 4 ? 1 : -1) * kTurnedA1);
-  for (const auto& q : {std::array<int32_t, 4>{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4}, {2, 6, 7, 3},
-                        {0, 2, 3, 1}, {4, 5, 7, 6}}) {
+    cube.vertices.push_back((i & 1 ? 1 : -1) * kTurnedA2 + (i & 2 ? 1 : -1) * kTurnedA0 +
+                            (i & 4 ? 1 : -1) * kTurnedA1);
+  for (const auto& q : {std::array<int32_t, 4>{0, 4, 6, 2},
+                        {1, 3, 7, 5},
+                        {0, 1, 5, 4},
+                        {2, 6, 7, 3},
+                        {0, 2, 3, 1},
+                        {4, 5, 7, 6}}) {
     cube.faces.push_back({q[0], q[1], q[2]});
     cube.faces.push_back({q[0], q[2], q[3]});
   }

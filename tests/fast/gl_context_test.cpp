@@ -27,7 +27,8 @@ TEST(GlContext, ReportsItsRendererPlatformAndVersion) {
   EXPECT_FALSE(ctx->renderer().empty());
   EXPECT_TRUE(ctx->platform() == "device" || ctx->platform() == "surfaceless") << ctx->platform();
   EXPECT_EQ(ctx->version().rfind("4.", 0), 0u) << "an OpenGL 4.x context: " << ctx->version();
-  EXPECT_EQ(current_renderer(), ctx->renderer()) << "create() leaves the context current on this thread";
+  EXPECT_EQ(current_renderer(), ctx->renderer())
+      << "create() leaves the context current on this thread";
 }
 
 // A context released on one thread can be bound on another (the GL estimator's drawing thread
@@ -55,7 +56,8 @@ TEST(GlContext, ReleasedContextMovesBetweenThreads) {
 TEST(GlContextDeathTest, BindingAContextAnotherThreadHoldsAborts) {
   VOBB_MAKE_CONTEXT(ctx);  // current on this thread
   GTEST_FLAG_SET(death_test_style, "threadsafe");
-  EXPECT_DEATH(std::thread([&] { ctx->make_current(); }).join(), "eglMakeCurrent failed, EGL error 12290");
+  EXPECT_DEATH(std::thread([&] { ctx->make_current(); }).join(),
+               "eglMakeCurrent failed, EGL error 12290");
 }
 
 TEST(GlContext, SwitchedOffGivesAClearOneLineError) {
@@ -64,8 +66,10 @@ TEST(GlContext, SwitchedOffGivesAClearOneLineError) {
   ::setenv("VOBB_GL", "off", 1);
   std::unique_ptr<GlContext> ctx;
   const Status s = GlContext::create(&ctx);
-  if (old) ::setenv("VOBB_GL", saved.c_str(), 1);
-  else ::unsetenv("VOBB_GL");
+  if (old)
+    ::setenv("VOBB_GL", saved.c_str(), 1);
+  else
+    ::unsetenv("VOBB_GL");
   EXPECT_FALSE(s);
   EXPECT_EQ(ctx, nullptr);
   EXPECT_NE(s.message().find("VOBB_GL=off"), std::string::npos) << s.message();

@@ -1,6 +1,7 @@
 #include "fast/gl_estimator.h"
 
 #include <gtest/gtest.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <chrono>
@@ -9,8 +10,6 @@
 #include <random>
 #include <string>
 #include <thread>
-
-#include <tbb/task_arena.h>
 
 #include "common/io/mesh_report.h"
 #include "data/analytic_meshes.h"
@@ -41,9 +40,11 @@ std::vector<Obb> random_boxes(const Mesh& mesh, int n, uint64_t seed) {
   std::vector<Obb> out;
   for (int i = 0; i < n; ++i) {
     Obb b;
-    for (int k = 0; k < 3; ++k) b.center[k] = bounds.lo[k] - 0.1 * size[k] + 1.2 * size[k] * uniform();
-    b.axes = orthonormalize({Vec3(uniform() - 0.5, uniform() - 0.5, uniform() - 0.5),
-                             Vec3(uniform() - 0.5, uniform() - 0.5, uniform() - 0.5), Vec3::Zero()});
+    for (int k = 0; k < 3; ++k)
+      b.center[k] = bounds.lo[k] - 0.1 * size[k] + 1.2 * size[k] * uniform();
+    b.axes =
+        orthonormalize({Vec3(uniform() - 0.5, uniform() - 0.5, uniform() - 0.5),
+                        Vec3(uniform() - 0.5, uniform() - 0.5, uniform() - 0.5), Vec3::Zero()});
     for (int k = 0; k < 3; ++k) b.half[k] = diag * 0.01 * std::pow(40.0, uniform());
     out.push_back(b);
   }
@@ -65,7 +66,8 @@ std::vector<Obb> with_odd_boxes(std::vector<Obb> boxes) {
 // GL against the CPU twin: every box within gl_deviation_bound (gl_estimator.cpp derives it
 // from the shaders' float32 arithmetic). Returns the median of bound / |value| so callers can
 // check that the bound is informative, not vacuous.
-double expect_gl_matches_cpu(const Mesh& mesh, GlObvEstimator& gl, const std::vector<Obb>& boxes, int m) {
+double expect_gl_matches_cpu(const Mesh& mesh, GlObvEstimator& gl, const std::vector<Obb>& boxes,
+                             int m) {
   const CpuObvEstimator cpu(mesh);
   const size_t fallbacks = gl.cpu_fallbacks();
   const std::vector<double> g = gl.estimate(boxes, m), c = cpu.estimate(boxes, m);
@@ -97,15 +99,18 @@ TEST(GlEstimator, MatchesCpuTwinOnRealMeshesWithinDerivedFloatBound) {
     ASSERT_TRUE(load_solid(test::real_mesh(name), &lm));
     VOBB_MAKE_GL(gl, lm.mesh);
     const std::vector<Obb> boxes = random_boxes(lm.mesh, 100, seed++);
-    for (int m : {16, 23}) EXPECT_LT(expect_gl_matches_cpu(lm.mesh, *gl, boxes, m), 1e-5) << name << " m " << m;
+    for (int m : {16, 23})
+      EXPECT_LT(expect_gl_matches_cpu(lm.mesh, *gl, boxes, m), 1e-5) << name << " m " << m;
   }
 }
 
 TEST(GlEstimator, MatchesCpuTwinOnAnalyticMeshes) {
-  for (const auto& a : {analytic::polygonal_torus(), analytic::cube_with_cavity(), analytic::octahedron()}) {
+  for (const auto& a :
+       {analytic::polygonal_torus(), analytic::cube_with_cavity(), analytic::octahedron()}) {
     VOBB_MAKE_GL(gl, a.mesh);
     const std::vector<Obb> boxes = random_boxes(a.mesh, 40, 7);
-    for (int m : {1, 8, 32}) EXPECT_LT(expect_gl_matches_cpu(a.mesh, *gl, boxes, m), 1e-5) << a.name << " m " << m;
+    for (int m : {1, 8, 32})
+      EXPECT_LT(expect_gl_matches_cpu(a.mesh, *gl, boxes, m), 1e-5) << a.name << " m " << m;
   }
 }
 
@@ -137,7 +142,9 @@ TEST(GlEstimator, BoxesFloatCannotEvaluateGiveTheCpuTwinsValue) {
     // The box of half extent 1e38 holds the unit cube: OBV = box volume - 1, which is the box
     // volume in double; the CPU twin's plan keeps that to its rounding bound.
     const BoxPlan plan0 = gl->planner().plan(huge[0], res);
-    EXPECT_NEAR(g[0], volume(huge[0]), resolution_bound(plan0, res) + cpu_rounding_bound(plan0, res) + 1) << res;
+    EXPECT_NEAR(g[0], volume(huge[0]),
+                resolution_bound(plan0, res) + cpu_rounding_bound(plan0, res) + 1)
+        << res;
     const BoxPlan plan3 = gl->planner().plan(boxes[3], res);
     EXPECT_NEAR(g[3], 63.0, gl_deviation_bound(plan3, res) + cpu_rounding_bound(plan3, res)) << res;
   }
@@ -151,7 +158,8 @@ TEST(GlEstimator, DisjointBoxIsItsVolumeWithoutGpuWork) {
   // The plan of this dyadic aligned box is exact, so |GL - volume| <= |GL - CPU| + |CPU - exact|.
   for (int res : {1, 7, 32}) {
     const BoxPlan plan = gl->planner().plan(b, res);
-    EXPECT_NEAR(gl->estimate(b, res), volume(b), gl_deviation_bound(plan, res) + cpu_rounding_bound(plan, res));
+    EXPECT_NEAR(gl->estimate(b, res), volume(b),
+                gl_deviation_bound(plan, res) + cpu_rounding_bound(plan, res));
   }
   EXPECT_EQ(gl->round_trips(), trips);  // nothing drawn, nothing read back
 }
@@ -166,7 +174,9 @@ TEST(GlEstimator, WholeMeshBoxIsBoxVolumeMinusMeshVolume) {
   const Obb centred = aabox(Vec3(0.5, 0.5, 0.5), Vec3(2, 2, 2));
   for (int res : {1, 3, 16, 64}) {
     const BoxPlan plan = gl->planner().plan(centred, res);
-    EXPECT_NEAR(gl->estimate(centred, res), 63.0, gl_deviation_bound(plan, res) + cpu_rounding_bound(plan, res)) << res;
+    EXPECT_NEAR(gl->estimate(centred, res), 63.0,
+                gl_deviation_bound(plan, res) + cpu_rounding_bound(plan, res))
+        << res;
   }
   for (const auto& a : {analytic::polygonal_torus(), analytic::cube_with_cavity()}) {
     VOBB_MAKE_GL(est, a.mesh);
@@ -191,7 +201,8 @@ TEST(GlEstimator, WholeMeshBoxIsBoxVolumeMinusMeshVolume) {
       // all at m = 8 and 32, well under half. (Centred in cube_with_cavity's cavity, as this
       // test first was, every texel sees the surface and the bound is the whole box.)
       EXPECT_LT(resolution_bound(plan, res), volume(b) / 2) << a.name << " m " << res;
-      EXPECT_NEAR(v, exact, resolution_bound(plan, res) + gl_deviation_bound(plan, res)) << a.name << " m " << res;
+      EXPECT_NEAR(v, exact, resolution_bound(plan, res) + gl_deviation_bound(plan, res))
+          << a.name << " m " << res;
     }
   }
 }
@@ -215,8 +226,9 @@ TEST(GlEstimator, FiniteAndConsistentForCentresOnFacesEdgesAndVertices) {
       // value is within gl_deviation_bound of its CPU twin, which is within cpu_rounding_bound
       // of its plan's exact evaluation, which is off the true value by the plan's rounding.
       const BoxPlan pb = gl->planner().plan(b, 32), pn = gl->planner().plan(nudged, 32);
-      const double slack = gl_deviation_bound(pb, 32) + gl_deviation_bound(pn, 32) + cpu_rounding_bound(pb, 32) +
-                           cpu_rounding_bound(pn, 32) + test::aligned_plan_round_off(m, 6, b) +
+      const double slack = gl_deviation_bound(pb, 32) + gl_deviation_bound(pn, 32) +
+                           cpu_rounding_bound(pb, 32) + cpu_rounding_bound(pn, 32) +
+                           test::aligned_plan_round_off(m, 6, b) +
                            test::aligned_plan_round_off(m, 6, nudged);
       EXPECT_NEAR(v, w, area * std::sqrt(3.0) * std::abs(eps) + slack) << c.transpose();
     }
@@ -257,7 +269,8 @@ TEST(GlEstimator, BatchingChangesNothingButTheRoundTrips) {
 TEST(GlEstimator, ThreadsChangeNothing) {
   const Mesh m = analytic::polygonal_torus().mesh;
   VOBB_MAKE_GL(gl, m);
-  const std::vector<Obb> boxes = with_odd_boxes(random_boxes(m, 197, 13));  // odd ones at 50, 100, 150
+  const std::vector<Obb> boxes =
+      with_odd_boxes(random_boxes(m, 197, 13));  // odd ones at 50, 100, 150
   for (int res : {8, 192}) {
     ASSERT_FALSE(gl_evaluates_in_float(gl->planner().plan(boxes[150], res)));
     std::vector<double> alone;
@@ -323,17 +336,21 @@ TEST(GlEstimator, CallsFromSeveralThreadsAtOnceGiveEachBoxItsOwnValue) {
         const std::vector<double> got = gl->estimate(slice, resolutions[r]);
         for (size_t i = 0; i < count && wrong[t].empty(); ++i)
           if (got[i] != alone[r][first + i])
-            wrong[t] = "box " + std::to_string(first + i) + " at m " + std::to_string(resolutions[r]);
-        for (size_t i = 0; i < count; ++i) drawn[t] += gl_draws(gl->planner().plan(slice[i], resolutions[r])) ? 1 : 0;
+            wrong[t] =
+                "box " + std::to_string(first + i) + " at m " + std::to_string(resolutions[r]);
+        for (size_t i = 0; i < count; ++i)
+          drawn[t] += gl_draws(gl->planner().plan(slice[i], resolutions[r])) ? 1 : 0;
       });
     // Each call is one request (at most 64 boxes, under either atlas's capacity).
     const auto t0 = std::chrono::steady_clock::now();
-    while (gl->queued_calls() < kThreads && std::chrono::steady_clock::now() - t0 < std::chrono::seconds(120))
+    while (gl->queued_calls() < kThreads &&
+           std::chrono::steady_clock::now() - t0 < std::chrono::seconds(120))
       std::this_thread::sleep_for(std::chrono::milliseconds(1));
     EXPECT_EQ(gl->queued_calls(), static_cast<size_t>(kThreads)) << "round " << round;
     gl->hold_draws(false);
     for (std::thread& th : threads) th.join();
-    for (int t = 0; t < kThreads; ++t) EXPECT_EQ(wrong[t], "") << "thread " << t << ", round " << round;
+    for (int t = 0; t < kThreads; ++t)
+      EXPECT_EQ(wrong[t], "") << "thread " << t << ", round " << round;
     EXPECT_EQ(gl->shared_round_trips() - shared_before, 2u) << "round " << round;
     const size_t drawn_192 = drawn[1] + drawn[3] + drawn[5];
     ASSERT_GT(drawn_192, 70u) << "the m = 192 calls do not fill an atlas, round " << round;
@@ -354,7 +371,8 @@ TEST(GlEstimator, RaysThroughVerticesAreClaimedOnce) {
   const Obb b = aabox(Vec3::Zero(), Vec3(2, 2, 2));
   Obb turned = b;
   const double a = 1e-9;
-  turned.axes = orthonormalize({Vec3(std::cos(a), std::sin(a), 0), Vec3(-std::sin(a), std::cos(a), 0), Vec3::Zero()});
+  turned.axes = orthonormalize(
+      {Vec3(std::cos(a), std::sin(a), 0), Vec3(-std::sin(a), std::cos(a), 0), Vec3::Zero()});
   for (int res : {1, 3, 9}) {
     const double slack = gl_deviation_bound(gl->planner().plan(b, res), res) +
                          gl_deviation_bound(gl->planner().plan(turned, res), res);

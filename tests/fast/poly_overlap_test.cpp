@@ -8,18 +8,20 @@
 #include <cmath>
 #include <random>
 
+#include "builder/variational_builder.h"
 #include "common/cell_clip.h"
+#include "common/io/mesh_report.h"
 #include "data/analytic_meshes.h"
 #include "exact/outer_volume.h"
-#include "common/io/mesh_report.h"
 #include "fast/poly_solver.h"
-#include "builder/variational_builder.h"
 #include "test_common.h"
 
 namespace vobb {
 namespace {
 
-double uniform(std::mt19937_64& rng, double a, double b) { return a + (b - a) * (double(rng() >> 11) * 0x1p-53); }
+double uniform(std::mt19937_64& rng, double a, double b) {
+  return a + (b - a) * (double(rng() >> 11) * 0x1p-53);
+}
 
 // A seeded pair of boxes that mostly overlap and cut the mesh's surface: the first anywhere
 // near the mesh, the second centred within the first's reach, both in any orientation.
@@ -32,7 +34,8 @@ std::pair<Obb, Obb> random_pair(const Mesh& mesh, std::mt19937_64& rng) {
     for (int k = 0; k < 3; ++k) c[k] = around[k] + spread * uniform(rng, -1, 1);
     const double s = std::exp(uniform(rng, std::log(0.05), std::log(0.8))) * size.maxCoeff();
     for (int k = 0; k < 3; ++k) h[k] = s * uniform(rng, 0.2, 1.0);
-    return rotated_box(c, h, uniform(rng, 0, 3.14159), Vec3(uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, 0.1, 1)));
+    return rotated_box(c, h, uniform(rng, 0, 3.14159),
+                       Vec3(uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, 0.1, 1)));
   };
   const Obb a = box_near(0.5 * (bounds.lo + bounds.hi), 0.5 * size.maxCoeff());
   const Obb b = box_near(a.center, a.half.maxCoeff());
@@ -50,11 +53,13 @@ cell_clip::Cell<NT> pair_cell(const Obb& a, const Obb& b) {
 // The estimate is not certified; it must be the exact value to far below the OBV estimator's
 // error (about 1e-4 of a box's volume), or the builder's objective would not be what it says:
 // within 1e-9 of the cells' volume, against about 1e-15 from round-off.
-::testing::AssertionResult close_to_exact(double estimate, const Rational& exact, const Obb& a, const Obb& b) {
+::testing::AssertionResult close_to_exact(double estimate, const Rational& exact, const Obb& a,
+                                          const Obb& b) {
   const double cell = pair_cell<double>(a, b).volume();
-  if (std::abs(estimate - to_double_nearest(exact)) <= 1e-9 * cell) return ::testing::AssertionSuccess();
-  return ::testing::AssertionFailure() << "estimate " << estimate << " against exact " << format_nearest(exact)
-                                       << " (cell volume " << cell << ")";
+  if (std::abs(estimate - to_double_nearest(exact)) <= 1e-9 * cell)
+    return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << "estimate " << estimate << " against exact "
+                                       << format_nearest(exact) << " (cell volume " << cell << ")";
 }
 
 TEST(PolyOverlap, ExactIsTheClippingPathsAndTheIntervalHoldsIt) {
@@ -92,7 +97,8 @@ TEST(PolyOverlap, ExactIsTheClippingPathsAndTheIntervalHoldsIt) {
 }
 
 TEST(PolyOverlap, TwoBoxesGiveTheirExactOmv) {
-  for (const analytic::AnalyticMesh& am : {analytic::cube_with_cavity(), analytic::polygonal_torus()}) {
+  for (const analytic::AnalyticMesh& am :
+       {analytic::cube_with_cavity(), analytic::polygonal_torus()}) {
     SCOPED_TRACE(am.name);
     const PolyOverlapSolver poly(am.mesh);
     const PolyObvSolver obv(am.mesh);
@@ -121,9 +127,10 @@ TEST(PolyOverlap, ThreeBoxesAreBracketedAndTheGapIsTheTripleTerm) {
   const PolyObvSolver obv(am.mesh);
   const exact::ClipSolver clip(am.mesh);
   // Three boxes around one point of the torus's hole, each reaching into the other two.
-  const Obb boxes[3] = {rotated_box(Vec3(0.3, 0.1, 0.2), Vec3(0.9, 0.5, 0.6), 0.3),
-                        rotated_box(Vec3(-0.2, 0.3, 0.1), Vec3(0.6, 0.9, 0.5), 0.9, Vec3(1, -1, 2)),
-                        rotated_box(Vec3(0.1, -0.3, -0.1), Vec3(0.7, 0.6, 0.8), 1.7, Vec3(0, 1, 1))};
+  const Obb boxes[3] = {
+      rotated_box(Vec3(0.3, 0.1, 0.2), Vec3(0.9, 0.5, 0.6), 0.3),
+      rotated_box(Vec3(-0.2, 0.3, 0.1), Vec3(0.6, 0.9, 0.5), 0.9, Vec3(1, -1, 2)),
+      rotated_box(Vec3(0.1, -0.3, -0.1), Vec3(0.7, 0.6, 0.8), 1.7, Vec3(0, 1, 1))};
   Rational sum_obv = 0, pairs = 0;
   for (int i = 0; i < 3; ++i) {
     sum_obv += obv.exact(boxes[i]);
@@ -138,18 +145,21 @@ TEST(PolyOverlap, ThreeBoxesAreBracketedAndTheGapIsTheTripleTerm) {
   const box_clip::Frame<Rational> fc = box_clip::make_frame<Rational>(boxes[2]);
   for (const auto& h : cell_clip::box_planes(fc, sgn(fc.det))) triple = triple.clipped(h);
   const AabbTree faces = AabbTree::over_faces(am.mesh);
-  const Rational triple_term = cell_clip::outside_volume(am.mesh, faces, triple, cell_clip::reach_of(triple));
+  const Rational triple_term =
+      cell_clip::outside_volume(am.mesh, faces, triple, cell_clip::reach_of(triple));
   EXPECT_GT(triple_term, 0);
   EXPECT_LT(sum_obv - pairs, omv);
   EXPECT_EQ(sum_obv - pairs + triple_term, omv);
   // Each box's share of what the earlier ones hold gives the OMV exactly.
-  EXPECT_EQ(sum_obv - poly.exact(boxes[1], {boxes[0]}) - poly.exact(boxes[2], {boxes[0], boxes[1]}), omv);
+  EXPECT_EQ(sum_obv - poly.exact(boxes[1], {boxes[0]}) - poly.exact(boxes[2], {boxes[0], boxes[1]}),
+            omv);
 }
 
 // Random layers: sum OBV less each box's share with the earlier ones is the layer's OMV, as
 // rationals, and the estimate and the interval agree with it.
 TEST(PolyOverlap, SharesGiveTheExactOmvOfALayer) {
-  for (const analytic::AnalyticMesh& am : {analytic::polygonal_torus(), analytic::cube_with_cavity()}) {
+  for (const analytic::AnalyticMesh& am :
+       {analytic::polygonal_torus(), analytic::cube_with_cavity()}) {
     SCOPED_TRACE(am.name);
     const PolyOverlapSolver poly(am.mesh);
     const PolyObvSolver obv(am.mesh);
@@ -174,7 +184,8 @@ TEST(PolyOverlap, SharesGiveTheExactOmvOfALayer) {
         EXPECT_LE(Rational(r.lo), s);
         EXPECT_LE(s, Rational(r.hi));
         // As close_to_exact, over the box's volume (its cells lie in it).
-        EXPECT_LE(std::abs(poly.estimate(boxes[j], earlier) - to_double_nearest(s)), 1e-9 * volume(boxes[j]));
+        EXPECT_LE(std::abs(poly.estimate(boxes[j], earlier) - to_double_nearest(s)),
+                  1e-9 * volume(boxes[j]));
       }
       sharing += shared;
       EXPECT_EQ(omv, clip.omv(boxes));
@@ -211,7 +222,8 @@ TEST(PolyOverlap, ABatchGivesEachPairsOwnValue) {
     queries.push_back({a, {b, random_pair(am.mesh, rng).first}});
   }
   const std::vector<double> batch = poly.estimate(queries);
-  for (size_t i = 0; i < queries.size(); ++i) EXPECT_EQ(batch[i], poly.estimate(queries[i].box, queries[i].earlier));
+  for (size_t i = 0; i < queries.size(); ++i)
+    EXPECT_EQ(batch[i], poly.estimate(queries[i].box, queries[i].earlier));
 }
 
 }  // namespace
@@ -237,14 +249,20 @@ TEST(PolyOverlapReal, EstimatesAreTheExactValueToRoundOff) {
     // box in a random frame.
     Aabb bounds = mesh.bounds();
     for (int i = 0; i < 10; ++i) {
-      const Vec3 n = Vec3(uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, -1, 1)).normalized();
-      const Vec3 mid = bounds.lo + (bounds.hi - bounds.lo).cwiseProduct(Vec3(uniform(rng, 0.3, 0.7), uniform(rng, 0.3, 0.7), uniform(rng, 0.3, 0.7)));
+      const Vec3 n =
+          Vec3(uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, -1, 1)).normalized();
+      const Vec3 mid =
+          bounds.lo + (bounds.hi - bounds.lo)
+                          .cwiseProduct(Vec3(uniform(rng, 0.3, 0.7), uniform(rng, 0.3, 0.7),
+                                             uniform(rng, 0.3, 0.7)));
       std::vector<int32_t> side[2];
-      for (size_t f = 0; f < mesh.faces.size(); ++f) side[(mesh.corner(f, 0) - mid).dot(n) > 0].push_back(static_cast<int32_t>(f));
+      for (size_t f = 0; f < mesh.faces.size(); ++f)
+        side[(mesh.corner(f, 0) - mid).dot(n) > 0].push_back(static_cast<int32_t>(f));
       if (side[0].empty() || side[1].empty()) continue;
       Obb box[2];
       for (int k = 0; k < 2; ++k) {
-        const Obb r = rotated_box(Vec3::Zero(), Vec3::Ones(), uniform(rng, 0, 3.14159), Vec3(uniform(rng, -1, 1), uniform(rng, -1, 1), 1));
+        const Obb r = rotated_box(Vec3::Zero(), Vec3::Ones(), uniform(rng, 0, 3.14159),
+                                  Vec3(uniform(rng, -1, 1), uniform(rng, -1, 1), 1));
         box[k] = tight_box(mesh, side[k], r.axes);
       }
       pairs.emplace_back(box[0], box[1]);

@@ -37,8 +37,8 @@ double width_bound(const PolyObv& r, const Obb& b, const Mesh& mesh) {
 // Exact OBV inside [lo, hi], compared as rationals.
 ::testing::AssertionResult encloses(const PolyObv& r, const Rational& exact) {
   if (Rational(r.lo) <= exact && exact <= Rational(r.hi)) return ::testing::AssertionSuccess();
-  return ::testing::AssertionFailure() << "exact " << format_nearest(exact) << " outside [" << r.lo << ", " << r.hi
-                                       << "]";
+  return ::testing::AssertionFailure()
+         << "exact " << format_nearest(exact) << " outside [" << r.lo << ", " << r.hi << "]";
 }
 
 // Seeded boxes over the analytic meshes: centres anywhere in the mesh's bounds (grown by a
@@ -52,10 +52,12 @@ std::vector<Obb> random_boxes(const Mesh& mesh, int count, uint64_t seed) {
   std::vector<Obb> boxes;
   for (int i = 0; i < count; ++i) {
     Vec3 c, h;
-    for (int k = 0; k < 3; ++k) c[k] = uniform(bounds.lo[k] - 0.5 * size[k], bounds.hi[k] + 0.5 * size[k]);
+    for (int k = 0; k < 3; ++k)
+      c[k] = uniform(bounds.lo[k] - 0.5 * size[k], bounds.hi[k] + 0.5 * size[k]);
     const double s = std::exp(uniform(std::log(0.01), std::log(1.0))) * size.maxCoeff();
     for (int k = 0; k < 3; ++k) h[k] = s * uniform(0.2, 1.0);
-    boxes.push_back(rotated_box(c, h, uniform(0, 3.14159), Vec3(uniform(-1, 1), uniform(-1, 1), uniform(0.1, 1))));
+    boxes.push_back(rotated_box(c, h, uniform(0, 3.14159),
+                                Vec3(uniform(-1, 1), uniform(-1, 1), uniform(0.1, 1))));
   }
   return boxes;
 }
@@ -65,7 +67,8 @@ struct Tally {
   double worst_width_ratio = 0;  // width / width_bound over the interval-evaluated boxes
 };
 
-void check_all(const Mesh& mesh, const std::vector<Obb>& boxes, Tally* tally, const std::string& what) {
+void check_all(const Mesh& mesh, const std::vector<Obb>& boxes, Tally* tally,
+               const std::string& what) {
   const PolyObvSolver poly(mesh);
   const std::vector<PolyObv> got = poly.evaluate(boxes);
   for (size_t i = 0; i < boxes.size(); ++i) {
@@ -82,7 +85,8 @@ void check_all(const Mesh& mesh, const std::vector<Obb>& boxes, Tally* tally, co
       ++tally->exact_boxes;
       continue;
     }
-    tally->worst_width_ratio = std::max(tally->worst_width_ratio, (r.hi - r.lo) / width_bound(r, boxes[i], mesh));
+    tally->worst_width_ratio =
+        std::max(tally->worst_width_ratio, (r.hi - r.lo) / width_bound(r, boxes[i], mesh));
     EXPECT_LE(r.hi - r.lo, 1e-9 * volume(boxes[i]));
   }
 }
@@ -93,14 +97,15 @@ void expect_ordinary(const Tally& tally, const char* what) {
   EXPECT_GE(tally.boxes, 1000);
   EXPECT_EQ(tally.exact_boxes, 0);
   EXPECT_LE(tally.worst_width_ratio, 1.0);
-  std::printf("%s: %d boxes, %d exact signs, %d exact faces, worst width / bound %.3g\n", what, tally.boxes,
-              tally.exact_signs, tally.exact_faces, tally.worst_width_ratio);
+  std::printf("%s: %d boxes, %d exact signs, %d exact faces, worst width / bound %.3g\n", what,
+              tally.boxes, tally.exact_signs, tally.exact_faces, tally.worst_width_ratio);
 }
 
 TEST(PolySolver, EnclosesTheExactValueOnAnalyticMeshes) {
   Tally tally;
   uint64_t seed = 1;
-  for (const AnalyticMesh& a : analytic::all()) check_all(a.mesh, random_boxes(a.mesh, 200, seed++), &tally, a.name);
+  for (const AnalyticMesh& a : analytic::all())
+    check_all(a.mesh, random_boxes(a.mesh, 200, seed++), &tally, a.name);
   expect_ordinary(tally, "analytic");
 }
 
@@ -114,7 +119,8 @@ TEST(PolySolver, EnclosesTheExactValueOnRealMeshesAtEverySize) {
     LoadedMesh lm;
     ASSERT_TRUE(load_solid(test::real_mesh(name), &lm));
     uint64_t seed = 7;
-    for (auto [size, count] : {std::pair{BoxSize::kLeaf, 200}, {BoxSize::kMid, 100}, {BoxSize::kRoot, 34}})
+    for (auto [size, count] :
+         {std::pair{BoxSize::kLeaf, 200}, {BoxSize::kMid, 100}, {BoxSize::kRoot, 34}})
       check_all(lm.mesh, validate::box_corpus(lm.mesh, size, count, seed++), &tally,
                 std::string(name) + " " + validate::to_string(size));
   }
@@ -171,11 +177,12 @@ TEST(PolySolver, SpecialPositionsFallBackToRationalsAndStillEnclose) {
   for (const Vec3& v : cube.mesh.vertices) bounds.extend(v);
   const Vec3 mid = 0.5 * (bounds.lo + bounds.hi), half = 0.5 * (bounds.hi - bounds.lo);
   const PolyObvSolver poly(cube.mesh);
-  std::vector<Obb> boxes = {rotated_box(mid, half),                             // the cube itself
-                            rotated_box(bounds.hi, 0.25 * half),                // centred on a vertex
-                            rotated_box(Vec3(mid[0], bounds.hi[1], bounds.hi[2]), 0.25 * half),  // an edge
-                            rotated_box(Vec3(mid[0], mid[1], bounds.hi[2]), 0.25 * half),        // a face
-                            rotated_box(mid + Vec3(0, 0, 0.5 * half[2]), Vec3(half[0], half[1], 0.5 * half[2]))};
+  std::vector<Obb> boxes = {
+      rotated_box(mid, half),                                              // the cube itself
+      rotated_box(bounds.hi, 0.25 * half),                                 // centred on a vertex
+      rotated_box(Vec3(mid[0], bounds.hi[1], bounds.hi[2]), 0.25 * half),  // an edge
+      rotated_box(Vec3(mid[0], mid[1], bounds.hi[2]), 0.25 * half),        // a face
+      rotated_box(mid + Vec3(0, 0, 0.5 * half[2]), Vec3(half[0], half[1], 0.5 * half[2]))};
   int fell_back = 0;
   for (size_t i = 0; i < boxes.size(); ++i) {
     const PolyObv r = poly.evaluate(boxes[i]);
@@ -211,7 +218,8 @@ TEST(PolySolver, StiffScalesAndShapes) {
         boxes.push_back(b);
       }
       Tally tally;
-      check_all(m, boxes, &tally, "scale " + std::to_string(scale) + " offset " + std::to_string(offset));
+      check_all(m, boxes, &tally,
+                "scale " + std::to_string(scale) + " offset " + std::to_string(offset));
     }
 }
 
@@ -247,13 +255,12 @@ TEST(PolySolver, BrokenEvaluatorIsCaught) {
   const AnalyticMesh torus = analytic::polygonal_torus();
   const std::vector<Obb> boxes = random_boxes(torus.mesh, 40, 11);
   PolyObvSolver poly(torus.mesh);
-  for (PolyObvSolver::Damage damage :
-       {PolyObvSolver::Damage([](double* lo, double* hi, int32_t f) {
-          if (f % 7 == 3) std::swap(*lo = -*lo, *hi = -*hi);
-        }),
-        PolyObvSolver::Damage([](double* lo, double* hi, int32_t f) {
-          if (f % 7 == 3) *lo = *hi = 0;
-        })}) {
+  for (PolyObvSolver::Damage damage : {PolyObvSolver::Damage([](double*lo, double*hi, int32_t f) {
+                                         if (f % 7 == 3) std::swap(*lo = -*lo, *hi = -*hi);
+                                       }),
+                                       PolyObvSolver::Damage([](double*lo, double*hi, int32_t f) {
+                                         if (f % 7 == 3) *lo = *hi = 0;
+                                       })}) {
     poly.set_damage_for_tests(damage);
     int caught = 0;
     for (const Obb& b : boxes) {

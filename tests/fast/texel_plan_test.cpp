@@ -58,16 +58,20 @@ TEST(TexelPlan, ThinBoxesDoNotTakeFarFacesAsNearTheCentre) {
 // capacity), so anything a plan left behind would change the next box's value. The boxes
 // alternate between large and small plans and the early exits: the whole mesh, a small box at
 // a rim vertex, a flat box, a thin box whose faces lie beyond 2^300 box units (unresolved), a
-// box across the rim. (Which order-keeping path a box takes is CulledPlansKeepTheFacesInMeshOrder's.)
-// A box centred on a mesh vertex, on the midpoint of a face's diagonal, or on an edge's
-// midpoint has edges whose line passes through the centre (E* = 0 exactly). plan() marks
-// exactly those, as a rational evaluation of E* says, and an edge test on a marked edge gives
-// 0 for every texel, as the full rational test does.
+// box across the rim. (Which order-keeping path a box takes is
+// CulledPlansKeepTheFacesInMeshOrder's.) A box centred on a mesh vertex, on the midpoint of a
+// face's diagonal, or on an edge's midpoint has edges whose line passes through the centre (E* = 0
+// exactly). plan() marks exactly those, as a rational evaluation of E* says, and an edge test on a
+// marked edge gives 0 for every texel, as the full rational test does.
 TEST(TexelPlan, EdgesThroughTheCentreAreMarkedExactly) {
   Mesh cube;
   for (int i = 0; i < 8; ++i) cube.vertices.emplace_back(i & 1, (i >> 1) & 1, (i >> 2) & 1);
-  for (const auto& q : {std::array<int32_t, 4>{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4}, {2, 6, 7, 3},
-                        {0, 2, 3, 1}, {4, 5, 7, 6}}) {
+  for (const auto& q : {std::array<int32_t, 4>{0, 4, 6, 2},
+                        {1, 3, 7, 5},
+                        {0, 1, 5, 4},
+                        {2, 6, 7, 3},
+                        {0, 2, 3, 1},
+                        {4, 5, 7, 6}}) {
     cube.faces.push_back({q[0], q[1], q[2]});
     cube.faces.push_back({q[0], q[2], q[3]});
   }
@@ -94,7 +98,8 @@ TEST(TexelPlan, EdgesThroughTheCentreAreMarkedExactly) {
         for (int f = 0; f < 6; ++f)
           for (int i = 0; i < m; ++i)
             for (int j = 0; j < m; ++j) {
-              const Texel x{f, i, j, m, cubemap_direction(f, texel_center(i, m), texel_center(j, m))};
+              const Texel x{f, i, j, m,
+                            cubemap_direction(f, texel_center(i, m), texel_center(j, m))};
               EXPECT_EQ(exact_edge_side(t, k, x), 0);
             }
       }
@@ -159,8 +164,9 @@ TEST(TexelPlan, APlanReusedAfterOthersEqualsAFreshOne) {
       ASSERT_EQ(reused.spans.size(), fresh.spans.size());
       for (size_t i = 0; i < fresh.spans.size(); ++i) {
         const TexelSpan &a = reused.spans[i], &b = fresh.spans[i];
-        EXPECT_EQ(std::make_tuple(a.tri, a.face, a.i0, a.i1, a.j0, a.j1, a.ci0, a.ci1, a.cj0, a.cj1),
-                  std::make_tuple(b.tri, b.face, b.i0, b.i1, b.j0, b.j1, b.ci0, b.ci1, b.cj0, b.cj1));
+        EXPECT_EQ(
+            std::make_tuple(a.tri, a.face, a.i0, a.i1, a.j0, a.j1, a.ci0, a.ci1, a.cj0, a.cj1),
+            std::make_tuple(b.tri, b.face, b.i0, b.i1, b.j0, b.j1, b.ci0, b.ci1, b.cj0, b.cj1));
       }
     }
   }
@@ -230,8 +236,8 @@ TEST(TexelPlan, CulledPlansKeepTheFacesInMeshOrder) {
   Obb box;
   box.axes = orthonormalize({Vec3(1, 0.2, 0.1), Vec3(-0.2, 1, 0.05), Vec3(0, 0, 1)});
   for (const auto& [center, half, least, sorted] :
-       {std::make_tuple(Vec3(0.0, 0.0, 0.0), 2.0, size_t{4800}, false),  // the whole cube
-        std::make_tuple(Vec3(0.9, 0.9, 0.9), 0.3, size_t{100}, false),   // a corner
+       {std::make_tuple(Vec3(0.0, 0.0, 0.0), 2.0, size_t{4800}, false),     // the whole cube
+        std::make_tuple(Vec3(0.9, 0.9, 0.9), 0.3, size_t{100}, false),      // a corner
         std::make_tuple(Vec3(0.99, 0.03, 0.02), 0.04, size_t{2}, true)}) {  // on one side
     box.center = center;
     box.half = Vec3::Constant(half);
@@ -243,7 +249,8 @@ TEST(TexelPlan, CulledPlansKeepTheFacesInMeshOrder) {
     query.hi += Vec3::Constant(1e-6);
     size_t found = 0;
     culled.face_tree().for_each_overlap(query, [&](int32_t) { ++found; });
-    EXPECT_EQ(found * 256 < mesh.faces.size(), sorted) << "half " << half << ": " << found << " faces found";
+    EXPECT_EQ(found * 256 < mesh.faces.size(), sorted)
+        << "half " << half << ": " << found << " faces found";
     const auto some = ids(culled.plan(box, 16)), every = ids(all.plan(box, 16));
     ASSERT_GE(some.size(), least) << "half " << half;
     if (least == mesh.faces.size()) {

@@ -8,17 +8,19 @@
 #include <set>
 #include <thread>
 
+#include "builder/obbtree_builder.h"
 #include "common/png_io.h"
 #include "data/analytic_meshes.h"
 #include "fast/gl_estimator.h"
 #include "fast/gl_test_util.h"
-#include "builder/obbtree_builder.h"
 #include "test_common.h"
 
 namespace vobb {
 namespace {
 
-bool same_rgba(const uint8_t* p, const std::array<uint8_t, 4>& c) { return std::memcmp(p, c.data(), 4) == 0; }
+bool same_rgba(const uint8_t* p, const std::array<uint8_t, 4>& c) {
+  return std::memcmp(p, c.data(), 4) == 0;
+}
 
 // A 6 x 2 x 1 brick (the cube's 12 faces, stretched): distinct extents give the baseline
 // definite covariance axes, so its boxes are the brick's own and lie inside it, and the view
@@ -54,7 +56,8 @@ TEST(TreeFigure, DefaultLevelsAreOneToDepthCappedAtEight) {
   deep.depth = 11;
   shallow.depth = 3;
   EXPECT_EQ(default_figure_levels({{"a", &shallow}}), (std::vector<int>{1, 2, 3}));
-  EXPECT_EQ(default_figure_levels({{"a", &shallow}, {"b", &deep}}), (std::vector<int>{1, 2, 3, 4, 5, 6, 7, 8}));
+  EXPECT_EQ(default_figure_levels({{"a", &shallow}, {"b", &deep}}),
+            (std::vector<int>{1, 2, 3, 4, 5, 6, 7, 8}));
   EXPECT_EQ(default_figure_levels({{"a", &root_only}}), (std::vector<int>{0}));
 }
 
@@ -92,7 +95,8 @@ TEST(TreeFigure, GridOfPanelsShowsMeshAndBoxes) {
   ASSERT_EQ(img.rgba.size(), static_cast<size_t>(img.width) * img.height * 4);
   // Image corners are the border colour.
   for (int x : {0, img.width - 1})
-    for (int y : {0, img.height - 1}) EXPECT_TRUE(same_rgba(img.pixel(x, y), o.gap_color)) << x << "," << y;
+    for (int y : {0, img.height - 1})
+      EXPECT_TRUE(same_rgba(img.pixel(x, y), o.gap_color)) << x << "," << y;
   const Tree* trees[2] = {&f.binary, &f.ternary};
   for (int r = 0; r < 2; ++r)
     for (int c = 0; c < 2; ++c) {
@@ -101,7 +105,8 @@ TEST(TreeFigure, GridOfPanelsShowsMeshAndBoxes) {
       // The camera keeps everything drawn at least edge width + 2 px from the panel's rim
       // (tree_figure.h), so the corner pixels are the background, exactly.
       for (int x : {p.x0, p.x0 + p.side - 1})
-        for (int y : {p.y0, p.y0 + p.side - 1}) EXPECT_TRUE(same_rgba(img.pixel(x, y), o.background));
+        for (int y : {p.y0, p.y0 + p.side - 1})
+          EXPECT_TRUE(same_rgba(img.pixel(x, y), o.background));
       // The centre looks at the brick: most pixels of a 9x9 window there are the mesh's grey
       // (albedo 0.80, 0.80, 0.78 times a shade in [0.38, 1]: r == g up to rounding, b a
       // little lower), not the white background. An edge may cross the window, hence "most".
@@ -110,7 +115,9 @@ TEST(TreeFigure, GridOfPanelsShowsMeshAndBoxes) {
         for (int x = p.x0 + p.side / 2 - 4; x <= p.x0 + p.side / 2 + 4; ++x) {
           const uint8_t* px = img.pixel(x, y);
           // Red is 0.80 (0.38 + 0.62 lambert) of 255: 77.5 to 204, to 8-bit rounding.
-          if (std::abs(px[0] - px[1]) <= 1 && px[2] <= px[1] && px[1] - px[2] <= 6 && px[0] >= 77 && px[0] <= 205) ++grey;
+          if (std::abs(px[0] - px[1]) <= 1 && px[2] <= px[1] && px[1] - px[2] <= 6 && px[0] >= 77 &&
+              px[0] <= 205)
+            ++grey;
         }
       EXPECT_GE(grey, 41) << "of 81";
       // Some pixel of the panel has exactly the colour of one of this layer's boxes: an edge
@@ -167,7 +174,8 @@ TEST(TreeFigure, BadInputIsAStatusNotACrash) {
   RgbaImage img;
   EXPECT_FALSE(render_tree_figure(*ctx, f.mesh, {}, small_options(), &img));
   const analytic::AnalyticMesh other = analytic::octahedron();
-  EXPECT_FALSE(render_tree_figure(*ctx, other.mesh, f.rows(), small_options(), &img));  // wrong mesh
+  EXPECT_FALSE(
+      render_tree_figure(*ctx, other.mesh, f.rows(), small_options(), &img));  // wrong mesh
   FigureOptions o = small_options();
   o.levels = {-1};
   EXPECT_FALSE(render_tree_figure(*ctx, f.mesh, f.rows(), o, &img));

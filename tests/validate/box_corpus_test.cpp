@@ -2,14 +2,13 @@
 
 #include <gtest/gtest.h>
 
-#include <limits>
-
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <vector>
 
-#include "data/analytic_meshes.h"
 #include "builder/obbtree_builder.h"
+#include "data/analytic_meshes.h"
 
 namespace vobb::validate {
 namespace {
@@ -23,8 +22,10 @@ struct Jitter {
 Jitter jitter(const Obb& box, const Obb& source) {
   Jitter j;
   for (int k = 0; k < 3; ++k) {
-    j.offset = std::max(j.offset, std::abs((box.center - source.center).dot(source.axes[k])) / (0.25 * source.half[k]));
-    j.angle = std::max(j.angle, std::acos(std::min(1.0, box.axes[k].dot(source.axes[k]))) * 180 / M_PI);
+    j.offset = std::max(j.offset, std::abs((box.center - source.center).dot(source.axes[k])) /
+                                      (0.25 * source.half[k]));
+    j.angle =
+        std::max(j.angle, std::acos(std::min(1.0, box.axes[k].dot(source.axes[k]))) * 180 / M_PI);
     j.ratio_lo = std::min(j.ratio_lo, box.half[k] / source.half[k]);
     j.ratio_hi = std::max(j.ratio_hi, box.half[k] / source.half[k]);
   }
@@ -92,11 +93,13 @@ TEST(BoxCorpus, BoxesAreJitteredNodeBoxesOfTheirLevel) {
 // a shorter corpus is the start of a longer one.
 TEST(BoxCorpus, SeededAndRepeatable) {
   const Mesh mesh = analytic::polygonal_torus().mesh;
-  const std::vector<Obb> a = box_corpus(mesh, BoxSize::kMid, 20, 9), b = box_corpus(mesh, BoxSize::kMid, 20, 9);
-  const std::vector<Obb> c = box_corpus(mesh, BoxSize::kMid, 20, 10), d = box_corpus(mesh, BoxSize::kMid, 5, 9);
+  const std::vector<Obb> a = box_corpus(mesh, BoxSize::kMid, 20, 9),
+                         b = box_corpus(mesh, BoxSize::kMid, 20, 9);
+  const std::vector<Obb> c = box_corpus(mesh, BoxSize::kMid, 20, 10),
+                         d = box_corpus(mesh, BoxSize::kMid, 5, 9);
   auto same = [](const Obb& x, const Obb& y) {
-    return x.center == y.center && x.half == y.half && x.axes[0] == y.axes[0] && x.axes[1] == y.axes[1] &&
-           x.axes[2] == y.axes[2];
+    return x.center == y.center && x.half == y.half && x.axes[0] == y.axes[0] &&
+           x.axes[1] == y.axes[1] && x.axes[2] == y.axes[2];
   };
   size_t equal_ab = 0, equal_ac = 0;
   for (size_t i = 0; i < a.size(); ++i) {

@@ -1,11 +1,11 @@
 // The statistics of the discretization study on synthetic errors whose answers are known:
 // quantiles, the least-squares rate, and the fit and held-out check of the stated bound B(m).
+#include "validate/discretization_study.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <limits>
-
-#include "validate/discretization_study.h"
 
 namespace vobb {
 namespace {

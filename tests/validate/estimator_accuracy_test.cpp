@@ -4,9 +4,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdlib>
-#include <array>
 #include <map>
 
 #include "common/io/mesh_report.h"
@@ -29,8 +29,9 @@ double median(std::vector<double> v) {
 }
 
 // The CPU prototype's median relative errors at m = 32 (DESIGN §4): leaf, mid, root.
-const std::map<validate::BoxSize, double> kPrototypeMedian32 = {
-    {validate::BoxSize::kLeaf, 4.5e-4}, {validate::BoxSize::kMid, 1.2e-4}, {validate::BoxSize::kRoot, 6.4e-5}};
+const std::map<validate::BoxSize, double> kPrototypeMedian32 = {{validate::BoxSize::kLeaf, 4.5e-4},
+                                                                {validate::BoxSize::kMid, 1.2e-4},
+                                                                {validate::BoxSize::kRoot, 6.4e-5}};
 
 TEST(EstimatorAccuracy, RealMeshesMatchThePrototypeAndConvergeWithM) {
   using validate::BoxSize;
@@ -39,7 +40,8 @@ TEST(EstimatorAccuracy, RealMeshesMatchThePrototypeAndConvergeWithM) {
   int meshes = 0;
   for (const char* name : {"dino", "knot1", "elephant"}) {
     if (!test::exists(test::real_mesh(name))) {
-      if (test::real_meshes_required()) ADD_FAILURE() << name << " is absent (VOBB_REQUIRE_REAL_MESHES=1)";
+      if (test::real_meshes_required())
+        ADD_FAILURE() << name << " is absent (VOBB_REQUIRE_REAL_MESHES=1)";
       continue;
     }
     ++meshes;
@@ -59,7 +61,8 @@ TEST(EstimatorAccuracy, RealMeshesMatchThePrototypeAndConvergeWithM) {
           ASSERT_TRUE(std::isfinite(est[i]));
           // Rigorous for every box: the texels the surface crosses, plus float deviation.
           const BoxPlan plan = gl->planner().plan(boxes[i], m);
-          EXPECT_LE(std::abs(est[i] - truth[i]), resolution_bound(plan, m) + gl_deviation_bound(plan, m))
+          EXPECT_LE(std::abs(est[i] - truth[i]),
+                    resolution_bound(plan, m) + gl_deviation_bound(plan, m))
               << name << " " << validate::to_string(size) << " box " << i << " m " << m;
           if (truth[i] > 0) rel[size][m].push_back(std::abs(est[i] - truth[i]) / truth[i]);
         }
@@ -69,8 +72,10 @@ TEST(EstimatorAccuracy, RealMeshesMatchThePrototypeAndConvergeWithM) {
   if (meshes == 0) VOBB_SKIP_WITHOUT_REAL_MESHES("no real meshes");
   for (const auto& [size, by_m] : rel) {
     const double m16 = median(by_m.at(16)), m32 = median(by_m.at(32)), m64 = median(by_m.at(64));
-    std::printf("%-5s boxes %3zu  median relative error  m=16 %.2e  m=32 %.2e  m=64 %.2e  (prototype m=32 %.1e)\n",
-                validate::to_string(size), by_m.at(32).size(), m16, m32, m64, kPrototypeMedian32.at(size));
+    std::printf(
+        "%-5s boxes %3zu  median relative error  m=16 %.2e  m=32 %.2e  m=64 %.2e  (prototype m=32 "
+        "%.1e)\n",
+        validate::to_string(size), by_m.at(32).size(), m16, m32, m64, kPrototypeMedian32.at(size));
     // The criterion: at least as good as the prototype within a factor of 2.
     EXPECT_LE(m32, 2 * kPrototypeMedian32.at(size)) << validate::to_string(size);
     EXPECT_LT(m64, m16) << validate::to_string(size);
@@ -79,12 +84,14 @@ TEST(EstimatorAccuracy, RealMeshesMatchThePrototypeAndConvergeWithM) {
 
 // On analytic meshes too the error falls as m doubles: medians over seeded boxes of all sizes.
 TEST(EstimatorAccuracy, AnalyticMeshesConvergeWithM) {
-  for (const auto& a : {analytic::polygonal_torus(), analytic::cube_with_cavity(), analytic::octahedron()}) {
+  for (const auto& a :
+       {analytic::polygonal_torus(), analytic::cube_with_cavity(), analytic::octahedron()}) {
     VOBB_MAKE_GL(gl, a.mesh);
     ASSERT_TRUE(gl);
     const exact::ClipSolver exact(a.mesh);
     std::vector<Obb> boxes;
-    for (auto size : {validate::BoxSize::kLeaf, validate::BoxSize::kMid, validate::BoxSize::kRoot}) {
+    for (auto size :
+         {validate::BoxSize::kLeaf, validate::BoxSize::kMid, validate::BoxSize::kRoot}) {
       const auto part = validate::box_corpus(a.mesh, size, 20, 7);
       boxes.insert(boxes.end(), part.begin(), part.end());
     }
@@ -198,7 +205,8 @@ TEST(EstimatorAccuracy, BoxesOfSubnormalVolumeStayWithinTheRigorousBound) {
   }
   // Needles whose volume is normal while h0 h1 is not (a review: multiplied left to right the
   // volume lost its digits, or became 0 and the box flat).
-  for (const Vec3& h : {Vec3(1.1 * 0x1p-540, 1.3 * 0x1p-520, 0x1p200), Vec3(0x1p-600, 0x1p-500, 0x1p200)}) {
+  for (const Vec3& h :
+       {Vec3(1.1 * 0x1p-540, 1.3 * 0x1p-520, 0x1p200), Vec3(0x1p-600, 0x1p-500, 0x1p200)}) {
     Obb box;
     box.center = Vec3(5, 5, 5);
     box.half = h;
@@ -211,7 +219,8 @@ TEST(EstimatorAccuracy, BoxesOfSubnormalVolumeStayWithinTheRigorousBound) {
       std::vector<double> seconds;
       const double est = estimators.estimate(backend, {box}, 4, &seconds)[0];
       EXPECT_LE(std::abs(est - truth), estimators.rigorous_bound(box, 4))
-          << validate::to_string(backend) << " h " << h << " exact " << truth << " estimate " << est;
+          << validate::to_string(backend) << " h " << h << " exact " << truth << " estimate "
+          << est;
     }
   }
 }
@@ -257,7 +266,8 @@ TEST(EstimatorAccuracy, BoxesTheDoublesCannotPlanStayWithinTheRigorousBound) {
       // fails here although it is within the bound of box 1's truth.
       EXPECT_EQ(est, volume(boxes[i]) / 2) << validate::to_string(backend) << " box " << i;
       EXPECT_LE(std::abs(est - truth), estimators.rigorous_bound(boxes[i], 4))
-          << validate::to_string(backend) << " box " << i << " exact " << truth << " estimate " << est;
+          << validate::to_string(backend) << " box " << i << " exact " << truth << " estimate "
+          << est;
     }
   }
 }

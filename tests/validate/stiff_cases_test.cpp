@@ -1,11 +1,11 @@
 // The stiff and extreme cases on the generated meshes (no real mesh needed): each behaves as it
 // states, and a broken estimator (non-finite, or off by a whole box volume) is caught.
+#include "validate/stiff_cases.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <limits>
-
-#include "validate/stiff_cases.h"
 
 namespace vobb {
 namespace {

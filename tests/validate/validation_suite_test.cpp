@@ -1,6 +1,8 @@
 // The validation suite (issue 6): the quick suite passes on the real estimator and fails when
 // the estimator is broken on purpose (the perturbation injection point of estimators.h); the
 // command line's exit codes. The quick suite needs dino, elephant, knot1 and armadillo.
+#include "validate/validation_suite.h"
+
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
@@ -13,7 +15,6 @@
 #include <vector>
 
 #include "test_common.h"
-#include "validate/validation_suite.h"
 
 namespace vobb {
 namespace {
@@ -50,17 +51,23 @@ TEST(ValidationSuite, QuickSuitePassesAndWritesItsFiles) {
   EXPECT_TRUE(report.ok());
   // Each of the suite's checks ran (an empty list would pass the loop above), the GL ones too
   // unless GL is switched off (VOBB_GL=off, as the GL tests skip); CI has GL (llvmpipe).
-  std::vector<std::string> names = {"estimates finite", "within the rigorous bound R(m)",
-                                    "convergence rate of the median (cpu)", "median relative error at m = 32 (cpu)",
-                                    "held-out violation rate of B(m)", "Nef == clipping (exact)",
-                                    "sum OBV >= OMV on every layer (exact)", "stiff and extreme cases as expected"};
+  std::vector<std::string> names = {"estimates finite",
+                                    "within the rigorous bound R(m)",
+                                    "convergence rate of the median (cpu)",
+                                    "median relative error at m = 32 (cpu)",
+                                    "held-out violation rate of B(m)",
+                                    "Nef == clipping (exact)",
+                                    "sum OBV >= OMV on every layer (exact)",
+                                    "stiff and extreme cases as expected"};
   const char* gl = std::getenv("VOBB_GL");
   if (gl == nullptr || std::string(gl) != "off")
-    names.insert(names.end(), {"GL within its float bound of the CPU twin", "convergence rate of the median (gl)",
-                               "median relative error at m = 32 (gl)"});
+    names.insert(names.end(),
+                 {"GL within its float bound of the CPU twin",
+                  "convergence rate of the median (gl)", "median relative error at m = 32 (gl)"});
   for (const std::string& name : names) EXPECT_NE(find_check(report, name), nullptr) << name;
-  for (const char* f : {"summary.md", "samples.csv", "evaluations.csv", "error_by_m.csv", "bound.csv", "richardson.csv",
-                        "pareto.csv", "upper_bound.csv", "stiff_cases.csv", "checks.csv"})
+  for (const char* f :
+       {"summary.md", "samples.csv", "evaluations.csv", "error_by_m.csv", "bound.csv",
+        "richardson.csv", "pareto.csv", "upper_bound.csv", "stiff_cases.csv", "checks.csv"})
     EXPECT_TRUE(fs::exists(fs::path(out) / f)) << f;
   if (std::system("command -v gnuplot >/dev/null 2>&1") == 0) {
     for (const char* f : {"error_vs_m.png", "bound.png", "pareto.png", "upper_bound.png"})
@@ -101,7 +108,8 @@ TEST(ValidationSuite, QuickSuiteFailsWhenTheEstimatorIsBroken) {
 
 int run_cli(const std::string& args, std::string* err) {
   const std::string err_path = test::temp_path("validate_stderr.txt");
-  const int status = std::system((std::string(VOBB_CLI) + " " + args + " >/dev/null 2>" + err_path).c_str());
+  const int status =
+      std::system((std::string(VOBB_CLI) + " " + args + " >/dev/null 2>" + err_path).c_str());
   std::ifstream e(err_path);
   std::stringstream ss;
   ss << e.rdbuf();
@@ -115,7 +123,9 @@ TEST(ValidateCommand, BadInputExitsTwoWithOneLine) {
   EXPECT_EQ(run_cli("validate --suite medium", &err), 2);
   EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
   const std::string missing = test::temp_path("no_such_mesh_dir");
-  EXPECT_EQ(run_cli("validate --meshes " + missing + " --out " + test::temp_path("validate_unused"), &err), 2);
+  EXPECT_EQ(run_cli("validate --meshes " + missing + " --out " + test::temp_path("validate_unused"),
+                    &err),
+            2);
   EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
   EXPECT_NE(err.find(missing), std::string::npos) << err;
 }

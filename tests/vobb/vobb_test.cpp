@@ -43,7 +43,8 @@ TEST(BuildTree, IsTheBuilderWithTheChosenEstimator) {
   v.max_sweeps = o.sweeps;
   v.concurrent_estimates = true;
   const CpuObvEstimator cpu(mesh);
-  Tree direct = build_variational(mesh, v, [&](const std::vector<Obb>& b) { return cpu.estimate(b, o.m); });
+  Tree direct =
+      build_variational(mesh, v, [&](const std::vector<Obb>& b) { return cpu.estimate(b, o.m); });
   direct.mesh_sha256 = mesh_sha256(mesh);
   EXPECT_EQ(tree_to_json(via_face), tree_to_json(direct));
 }
@@ -76,7 +77,8 @@ TEST(BuildTree, RefusesOptionsThatContradictEachOther) {
   const std::vector<Case> cases = {
       {[](BuildOptions* o) { o->method = Method::kObbTree, o->checkpoint = "x"; }, "--checkpoint"},
       {[](BuildOptions* o) { o->method = Method::kObbTree, o->time_budget = 1; }, "--time-budget"},
-      {[](BuildOptions* o) { o->method = Method::kObbTree, o->objective = Objective::kOmv; }, "--objective"},
+      {[](BuildOptions* o) { o->method = Method::kObbTree, o->objective = Objective::kOmv; },
+       "--objective"},
       {[](BuildOptions* o) { o->collider_margin = -1; }, "--collider-margin"},
       {[](BuildOptions* o) { o->collider_margin = 1e9; }, "bounding-box diagonal"},
       {[](BuildOptions* o) { o->queries.resize(1), o->objective = Objective::kOmv; }, "--queries"},

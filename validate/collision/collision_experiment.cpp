@@ -30,7 +30,8 @@ class Random {
   Eigen::Matrix3d rotation() {  // uniform on SO(3) (Shoemake)
     const double u1 = uniform(), u2 = 2 * M_PI * uniform(), u3 = 2 * M_PI * uniform();
     const double a = std::sqrt(1 - u1), b = std::sqrt(u1);
-    return Eigen::Quaterniond(b * std::cos(u3), a * std::sin(u2), a * std::cos(u2), b * std::sin(u3))
+    return Eigen::Quaterniond(b * std::cos(u3), a * std::sin(u2), a * std::cos(u2),
+                              b * std::sin(u3))
         .normalized()
         .toRotationMatrix();
   }
@@ -66,7 +67,12 @@ class QueryEngine {
  public:
   QueryEngine(const Mesh& mesh, const std::vector<NamedTree>& trees, const ExperimentOptions& opt,
               ExperimentReport* report)
-      : mesh_(mesh), scale_(mesh_scale(mesh)), report_(report), tamper_(opt.tamper_answer), on_query_(opt.on_query), brute_force_(mesh) {
+      : mesh_(mesh),
+        scale_(mesh_scale(mesh)),
+        report_(report),
+        tamper_(opt.tamper_answer),
+        on_query_(opt.on_query),
+        brute_force_(mesh) {
     for (const NamedTree& t : trees) traversals_.emplace_back(mesh, *t.tree);
     if (opt.fcl) {
       fcl_own_ = FclModel::fcl_own(mesh);
@@ -102,8 +108,9 @@ class QueryEngine {
         ++tr.disagreements;
         if (report_->brute_force_agrees) {
           report_->brute_force_agrees = false;
-          report_->first_disagreement = tr.name + ": query " + std::to_string(report_->queries) + " found " +
-                                        std::to_string(faces_.size()) + " touching faces, brute force " +
+          report_->first_disagreement = tr.name + ": query " + std::to_string(report_->queries) +
+                                        " found " + std::to_string(faces_.size()) +
+                                        " touching faces, brute force " +
                                         std::to_string(brute_.size());
         }
       }
@@ -143,12 +150,14 @@ void run_static(QueryEngine& engine, const Tree& first, const ExperimentOptions&
   Random rng(opt.seed);
   std::vector<double> cumulative(mesh.faces.size());
   double total = 0;
-  for (size_t f = 0; f < mesh.faces.size(); ++f) cumulative[f] = (total += 0.5 * mesh.double_area(f));
+  for (size_t f = 0; f < mesh.faces.size(); ++f)
+    cumulative[f] = (total += 0.5 * mesh.double_area(f));
   const Obb& root = first.nodes[0].box;
   const double R = root.half.norm();
   for (int q = 0; q < opt.colliders; ++q) {
     const size_t f = std::min<size_t>(
-        std::lower_bound(cumulative.begin(), cumulative.end(), rng.uniform() * total) - cumulative.begin(),
+        std::lower_bound(cumulative.begin(), cumulative.end(), rng.uniform() * total) -
+            cumulative.begin(),
         mesh.faces.size() - 1);
     double s = rng.uniform(), t = rng.uniform();
     if (s + t > 1) s = 1 - s, t = 1 - t;
@@ -261,7 +270,8 @@ int model_collider(dGeomID o1, dGeomID o2, int flags, dContactGeom* out, int ski
   std::sort(cands.begin(), cands.end(), [](const Candidate& x, const Candidate& y) {
     return x.depth != y.depth ? x.depth > y.depth : x.face < y.face;
   });
-  const int n = std::min<int>({static_cast<int>(cands.size()), flags & 0xffff, kMaxContactsPerPair});
+  const int n =
+      std::min<int>({static_cast<int>(cands.size()), flags & 0xffff, kMaxContactsPerPair});
   for (int i = 0; i < n; ++i) {
     dContactGeom* g = reinterpret_cast<dContactGeom*>(reinterpret_cast<char*>(out) + i * skip);
     const Vec3 pos = Rm * (cands[i].pos - s->spin_center) + pm;
@@ -353,7 +363,8 @@ struct PhysicsFailure {
   }
 };
 
-void run_dynamic(QueryEngine& engine, const Tree& first, const ExperimentOptions& opt, ExperimentReport* report) {
+void run_dynamic(QueryEngine& engine, const Tree& first, const ExperimentOptions& opt,
+                 ExperimentReport* report) {
   const int cls = model_class();
   const PhysicsFailure failure_handlers(opt);
   // ODE's quick step reorders constraints with its own global generator: reseed it per run.
@@ -390,7 +401,8 @@ void run_dynamic(QueryEngine& engine, const Tree& first, const ExperimentOptions
   auto drop = [&](dBodyID body) {
     const double rho = R * std::sqrt(rng.uniform()), phi = 2 * M_PI * rng.uniform();
     const double z = top + 0.2 * R + 4 * R * rng.uniform();
-    dBodySetPosition(body, root.center.x() + rho * std::cos(phi), root.center.y() + rho * std::sin(phi), z);
+    dBodySetPosition(body, root.center.x() + rho * std::cos(phi),
+                     root.center.y() + rho * std::sin(phi), z);
     const Eigen::Quaterniond q(rng.rotation());
     const dQuaternion dq = {q.w(), q.x(), q.y(), q.z()};
     dBodySetQuaternion(body, dq);
@@ -400,7 +412,8 @@ void run_dynamic(QueryEngine& engine, const Tree& first, const ExperimentOptions
   for (int i = 0; i < opt.colliders; ++i) {
     Body b;
     b.body = dBodyCreate(scene.world);
-    const Collider c = random_collider(rng, R * opt.collider_scale, Vec3::Zero(), Eigen::Matrix3d::Identity());
+    const Collider c =
+        random_collider(rng, R * opt.collider_scale, Vec3::Zero(), Eigen::Matrix3d::Identity());
     // Density 1 / R^3: a collider's mass depends on its size relative to R, not on the
     // model's units, so forces scale with R like every length and the contacts' CFM keeps
     // its meaning (the scene is the same at any scale; exactly so for powers of two).
@@ -444,7 +457,9 @@ void run_dynamic(QueryEngine& engine, const Tree& first, const ExperimentOptions
 
 }  // namespace
 
-double reduction_pct(double first, double other) { return first > 0 ? 100.0 * (1.0 - other / first) : 0.0; }
+double reduction_pct(double first, double other) {
+  return first > 0 ? 100.0 * (1.0 - other / first) : 0.0;
+}
 
 Status run_collision_experiment(const Mesh& mesh, const std::vector<NamedTree>& trees,
                                 const ExperimentOptions& options, ExperimentReport* report) {
@@ -457,12 +472,15 @@ Status run_collision_experiment(const Mesh& mesh, const std::vector<NamedTree>& 
     // at once, and ODE does not survive a failed allocation: 10^7 took 10.5 GB before the
     // first step. 10^6 keeps the scene near 1 GB.
     if (options.colliders > kMaxDynamicColliders)
-      return Status::error("collide: at most " + std::to_string(kMaxDynamicColliders) +
-                           " colliders in the dynamic scene (each is a physics body held in memory); "
-                           "use --static for more poses");
+      return Status::error(
+          "collide: at most " + std::to_string(kMaxDynamicColliders) +
+          " colliders in the dynamic scene (each is a physics body held in memory); "
+          "use --static for more poses");
     // At most 10^9 steps; NaN fails every comparison.
-    if (!(options.step > 0 && options.step <= 1) || !(options.seconds >= 0 && options.seconds <= 1e9 * options.step))
-      return Status::error("collide: the time step must be in (0, 1] s and the simulated time in [0, 1e9 steps]");
+    if (!(options.step > 0 && options.step <= 1) ||
+        !(options.seconds >= 0 && options.seconds <= 1e9 * options.step))
+      return Status::error(
+          "collide: the time step must be in (0, 1] s and the simulated time in [0, 1e9 steps]");
   }
   for (const NamedTree& t : trees) {
     Status s = validate_tree(*t.tree, t.name);
@@ -497,10 +515,11 @@ Status run_collision_experiment(const Mesh& mesh, const std::vector<NamedTree>& 
   // asks nothing, and "every answer agrees" would say nothing.
   if (report->queries == 0) {
     char why[160];
-    std::snprintf(why, sizeof why,
-                  "collide: no collider reached the model in %g simulated seconds (the first arrive after "
-                  "about 0.45 s); simulate longer",
-                  report->simulated_seconds);
+    std::snprintf(
+        why, sizeof why,
+        "collide: no collider reached the model in %g simulated seconds (the first arrive after "
+        "about 0.45 s); simulate longer",
+        report->simulated_seconds);
     return Status::error(why);
   }
   return Status::ok();

@@ -24,10 +24,10 @@
 #include <string>
 #include <vector>
 
+#include "collision/tree_traversal.h"
 #include "common/mesh.h"
 #include "common/status.h"
 #include "common/tree.h"
-#include "collision/tree_traversal.h"
 
 namespace vobb::collision {
 
@@ -36,17 +36,17 @@ namespace vobb::collision {
 constexpr int kMaxDynamicColliders = 1000000;
 
 struct ExperimentOptions {
-  bool dynamic = true;     // false: static poses on and near the surface
-  int colliders = 1000;    // bodies (dynamic) or poses (static); >= 1
-  double seconds = 10.0;   // simulated time (dynamic)
-  double step = 0.01;      // ODE time step, s
+  bool dynamic = true;    // false: static poses on and near the surface
+  int colliders = 1000;   // bodies (dynamic) or poses (static); >= 1
+  double seconds = 10.0;  // simulated time (dynamic)
+  double step = 0.01;     // ODE time step, s
   uint64_t seed = 1;
   // Multiplies every collider's size: spheres of radius 0.02–0.08 R and boxes of half sides
   // 0.015–0.06 R at 1 (R: half the diagonal of the first tree's root box). Finite, in
   // [0.01, 10]. The random draws (drop points, shapes, orientations, relative sizes) do not
   // depend on it; in the dynamic scene, which body a later re-drop goes to does.
   double collider_scale = 1.0;
-  bool fcl = true;         // replay through FCL
+  bool fcl = true;  // replay through FCL
   // Called, and must not return, when ODE stops on an internal error (its assertions fire at
   // some scales of the model: its tolerances are absolute). The message is one line. Unset:
   // the message goes to stderr and the process aborts, as ODE itself would.
@@ -84,13 +84,13 @@ struct ExperimentReport {
   uint64_t queries = 0;
   uint64_t touching_queries = 0;  // queries with at least one touching face
   double simulated_seconds = 0;
-  uint64_t ode_contacts = 0;      // contact joints created (dynamic)
+  uint64_t ode_contacts = 0;  // contact joints created (dynamic)
   bool brute_force_agrees = true;
   std::string first_disagreement;  // one line, empty when all agree
   double brute_force_seconds = 0;
-  uint64_t exact_fallbacks = 0;   // box–triangle tests decided by rationals
+  uint64_t exact_fallbacks = 0;  // box–triangle tests decided by rationals
   std::vector<TreeResult> trees;
-  FclCounts fcl_own;              // FCL's own OBB tree
+  FclCounts fcl_own;  // FCL's own OBB tree
 };
 
 struct NamedTree {

@@ -1,6 +1,5 @@
 #include "validate/collision/fcl_referee.h"
 
-#include <algorithm>
 #include <fcl/geometry/bvh/BVH_model.h>
 #include <fcl/geometry/shape/box.h>
 #include <fcl/geometry/shape/sphere.h>
@@ -10,6 +9,8 @@
 #include <fcl/narrowphase/detail/gjk_solver_libccd.h>
 #include <fcl/narrowphase/detail/traversal/collision/mesh_shape_collision_traversal_node.h>
 #include <fcl/narrowphase/detail/traversal/collision_node.h>
+
+#include <algorithm>
 #include <limits>
 
 namespace vobb::collision {
@@ -24,7 +25,7 @@ struct PlanNode {
   Obb box;
   std::vector<uint32_t> faces;  // ascending
   int left = -1, right = -1;
-  int32_t ours = -1;            // our node id, or -1 for a padding node
+  int32_t ours = -1;  // our node id, or -1 for a padding node
 };
 
 class Plan {
@@ -41,17 +42,21 @@ class Plan {
   }
   int expand_node(int32_t id) {
     const TreeNode& t = tree_.nodes[id];
-    if (t.is_leaf()) return expand_faces(t.box, id, std::vector<uint32_t>(t.faces.begin(), t.faces.end()));
+    if (t.is_leaf())
+      return expand_faces(t.box, id, std::vector<uint32_t>(t.faces.begin(), t.faces.end()));
     if (t.children.size() < 2) return -1;
     return expand_children(t.box, id, t.children);
   }
   int expand_children(const Obb& box, int32_t ours, const std::vector<int32_t>& kids) {
     std::vector<uint32_t> faces;
-    for (int32_t k : kids) faces.insert(faces.end(), tree_.nodes[k].faces.begin(), tree_.nodes[k].faces.end());
+    for (int32_t k : kids)
+      faces.insert(faces.end(), tree_.nodes[k].faces.begin(), tree_.nodes[k].faces.end());
     const int idx = add(box, ours, std::move(faces));
     const int l = expand_node(kids[0]);
-    const int r = kids.size() == 2 ? expand_node(kids[1])
-                                   : expand_children(box, -1, std::vector<int32_t>(kids.begin() + 1, kids.end()));
+    const int r =
+        kids.size() == 2
+            ? expand_node(kids[1])
+            : expand_children(box, -1, std::vector<int32_t>(kids.begin() + 1, kids.end()));
     if (l < 0 || r < 0) return -1;
     nodes_[idx].left = l;
     nodes_[idx].right = r;
@@ -93,7 +98,8 @@ class PlanFitter : public fcl::detail::BVFitterBase<FclObb> {
  public:
   explicit PlanFitter(BuildState* s) : s_(s) {}
   void set(fcl::Vector3<double>*, fcl::Triangle*, fcl::BVHModelType) override {}
-  void set(fcl::Vector3<double>*, fcl::Vector3<double>*, fcl::Triangle*, fcl::BVHModelType) override {}
+  void set(fcl::Vector3<double>*, fcl::Vector3<double>*, fcl::Triangle*,
+           fcl::BVHModelType) override {}
   FclObb fit(unsigned int* primitives, int n) override {
     const std::vector<PlanNode>& plan = *s_->plan;
     if (s_->cursor >= plan.size()) {
@@ -123,7 +129,8 @@ class PlanSplitter : public fcl::detail::BVSplitterBase<FclObb> {
     const PlanNode& node = plan[s_->cursor - 1];
     if (node.left < 0) return;
     const std::vector<uint32_t>& left = plan[node.left].faces;
-    for (int i = 0; i < n; ++i) right_[i] = !std::binary_search(left.begin(), left.end(), primitives[i]);
+    for (int i = 0; i < n; ++i)
+      right_[i] = !std::binary_search(left.begin(), left.end(), primitives[i]);
   }
   bool apply(const fcl::Vector3<double>&) const override {
     if (next_ >= right_.size()) return true;
@@ -213,7 +220,8 @@ Status FclModel::from_tree(const Mesh& mesh, const Tree& tree, const std::string
   impl->model->bv_splitter = std::make_shared<PlanSplitter>(&state);
   impl->model->endModel();
   const Model& m = *impl->model;
-  if (!state.ok || state.cursor != plan.nodes().size() || m.getNumBVs() != static_cast<int>(plan.nodes().size()))
+  if (!state.ok || state.cursor != plan.nodes().size() ||
+      m.getNumBVs() != static_cast<int>(plan.nodes().size()))
     return Status::error(display + ": FCL's build did not follow the tree's partition");
   // Walk FCL's nodes in pre-order beside the plan: same boxes, same leaf faces.
   impl->ours.assign(m.getNumBVs(), 0);

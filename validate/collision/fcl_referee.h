@@ -20,10 +20,10 @@
 #include <memory>
 #include <vector>
 
+#include "collision/contact_predicates.h"
 #include "common/mesh.h"
 #include "common/status.h"
 #include "common/tree.h"
-#include "collision/contact_predicates.h"
 
 namespace vobb::collision {
 

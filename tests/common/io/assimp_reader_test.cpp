@@ -1,9 +1,9 @@
 #include "common/io/assimp_reader.h"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <chrono>
-#include <sys/stat.h>
 #include <filesystem>
 #include <fstream>
 
@@ -32,9 +32,11 @@ TEST(AssimpReader, ASceneNamingAPipeIsRefusedAtOnce) {
   LoadedMesh lm;
   const auto t0 = std::chrono::steady_clock::now();
   const Status s = load_mesh(scene, &lm);
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   EXPECT_FALSE(s);
-  EXPECT_EQ(s.message().rfind("scene.lws: cannot read: assimp made an incomplete scene", 0), 0u) << s.message();
+  EXPECT_EQ(s.message().rfind("scene.lws: cannot read: assimp made an incomplete scene", 0), 0u)
+      << s.message();
   EXPECT_EQ(s.message().find('\n'), std::string::npos) << s.message();
   // Far below the wall-clock deadline, 2 x 20 s + 10 s: nothing waited.
   EXPECT_LT(seconds, 10.0) << s.message();
@@ -51,7 +53,8 @@ TEST(AssimpReader, ImporterCrashesBecomeOneLineRefusals) {
     const char* text;
   } cases[] = {
       {"crash.ase", "*GEOMOBJECT *MESH {*MESH_NUMFACES 1{}*MESH_FACE_LIST {}}"},
-      {"crash.nff", "p 3\n0 0 0\n0 0 1\n0 1 1\np 3\n0 0 0\n0 1 1\n0 1 0\np 3\n1 0 0\n1 1 0\n1 1 1\np"},
+      {"crash.nff",
+       "p 3\n0 0 0\n0 0 1\n0 1 1\np 3\n0 0 0\n0 1 1\n0 1 0\np 3\n1 0 0\n1 1 0\n1 1 1\np"},
   };
   for (const auto& c : cases) {
     const std::string path = test::temp_path(c.name);
@@ -59,7 +62,8 @@ TEST(AssimpReader, ImporterCrashesBecomeOneLineRefusals) {
     LoadedMesh lm;
     const Status s = load_mesh(path, &lm);
     EXPECT_FALSE(s) << c.name;
-    EXPECT_NE(s.message().find(std::string(c.name) + ": cannot read: assimp's importer crashed"), std::string::npos)
+    EXPECT_NE(s.message().find(std::string(c.name) + ": cannot read: assimp's importer crashed"),
+              std::string::npos)
         << s.message();
     EXPECT_EQ(s.message().find('\n'), std::string::npos);
     std::remove(path.c_str());
@@ -77,7 +81,8 @@ TEST(AssimpReader, ALoopingImportStopsAtTheCpuLimit) {
   const Status s = load_with_assimp(path, "loop.smd", &lm, 1.0);
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   EXPECT_FALSE(s);
-  EXPECT_NE(s.message().find("loop.smd: cannot read: assimp did not finish within 1 s of CPU time"), std::string::npos)
+  EXPECT_NE(s.message().find("loop.smd: cannot read: assimp did not finish within 1 s of CPU time"),
+            std::string::npos)
       << s.message();
   EXPECT_LT(wall, 30.0);
   std::remove(path.c_str());

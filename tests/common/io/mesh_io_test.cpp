@@ -1,14 +1,13 @@
 #include "common/io/mesh_io.h"
-#include "common/io/assimp_reader.h"
 
 #include <gtest/gtest.h>
-
 #include <sys/stat.h>
 
 #include <cmath>
 #include <fstream>
 #include <random>
 
+#include "common/io/assimp_reader.h"
 #include "common/solidity.h"
 #include "data/analytic_meshes.h"
 #include "test_common.h"
@@ -38,9 +37,10 @@ struct NativeFormat {
   MeshFormat format;
   const char* ext;
 };
-constexpr NativeFormat kEveryNativeFormat[] = {{MeshFormat::kOff, "off"}, {MeshFormat::kObj, "obj"},
-                                               {MeshFormat::kPlyAscii, "ply"}, {MeshFormat::kPlyBinary, "ply"},
-                                               {MeshFormat::kStlAscii, "stl"}, {MeshFormat::kStlBinary, "stl"}};
+constexpr NativeFormat kEveryNativeFormat[] = {
+    {MeshFormat::kOff, "off"},      {MeshFormat::kObj, "obj"},
+    {MeshFormat::kPlyAscii, "ply"}, {MeshFormat::kPlyBinary, "ply"},
+    {MeshFormat::kStlAscii, "stl"}, {MeshFormat::kStlBinary, "stl"}};
 
 void write_text(const std::string& path, const std::string& text) {
   std::ofstream(path, std::ios::binary) << text;
@@ -51,8 +51,11 @@ TEST(MeshIo, RoundTripsEveryNativeFormatExactly) {
   const struct {
     MeshFormat format;
     const char* ext;
-  } cases[] = {{MeshFormat::kOff, "off"}, {MeshFormat::kObj, "obj"}, {MeshFormat::kPlyAscii, "ply"},
-               {MeshFormat::kPlyBinary, "ply"}, {MeshFormat::kStlAscii, "stl"}};
+  } cases[] = {{MeshFormat::kOff, "off"},
+               {MeshFormat::kObj, "obj"},
+               {MeshFormat::kPlyAscii, "ply"},
+               {MeshFormat::kPlyBinary, "ply"},
+               {MeshFormat::kStlAscii, "stl"}};
   for (const auto& c : cases) {
     SCOPED_TRACE(c.ext);
     const std::string path = test::temp_path(std::string("rt.") + c.ext);
@@ -98,12 +101,13 @@ TEST(MeshIo, OffVariantsCommentsColoursAndPolygons) {
 TEST(MeshIo, AsciiStlWithSeveralSolidsReadsThemAll) {
   const std::string path = test::temp_path("two.stl");
   auto facet = [](const char* a, const char* b, const char* c) {
-    return std::string("  facet normal 0 0 0\n    outer loop\n      vertex ") + a + "\n      vertex " + b +
-           "\n      vertex " + c + "\n    endloop\n  endfacet\n";
+    return std::string("  facet normal 0 0 0\n    outer loop\n      vertex ") + a +
+           "\n      vertex " + b + "\n      vertex " + c + "\n    endloop\n  endfacet\n";
   };
-  const std::string two = "solid a\n" + facet("0 0 0", "0 1 0", "1 0 0") + facet("0 0 0", "1 0 0", "0 0 1") +
-                          "endsolid a\nsolid b\n" + facet("0 0 0", "0 0 1", "0 1 0") +
-                          facet("1 0 0", "0 1 0", "0 0 1") + "endsolid b\n";
+  const std::string two = "solid a\n" + facet("0 0 0", "0 1 0", "1 0 0") +
+                          facet("0 0 0", "1 0 0", "0 0 1") + "endsolid a\nsolid b\n" +
+                          facet("0 0 0", "0 0 1", "0 1 0") + facet("1 0 0", "0 1 0", "0 0 1") +
+                          "endsolid b\n";
   write_text(path, two);
   LoadedMesh lm;
   Status s = load_mesh(path, &lm);
@@ -132,12 +136,15 @@ TEST(MeshIo, WrongExtensionIsNamed) {
   const struct {
     MeshFormat format;
     const char* looks;  // what the message must say, or nullptr
-  } cases[] = {{MeshFormat::kOff, "OFF"}, {MeshFormat::kObj, "OBJ"}, {MeshFormat::kPlyAscii, "PLY"},
-               {MeshFormat::kPlyBinary, "PLY"}, {MeshFormat::kStlAscii, "STL"}, {MeshFormat::kStlBinary, nullptr}};
+  } cases[] = {{MeshFormat::kOff, "OFF"},      {MeshFormat::kObj, "OBJ"},
+               {MeshFormat::kPlyAscii, "PLY"}, {MeshFormat::kPlyBinary, "PLY"},
+               {MeshFormat::kStlAscii, "STL"}, {MeshFormat::kStlBinary, nullptr}};
   size_t named = 0;
   for (const auto& c : cases) {
-    for (const auto& [ext, name] : {std::pair<const char*, const char*>{"off", "OFF"}, {"obj", "OBJ"},
-                                     {"ply", "PLY"}, {"stl", "STL"}}) {
+    for (const auto& [ext, name] : {std::pair<const char*, const char*>{"off", "OFF"},
+                                    {"obj", "OBJ"},
+                                    {"ply", "PLY"},
+                                    {"stl", "STL"}}) {
       const std::string path = test::temp_path(std::string("wrong.") + ext);
       ASSERT_TRUE(save_mesh(m, path, c.format));
       LoadedMesh lm;
@@ -146,7 +153,8 @@ TEST(MeshIo, WrongExtensionIsNamed) {
       if (s) continue;  // e.g. its own extension
       EXPECT_EQ(s.message().find('\n'), std::string::npos) << s.message();
       if (c.looks && std::string(c.looks) != name) {
-        EXPECT_NE(s.message().find(std::string("looks like ") + c.looks), std::string::npos) << ext << ": " << s.message();
+        EXPECT_NE(s.message().find(std::string("looks like ") + c.looks), std::string::npos)
+            << ext << ": " << s.message();
         ++named;
       }
     }
@@ -158,7 +166,8 @@ TEST(MeshIo, WrongExtensionIsNamed) {
 
 TEST(MeshIo, ObjRelativeIndicesSlashesAndUnusedVertices) {
   const std::string path = test::temp_path("rel.obj");
-  write_text(path, "# t\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 9 9 9\nvn 0 0 1\nf 1//1 2//1 3//1\nf -4/1 -2 -3\n");
+  write_text(path,
+             "# t\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 9 9 9\nvn 0 0 1\nf 1//1 2//1 3//1\nf -4/1 -2 -3\n");
   LoadedMesh lm;
   ASSERT_TRUE(load_mesh(path, &lm));
   ASSERT_EQ(lm.mesh.faces.size(), 2u);
@@ -247,8 +256,22 @@ TEST(MeshIo, TruncationAtEveryByteIsHandled) {
 // deterministic 1,800 damaged meshes in the suite.
 TEST(MeshIo, DamagedFilesAreReadOrRefusedInOneLine) {
   const Mesh m = analytic::cube().mesh;
-  const std::vector<std::string> tokens = {"nan", "inf", "-1", "1e308", "1e400", "4294967295", "99999999999999999999",
-                                           "0x10", "", " ", "\n", std::string(1, '\0'), ".", "e5", "1e73", "-0"};
+  const std::vector<std::string> tokens = {"nan",
+                                           "inf",
+                                           "-1",
+                                           "1e308",
+                                           "1e400",
+                                           "4294967295",
+                                           "99999999999999999999",
+                                           "0x10",
+                                           "",
+                                           " ",
+                                           "\n",
+                                           std::string(1, '\0'),
+                                           ".",
+                                           "e5",
+                                           "1e73",
+                                           "-0"};
   std::mt19937 rng(2026);  // mt19937's output is fixed by the standard; only raw draws are used
   auto below = [&](size_t n) { return static_cast<size_t>(rng() % n); };
   int read = 0, refused = 0, non_finite = 0;
@@ -265,11 +288,21 @@ TEST(MeshIo, DamagedFilesAreReadOrRefusedInOneLine) {
       for (size_t edits = 1 + below(4); edits > 0 && !d.empty(); --edits) {
         const size_t at = below(d.size());
         switch (below(5)) {
-          case 0: d[at] = static_cast<char>(rng() & 0xff); break;
-          case 1: d[at] = static_cast<char>(d[at] ^ (1 << below(8))); break;
-          case 2: d.erase(at, 1 + below(8)); break;
-          case 3: d.insert(at, tokens[below(tokens.size())]); break;
-          default: d.resize(at); break;
+          case 0:
+            d[at] = static_cast<char>(rng() & 0xff);
+            break;
+          case 1:
+            d[at] = static_cast<char>(d[at] ^ (1 << below(8)));
+            break;
+          case 2:
+            d.erase(at, 1 + below(8));
+            break;
+          case 3:
+            d.insert(at, tokens[below(tokens.size())]);
+            break;
+          default:
+            d.resize(at);
+            break;
         }
       }
       write_text(damaged_path, d);
@@ -283,7 +316,8 @@ TEST(MeshIo, DamagedFilesAreReadOrRefusedInOneLine) {
       }
       ++read;
       for (const auto& f : lm.mesh.faces)
-        for (int k = 0; k < 3; ++k) ASSERT_LT(static_cast<size_t>(f[k]), lm.mesh.vertices.size()) << trial;
+        for (int k = 0; k < 3; ++k)
+          ASSERT_LT(static_cast<size_t>(f[k]), lm.mesh.vertices.size()) << trial;
       // The reader keeps NaN and Inf as written; the solidity checks must name them.
       bool finite = true;
       for (const Vec3& v : lm.mesh.vertices) finite &= v.allFinite();
@@ -291,7 +325,8 @@ TEST(MeshIo, DamagedFilesAreReadOrRefusedInOneLine) {
       EXPECT_EQ(r.verdict().find('\n'), std::string::npos) << trial;
       if (!finite) {
         ++non_finite;
-        EXPECT_NE(r.verdict().find("non-finite"), std::string::npos) << trial << ": " << r.verdict();
+        EXPECT_NE(r.verdict().find("non-finite"), std::string::npos)
+            << trial << ": " << r.verdict();
       }
     }
     // Some damaged files of every format are read, so the read branch is checked on each.
@@ -303,7 +338,8 @@ TEST(MeshIo, DamagedFilesAreReadOrRefusedInOneLine) {
   // refused), so none of the branches' checks is vacuous.
   EXPECT_GT(refused, 0);
   EXPECT_GT(non_finite, 0);
-  std::printf("damaged files read: %d (%d with NaN or Inf), refused: %d\n", read, non_finite, refused);
+  std::printf("damaged files read: %d (%d with NaN or Inf), refused: %d\n", read, non_finite,
+              refused);
 }
 
 TEST(MeshIo, MissingFileAndDirectory) {
@@ -334,7 +370,9 @@ TEST(MeshIo, FifoIsRefusedWithoutBlocking) {
 // A literal below the least subnormal rounds to zero (strtod's rule), not to infinity.
 TEST(MeshIo, UnderflowingLiteralRoundsToZero) {
   const std::string path = test::temp_path("underflow.off");
-  write_text(path, "OFF\n4 4 0\n1e-400 0 0\n1 0 0\n0 1 -1e-330\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n");
+  write_text(
+      path,
+      "OFF\n4 4 0\n1e-400 0 0\n1 0 0\n0 1 -1e-330\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n");
   LoadedMesh lm;
   ASSERT_TRUE(load_mesh(path, &lm));
   EXPECT_EQ(lm.mesh.vertices[0][0], 0.0);
@@ -350,12 +388,16 @@ TEST(MeshIo, ByteOrderMarkIsSkippedInTextFormats) {
   const std::vector<std::pair<std::string, std::string>> files = {
       {"off", "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n"},
       {"obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n"},
-      {"ply", "ply\nformat ascii 1.0\nelement vertex 4\nproperty double x\nproperty double y\nproperty double z\n"
-              "element face 4\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n"
-              "3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n"}};
+      {"ply",
+       "ply\nformat ascii 1.0\nelement vertex 4\nproperty double x\nproperty double y\nproperty "
+       "double z\n"
+       "element face 4\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n0 "
+       "0 1\n"
+       "3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n"}};
   for (const auto& [ext, text] : files) {
     SCOPED_TRACE(ext);
-    const std::string plain = test::temp_path("nobom." + ext), marked = test::temp_path("bom." + ext);
+    const std::string plain = test::temp_path("nobom." + ext),
+                      marked = test::temp_path("bom." + ext);
     write_text(plain, text);
     write_text(marked, bom + text);
     LoadedMesh a, b;
@@ -377,10 +419,12 @@ TEST(MeshIo, RealMeshesWithAwkwardHeadersLoad) {
   LoadedMesh lm;
   // The triangles each file's own header and face lines give, counted without vobb's reader.
   ASSERT_TRUE(load_mesh(test::real_mesh("dino"), &lm));  // COFF with colours
-  EXPECT_EQ(static_cast<long>(lm.mesh.faces.size()), test::off_triangle_count(test::real_mesh("dino")));
+  EXPECT_EQ(static_cast<long>(lm.mesh.faces.size()),
+            test::off_triangle_count(test::real_mesh("dino")));
   EXPECT_GT(lm.mesh.faces.size(), 0u);
   ASSERT_TRUE(load_mesh(test::real_mesh("bunny00"), &lm));  // blank line after the header
-  EXPECT_EQ(static_cast<long>(lm.mesh.faces.size()), test::off_triangle_count(test::real_mesh("bunny00")));
+  EXPECT_EQ(static_cast<long>(lm.mesh.faces.size()),
+            test::off_triangle_count(test::real_mesh("bunny00")));
   EXPECT_GT(lm.mesh.faces.size(), 0u);
 }
 

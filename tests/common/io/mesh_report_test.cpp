@@ -1,9 +1,9 @@
 #include "common/io/mesh_report.h"
 
 #include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
 
 #include <cstdio>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "data/analytic_meshes.h"
@@ -40,7 +40,8 @@ TEST(MeshReport, SolidCubeIsReportedWithItsExactVolume) {
   const std::string text = format_report_text(r, true);
   EXPECT_NE(text.find("verdict:   solid"), std::string::npos) << text;
   EXPECT_NE(text.find("rational:  8\n"), std::string::npos) << text;
-  EXPECT_EQ(format_report_text(r, false).find("rational:"), std::string::npos) << "rational only when asked";
+  EXPECT_EQ(format_report_text(r, false).find("rational:"), std::string::npos)
+      << "rational only when asked";
   LoadedMesh loaded;
   ASSERT_TRUE(load_solid(path, &loaded));
   EXPECT_EQ(loaded.mesh.faces.size(), 12u);
@@ -57,7 +58,8 @@ TEST(MeshReport, OpenMeshIsReportedAndRefused) {
   EXPECT_FALSE(r.solidity.solid());
   const Status s = solidity_status(r);
   EXPECT_FALSE(s);
-  EXPECT_EQ(s.message().rfind(path.substr(path.rfind('/') + 1) + ": ", 0), 0u) << "named by its file name: " << s.message();
+  EXPECT_EQ(s.message().rfind(path.substr(path.rfind('/') + 1) + ": ", 0), 0u)
+      << "named by its file name: " << s.message();
   EXPECT_NE(s.message().find("not closed: 3 border edges"), std::string::npos) << s.message();
   EXPECT_EQ(s.message().find('\n'), std::string::npos);
   const nlohmann::json j = nlohmann::json::parse(format_report_json(r, false));

@@ -18,7 +18,8 @@ int main(int argc, char** argv) {
   vobb::exact::Certificate certificate;
   if (s) s = vobb::certify(solid.mesh, tree, exact, &certificate);
   if (s) s = vobb::write_tree(tree, argv[2]);
-  if (!s || !certificate.ok()) return std::fprintf(stderr, "%s\n", s ? "not certified" : s.message().c_str()), 1;
+  if (!s || !certificate.ok())
+    return std::fprintf(stderr, "%s\n", s ? "not certified" : s.message().c_str()), 1;
   std::printf("e %s\n", certificate.weighted_error.get_str().c_str());
   return 0;
 }

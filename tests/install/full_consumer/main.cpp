@@ -51,14 +51,16 @@ int main(int argc, char** argv) {
     for (size_t i = 0; i < boxes.size(); ++i) {
       vobb::Rational d = vobb::Rational(run.obv[i]) - report.exact[i];
       if (d < 0) d = -d;
-      check(d <= vobb::Rational(run.bound[i]), run.backend + " within its certified error, box " + std::to_string(i));
+      check(d <= vobb::Rational(run.bound[i]),
+            run.backend + " within its certified error, box " + std::to_string(i));
     }
 
   vobb::CompareOptions compare;
   compare.build.depth = 2;
   compare.build.m = 8;
   vobb::CompareResult result;
-  check(vobb::compare(mesh, compare, &result).is_ok() && result.certified(), "compare: both trees certified");
+  check(vobb::compare(mesh, compare, &result).is_ok() && result.certified(),
+        "compare: both trees certified");
   vobb::RgbaImage image;
   vobb::CompareFigure figure;
   check(vobb::draw_compare_figure(mesh, result, "y", nullptr, &image, &figure).is_ok() &&
@@ -69,11 +71,14 @@ int main(int argc, char** argv) {
   collide.dynamic = false;
   collide.colliders = 50;
   vobb::collision::ExperimentReport experiment;
-  const vobb::Status ran = vobb::collision::run_collision_experiment(mesh, {{"tree", &tree}}, collide, &experiment);
+  const vobb::Status ran =
+      vobb::collision::run_collision_experiment(mesh, {{"tree", &tree}}, collide, &experiment);
   check(ran.is_ok(), "collision experiment: " + ran.message());
-  check(experiment.queries == 50 && experiment.brute_force_agrees, "collision: 50 queries, all agree with brute force");
+  check(experiment.queries == 50 && experiment.brute_force_agrees,
+        "collision: 50 queries, all agree with brute force");
   check(experiment.trees.size() == 1 && experiment.trees[0].fcl.available &&
-            experiment.trees[0].fcl.answer_disagreements == 0 && experiment.trees[0].fcl.face_disagreements == 0,
+            experiment.trees[0].fcl.answer_disagreements == 0 &&
+            experiment.trees[0].fcl.face_disagreements == 0,
         "collision: FCL agrees");
 
   // Assimp's RAW format: nine numbers per triangle. Read back in single precision; the mesh's
@@ -88,8 +93,10 @@ int main(int argc, char** argv) {
     }
   }
   vobb::LoadedMesh again;
-  check(vobb::load_solid(raw, &again).is_ok() && again.single_precision, "assimp: RAW read as a solid");
-  check(vobb::check_solidity(again.mesh).volume == vobb::check_solidity(mesh).volume, "assimp: the same volume");
+  check(vobb::load_solid(raw, &again).is_ok() && again.single_precision,
+        "assimp: RAW read as a solid");
+  check(vobb::check_solidity(again.mesh).volume == vobb::check_solidity(mesh).volume,
+        "assimp: the same volume");
   std::remove(raw.c_str());
   return failures ? 1 : 0;
 }

@@ -4,20 +4,20 @@
 #include "validate/collision/collision_experiment.h"
 
 #include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
 #include <sys/wait.h>
 
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "builder/obbtree_builder.h"
 #include "common/io/mesh_io.h"
 #include "common/obb.h"
 #include "common/sha256.h"
 #include "common/tree_io.h"
 #include "data/analytic_meshes.h"
-#include "builder/obbtree_builder.h"
 #include "test_common.h"
 #include "validate/collision/collision_test_util.h"
 
@@ -40,8 +40,8 @@ Tree inflated(const Tree& t) {
   return out;
 }
 
-ExperimentReport run(const Mesh& mesh, const std::vector<NamedTree>& trees, bool dynamic, int colliders,
-                     uint64_t seed = 1, double seconds = 2.0) {
+ExperimentReport run(const Mesh& mesh, const std::vector<NamedTree>& trees, bool dynamic,
+                     int colliders, uint64_t seed = 1, double seconds = 2.0) {
   ExperimentOptions opt;
   opt.dynamic = dynamic;
   opt.colliders = colliders;
@@ -274,7 +274,8 @@ TEST(CollisionExperiment, DynamicSceneRefusesMoreBodiesThanItsLimit) {
   ExperimentReport r;
   const Status s = run_collision_experiment(mesh, {{"t.json", &tree}}, opt, &r);
   ASSERT_FALSE(s);
-  EXPECT_NE(s.message().find("at most 1000000 colliders in the dynamic scene"), std::string::npos) << s.message();
+  EXPECT_NE(s.message().find("at most 1000000 colliders in the dynamic scene"), std::string::npos)
+      << s.message();
   EXPECT_EQ(r.queries, 0u);
 }
 
@@ -283,8 +284,10 @@ using test::vobb_cli;
 
 TEST(CollideCli, StaticRunJsonAndBadInput) {
   const Mesh torus = analytic::polygonal_torus().mesh, octa = analytic::octahedron().mesh;
-  const std::string mesh_path = test::temp_path("torus.off"), other_path = test::temp_path("octa.off");
-  const std::string tree_path = test::temp_path("torus_tree.json"), out_path = test::temp_path("collide.json");
+  const std::string mesh_path = test::temp_path("torus.off"),
+                    other_path = test::temp_path("octa.off");
+  const std::string tree_path = test::temp_path("torus_tree.json"),
+                    out_path = test::temp_path("collide.json");
   ASSERT_TRUE(save_mesh(torus, mesh_path, MeshFormat::kOff));
   ASSERT_TRUE(save_mesh(octa, other_path, MeshFormat::kOff));
   const std::string loose_path = test::temp_path("torus_loose.json");
@@ -310,8 +313,8 @@ TEST(CollideCli, StaticRunJsonAndBadInput) {
   EXPECT_LT(j["trees"][1]["reduction_pct"].get<double>(), 0.0);
   EXPECT_EQ(j["trees"][0]["contacts"], j["trees"][1]["contacts"]);  // the same faces touched
   EXPECT_EQ(j["trees"][0]["box_tests_by_level"][0], 60);
-  for (const char* key : {"file", "box_tests", "box_tests_by_level", "leaf_tests", "contacts", "narrow_phase_seconds", "fcl_bv_tests",
-                          "reduction_pct"})
+  for (const char* key : {"file", "box_tests", "box_tests_by_level", "leaf_tests", "contacts",
+                          "narrow_phase_seconds", "fcl_bv_tests", "reduction_pct"})
     EXPECT_TRUE(j["trees"][0].contains(key)) << key;
 
   // The tree belongs to another mesh: exit 2, one line naming the tree file.
@@ -321,12 +324,14 @@ TEST(CollideCli, StaticRunJsonAndBadInput) {
   EXPECT_NE(r.err.find(tree_path), std::string::npos) << r.err;
   // A collider scale out of range, or not a number: a usage error naming the option.
   for (const char* scale : {"0", "nan", "11"}) {
-    r = vobb_cli("collide " + mesh_path + " " + tree_path + " --static --colliders 5 --collider-scale " + scale);
+    r = vobb_cli("collide " + mesh_path + " " + tree_path +
+                 " --static --colliders 5 --collider-scale " + scale);
     EXPECT_EQ(r.code, 2) << scale;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
     EXPECT_NE(r.err.find("collider-scale"), std::string::npos) << r.err;
   }
-  r = vobb_cli("collide " + mesh_path + " " + tree_path + " --static --colliders 5 --json --collider-scale 0.5");
+  r = vobb_cli("collide " + mesh_path + " " + tree_path +
+               " --static --colliders 5 --json --collider-scale 0.5");
   EXPECT_EQ(r.code, 0) << r.err;
   EXPECT_EQ(nlohmann::json::parse(r.out)["collider_scale"], 0.5);
   r = vobb_cli("collide /nonexistent/mesh.off " + tree_path);
@@ -346,7 +351,8 @@ TEST(CollideCli, StaticRunJsonAndBadInput) {
   single.mesh_sha256 = mesh_sha256(torus);
   const std::string single_path = test::temp_path("single_child.json");
   ASSERT_TRUE(write_tree(single, single_path));
-  r = vobb_cli("collide " + mesh_path + " " + single_path + " " + tree_path + " --static --colliders 20");
+  r = vobb_cli("collide " + mesh_path + " " + single_path + " " + tree_path +
+               " --static --colliders 20");
   EXPECT_EQ(r.code, 0) << r.err;
   std::istringstream lines(r.out);
   std::string line;
@@ -354,7 +360,8 @@ TEST(CollideCli, StaticRunJsonAndBadInput) {
   while (std::getline(lines, line)) {
     if (line.rfind(single_path, 0) == 0) {  // no FCL at all
       ++rows;
-      EXPECT_NE(line.find("              -              -         -         -"), std::string::npos) << line;
+      EXPECT_NE(line.find("              -              -         -         -"), std::string::npos)
+          << line;
     } else if (line.rfind(tree_path, 0) == 0) {  // FCL counts, no FCL change
       ++rows;
       EXPECT_NE(line.find("         -         -"), std::string::npos) << line;
@@ -362,8 +369,11 @@ TEST(CollideCli, StaticRunJsonAndBadInput) {
     }
   }
   EXPECT_EQ(rows, 2) << r.out;
-  EXPECT_NE(r.out.find("FCL skipped: " + single_path + ": a node has a single child"), std::string::npos) << r.out;
-  for (const std::string& p : {mesh_path, other_path, tree_path, out_path, single_path}) std::remove(p.c_str());
+  EXPECT_NE(r.out.find("FCL skipped: " + single_path + ": a node has a single child"),
+            std::string::npos)
+      << r.out;
+  for (const std::string& p : {mesh_path, other_path, tree_path, out_path, single_path})
+    std::remove(p.c_str());
 }
 
 }  // namespace

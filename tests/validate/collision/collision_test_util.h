@@ -1,8 +1,8 @@
 // Trees the collision tests share.
 #pragma once
 
-#include "common/tree.h"
 #include "builder/obbtree_builder.h"
+#include "common/tree.h"
 
 namespace vobb::collision::test_util {
 

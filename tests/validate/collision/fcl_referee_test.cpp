@@ -9,8 +9,8 @@
 #include <cmath>
 #include <random>
 
-#include "data/analytic_meshes.h"
 #include "builder/obbtree_builder.h"
+#include "data/analytic_meshes.h"
 #include "validate/collision/collision_test_util.h"
 
 namespace vobb::collision {
@@ -41,7 +41,8 @@ TEST(FclReferee, LoadedModelsAreBinaryWithOneTrianglePerLeaf) {
   const Mesh mesh = analytic::polygonal_torus().mesh;
   const size_t want = 2 * mesh.faces.size() - 1;
   EXPECT_EQ(FclModel::fcl_own(mesh)->bv_count(), want);
-  for (const Tree& t : {baseline(mesh, 2), baseline(mesh, 12), baseline(mesh, 3, 4), single_leaf(mesh)}) {
+  for (const Tree& t :
+       {baseline(mesh, 2), baseline(mesh, 12), baseline(mesh, 3, 4), single_leaf(mesh)}) {
     SCOPED_TRACE(t.nodes.size());
     std::unique_ptr<FclModel> m;
     const Status s = FclModel::from_tree(mesh, t, "t.json", &m);
@@ -105,7 +106,8 @@ TEST(FclReferee, FindsTheFacesBruteForceFindsOnClearPoses) {
     std::vector<int32_t> want;
     bool clear = true;
     for (size_t f = 0; f < mesh.faces.size() && clear; ++f) {
-      const Vec3 p = closest_point_on_triangle(c.center, mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2));
+      const Vec3 p = closest_point_on_triangle(c.center, mesh.corner(f, 0), mesh.corner(f, 1),
+                                               mesh.corner(f, 2));
       const double d = (p - c.center).norm();
       clear = std::abs(d - c.radius) > 1e-6 * c.radius;
       if (d < c.radius) want.push_back(static_cast<int32_t>(f));
