@@ -59,7 +59,6 @@ class BuildCommand final : public Command {
     BuildReport report;
     s = build_tree(loaded.mesh, o, &tree, &report);
     if (!s) return refuse(s);
-    if (o.method == Method::kVariational) say_build_report(flags_, report.search);
     s = write_tree(tree, out_);
     if (!s) return could_not_finish(s);  // its folder took a file when the run started
     std::fprintf(stderr, "vobb: %s tree of %zu nodes, depth %d, arity %d, in %.3f s -> %s\n",

@@ -78,6 +78,19 @@ struct ProgressLine {
   }
 };
 
+// The one line after a variational build.
+void say_report(const VariationalReport& r) {
+  std::fprintf(stderr,
+               "vobb: %zu boxes estimated (%zu more measured again, from the search's record), %zu "
+               "shares of "
+               "overlap estimated, %zu adjusted splits and %zu merges kept, %d sweeps (%zu "
+               "regroupings unchanged since "
+               "they found no move, not run again)%s\n",
+               r.estimates, r.reused, r.overlaps, r.adjustments, r.merges, r.sweeps,
+               r.regroups_skipped,
+               r.budget_spent ? "; time budget spent: the rest got the baseline split" : "");
+}
+
 }  // namespace
 
 void add_build_flags(CLI::App* cmd, BuildFlags* f, bool compare) {
@@ -193,6 +206,14 @@ BuildOptions build_options(const BuildFlags& f) {
                  one_line(s).c_str());
   };
   o.saved = build_kill_hook();
+  // The line's clock starts with the search, not with the loading or the baseline before it.
+  o.started = [line] { line->t0 = std::chrono::steady_clock::now(); };
+  if (!f.quiet)
+    o.finished = [line](const VariationalReport& r) {
+      if (line->tty && line->last >= 0) std::fprintf(stderr, "\n");  // end the progress line
+      line->last = -1;
+      say_report(r);
+    };
   return o;
 }
 
@@ -210,20 +231,6 @@ std::function<void(const exact::CertifyState&)> certify_kill_hook() {
   return [layers = std::atol(at)](const exact::CertifyState& st) {
     if (!st.obv.empty() && static_cast<long>(st.layers.size()) == layers) ::raise(SIGKILL);
   };
-}
-
-void say_build_report(const BuildFlags& f, const VariationalReport& r) {
-  if (f.quiet) return;
-  if (::isatty(::fileno(stderr))) std::fprintf(stderr, "\n");
-  std::fprintf(stderr,
-               "vobb: %zu boxes estimated (%zu more measured again, from the search's record), %zu "
-               "shares of "
-               "overlap estimated, %zu adjusted splits and %zu merges kept, %d sweeps (%zu "
-               "regroupings unchanged since "
-               "they found no move, not run again)%s\n",
-               r.estimates, r.reused, r.overlaps, r.adjustments, r.merges, r.sweeps,
-               r.regroups_skipped,
-               r.budget_spent ? "; time budget spent: the rest got the baseline split" : "");
 }
 
 }  // namespace vobb::app

@@ -29,8 +29,9 @@ struct BuildFlags {
 void add_build_flags(CLI::App* cmd, BuildFlags* flags, bool compare);
 // The flags that contradict each other once parsed (an explicit --m with poly or --queries).
 Status check_build_flags(const CLI::App* cmd, const BuildFlags& flags);
-// The options the flags give, with progress and notes printed on stderr (none but warnings
-// with --quiet). The queries are read by the caller (read_queries), once the mesh is loaded.
+// The options the flags give, with progress, notes and the search's closing line printed on
+// stderr (none but warnings with --quiet). The queries are read by the caller (read_queries), once
+// the mesh is loaded.
 BuildOptions build_options(const BuildFlags& flags);
 // Test hooks: VOBB_TEST_KILL_AT_SPLIT_LEVELS=N kills the process (SIGKILL, as an outside kill
 // would) right after the build state with N levels split is saved, and
@@ -39,7 +40,5 @@ BuildOptions build_options(const BuildFlags& flags);
 // racing it. Empty when the variable is not set.
 std::function<void(const VariationalState&)> build_kill_hook();
 std::function<void(const exact::CertifyState&)> certify_kill_hook();
-// The one line after a variational build (unless --quiet).
-void say_build_report(const BuildFlags& flags, const VariationalReport& report);
 
 }  // namespace vobb::app

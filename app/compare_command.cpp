@@ -115,7 +115,6 @@ class CompareCommand final : public Command {
     CompareResult r;
     s = compare(loaded.mesh, o, &r);
     if (!s) return refuse(s);
-    say_build_report(flags_, r.search);
     if (json_)
       print_json(r, rational_, loaded.single_precision);
     else

@@ -1,9 +1,8 @@
 #include "builder/variational_state.h"
 
-#include <nlohmann/json.hpp>
-
 #include <cmath>
 #include <cstring>
+#include <nlohmann/json.hpp>
 #include <set>
 #include <string>
 
@@ -13,14 +12,13 @@
 
 namespace vobb {
 
-
-
 namespace {
 constexpr const char* kCheckpointFormat = "vobb-variational-state";
 
 }
 
-Status write_variational_state(const VariationalState& st, const std::string& fingerprint, const std::string& path) {
+Status write_variational_state(const VariationalState& st, const std::string& fingerprint,
+                               const std::string& path) {
   nlohmann::json j;
   j["format"] = kCheckpointFormat;
   j["version"] = 1;
@@ -34,7 +32,11 @@ Status write_variational_state(const VariationalState& st, const std::string& fi
     const TreeNode& n = st.nodes[i];
     nlohmann::json axes = nlohmann::json::array();
     for (const Vec3& a : st.axes[i]) axes.push_back({a[0], a[1], a[2]});
-    nodes.push_back({{"parent", n.parent}, {"level", n.level}, {"children", n.children}, {"faces", n.faces}, {"axes", axes}});
+    nodes.push_back({{"parent", n.parent},
+                     {"level", n.level},
+                     {"children", n.children},
+                     {"faces", n.faces},
+                     {"axes", axes}});
   }
   j["nodes"] = std::move(nodes);
   // nlohmann writes doubles in their shortest round-trip form: a resumed build reads the
@@ -44,40 +46,49 @@ Status write_variational_state(const VariationalState& st, const std::string& fi
   return write_file_atomic(path, j.dump() + "\n");
 }
 
-Status read_variational_state(const std::string& path, const std::string& fingerprint, size_t mesh_faces,
-                              int arity, int depth, VariationalState* state, bool* found) {
+Status read_variational_state(const std::string& path, const std::string& fingerprint,
+                              size_t mesh_faces, int arity, int depth, VariationalState* state,
+                              bool* found) {
   *found = false;
   if (path_absent(path)) return Status::ok();
   *found = true;
   std::string text;
   const Status read = read_regular_file(path, path, "checkpoint file", &text);
   if (!read) return read;
-  auto bad = [&](const std::string& why) { return Status::error(path + ": damaged checkpoint: " + why); };
+  auto bad = [&](const std::string& why) {
+    return Status::error(path + ": damaged checkpoint: " + why);
+  };
   // A state's deepest values are at depth 4 (file, nodes, node, axes, an axis); 8 leaves room.
   nlohmann::json j;
   bool too_deep = false;
   if (!parse_json_within(text, 8, &j, &too_deep) || !j.is_object())
     return bad(too_deep ? "nested deeper than a checkpoint can be" : "not JSON");
   try {
-    if (j.value("format", "") != kCheckpointFormat || j.value("version", 0) != 1) return bad("not a vobb checkpoint");
+    if (j.value("format", "") != kCheckpointFormat || j.value("version", 0) != 1)
+      return bad("not a vobb checkpoint");
     // Every top-level key must be one this builder writes: a damaged key name (a "sha256"
     // spelled otherwise) would otherwise pass as a state from before checksums.
-    const std::set<std::string> known{"format", "version", "fingerprint", "split_levels", "sweeps",
-                                      "sweeping_done", "budget_spent", "nodes", "sha256"};
+    const std::set<std::string> known{"format",       "version", "fingerprint",
+                                      "split_levels", "sweeps",  "sweeping_done",
+                                      "budget_spent", "nodes",   "sha256"};
     for (const auto& item : j.items())
       if (!known.count(item.key())) return bad("unknown field '" + item.key().substr(0, 40) + "'");
     // States saved before checksums were written have none; any other must match.
-    if (j.contains("sha256") && (!j["sha256"].is_string() || j["sha256"].get<std::string>() != json_checksum(j)))
+    if (j.contains("sha256") &&
+        (!j["sha256"].is_string() || j["sha256"].get<std::string>() != json_checksum(j)))
       return bad("checksum does not match the contents");
     if (j.at("fingerprint").get<std::string>() != fingerprint)
-      return Status::error(path + ": checkpoint of another build (mesh, options or estimator differ); "
+      return Status::error(path +
+                           ": checkpoint of another build (mesh, options or estimator differ); "
                            "use another --checkpoint folder or remove it");
     VariationalState st;
     // Counts are whole numbers as saved: nlohmann's get<int> would truncate 1.5 to 1.
     auto count = [&](const char* key) {
       const nlohmann::json& v = j.at(key);
-      if (!v.is_number_integer() || v.get<int64_t>() < 0 || v.get<int64_t>() > (int64_t{1} << 31) - 1)
-        throw nlohmann::json::type_error::create(302, std::string(key) + " is not a count", nullptr);
+      if (!v.is_number_integer() || v.get<int64_t>() < 0 ||
+          v.get<int64_t>() > (int64_t{1} << 31) - 1)
+        throw nlohmann::json::type_error::create(302, std::string(key) + " is not a count",
+                                                 nullptr);
       return static_cast<int>(v.get<int64_t>());
     };
     st.split_levels = count("split_levels");
@@ -91,7 +102,8 @@ Status read_variational_state(const std::string& path, const std::string& finger
       TreeNode n;
       n.id = static_cast<int32_t>(i);
       auto integer = [&](const nlohmann::json& v) {
-        if (!v.is_number_integer() || v.get<int64_t>() < -1 || v.get<int64_t>() > (int64_t{1} << 31) - 1)
+        if (!v.is_number_integer() || v.get<int64_t>() < -1 ||
+            v.get<int64_t>() > (int64_t{1} << 31) - 1)
           throw nlohmann::json::type_error::create(302, "not an index", nullptr);
         return static_cast<int32_t>(v.get<int64_t>());
       };
@@ -116,9 +128,11 @@ Status read_variational_state(const std::string& path, const std::string& finger
         for (int b = 0; b < 3; ++b)
           if (!(std::abs(axes[a].dot(axes[b]) - (a == b ? 1.0 : 0.0)) <= 1e-9))
             return bad("node " + std::to_string(i) + " axes are not orthonormal");
-      if (n.faces.empty() || !std::is_sorted(n.faces.begin(), n.faces.end())) return bad("node " + std::to_string(i) + " faces");
+      if (n.faces.empty() || !std::is_sorted(n.faces.begin(), n.faces.end()))
+        return bad("node " + std::to_string(i) + " faces");
       for (int32_t f : n.faces)
-        if (f < 0 || static_cast<size_t>(f) >= mesh_faces) return bad("node " + std::to_string(i) + " faces");
+        if (f < 0 || static_cast<size_t>(f) >= mesh_faces)
+          return bad("node " + std::to_string(i) + " faces");
       st.nodes.push_back(std::move(n));
       st.axes.push_back(axes);
     }
@@ -128,7 +142,8 @@ Status read_variational_state(const std::string& path, const std::string& finger
     t.mesh_triangles = mesh_faces;
     t.nodes = st.nodes;
     for (const TreeNode& n : t.nodes) t.depth = std::max(t.depth, static_cast<int>(n.level));
-    if (t.depth > depth || st.split_levels > depth) return bad("deeper than the build's depth " + std::to_string(depth));
+    if (t.depth > depth || st.split_levels > depth)
+      return bad("deeper than the build's depth " + std::to_string(depth));
     for (TreeNode& n : t.nodes) std::sort(n.children.begin(), n.children.end());
     const Status s = validate_tree(t, path);
     if (!s) return s;
@@ -136,7 +151,8 @@ Status read_variational_state(const std::string& path, const std::string& finger
     // The levels made so far are split_levels: no node deeper, and every splittable node
     // above it split (else a resumed build would split it again).
     for (const TreeNode& n : st.nodes)
-      if (n.level > st.split_levels || (n.level < st.split_levels && n.faces.size() >= 2 && n.children.empty()))
+      if (n.level > st.split_levels ||
+          (n.level < st.split_levels && n.faces.size() >= 2 && n.children.empty()))
         return bad("levels do not match split_levels");
     *state = std::move(st);
   } catch (const nlohmann::json::exception&) {

@@ -28,22 +28,23 @@ foreach(t IN LISTS VOBB_CORE_LIBS VOBB_CORE_HELPERS VOBB_GL_LIBS VOBB_COLLISION_
   set_target_properties(${t} PROPERTIES EXPORT_NAME ${name})
 endforeach()
 
-# The public targets: vobb::vobb and one per component.
+# The public targets: vobb::vobb and one per component (each brings vobb::vobb, whose include
+# folders the public headers need).
 add_library(vobb_public_core INTERFACE)
 target_link_libraries(vobb_public_core INTERFACE vobb_api)
 target_include_directories(vobb_public_core INTERFACE $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>
                                                       $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}/vobb/detail>)
 set_target_properties(vobb_public_core PROPERTIES EXPORT_NAME vobb)
 add_library(vobb_public_gl INTERFACE)
-target_link_libraries(vobb_public_gl INTERFACE vobb_api_gl)
+target_link_libraries(vobb_public_gl INTERFACE vobb_api_gl vobb_public_core)
 set_target_properties(vobb_public_gl PROPERTIES EXPORT_NAME gl)
 add_library(vobb_public_collision INTERFACE)
-target_link_libraries(vobb_public_collision INTERFACE vobb_collision_experiment)
+target_link_libraries(vobb_public_collision INTERFACE vobb_collision_experiment vobb_public_core)
 set_target_properties(vobb_public_collision PROPERTIES EXPORT_NAME collision)
 set(VOBB_ASSIMP_PUBLIC)
 if(VOBB_WITH_ASSIMP)
   add_library(vobb_public_assimp INTERFACE)
-  target_link_libraries(vobb_public_assimp INTERFACE vobb_meshio_assimp)
+  target_link_libraries(vobb_public_assimp INTERFACE vobb_meshio_assimp vobb_public_core)
   set_target_properties(vobb_public_assimp PROPERTIES EXPORT_NAME assimp)
   set(VOBB_ASSIMP_PUBLIC vobb_public_assimp)
 endif()

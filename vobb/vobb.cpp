@@ -98,6 +98,26 @@ Status make_estimator(const Mesh& mesh, const BuildOptions& o, Estimator* e) {
   return Status::ok();
 }
 
+// The SHA-256 of recorded colliders: each as 17 doubles (shape, centre, radius, half extents,
+// axes), the checkpoint's name for them.
+std::string queries_digest(const std::vector<collision::Collider>& colliders) {
+  std::string bytes;
+  for (const collision::Collider& c : colliders) {
+    double v[17] = {c.shape == collision::ColliderShape::kSphere ? 0.0 : 1.0,
+                    c.center[0],
+                    c.center[1],
+                    c.center[2],
+                    c.radius,
+                    c.half[0],
+                    c.half[1],
+                    c.half[2]};
+    for (int k = 0; k < 3; ++k)
+      for (int i = 0; i < 3; ++i) v[8 + 3 * k + i] = c.axes[k][i];
+    bytes.append(reinterpret_cast<const char*>(v), sizeof v);
+  }
+  return sha256_hex(bytes.data(), bytes.size());
+}
+
 // What a variational build depends on, for its checkpoints: a state saved under another
 // fingerprint is refused, so a resumed build is the build that was interrupted. "builder 2":
 // bump when the builder's decisions change, so that older states are refused.
@@ -115,8 +135,20 @@ std::string build_fingerprint(const Mesh& mesh, const BuildOptions& o,
          // Named only when set, so that states saved before the option existed still resume.
          (o.collider_margin > 0 ? "; collider margin " + format_double(o.collider_margin)
                                 : std::string()) +
-         (o.queries.empty() ? std::string() : "; recorded queries " + o.queries_digest) +
+         (o.queries.empty() ? std::string() : "; recorded queries " + queries_digest(o.queries)) +
          (o.objective == Objective::kOmv ? "; objective omv" : "");
+}
+
+// A margin beyond the model's size is no collider of this model, and it keeps the grown boxes'
+// volumes far from overflow.
+Status check_margin(const Mesh& mesh, const BuildOptions& o) {
+  if (o.collider_margin <= 0) return Status::ok();
+  const Aabb box = mesh.bounds();
+  const double diagonal = (box.hi - box.lo).norm();
+  if (o.collider_margin > diagonal)
+    return Status::error("--collider-margin " + format_double(o.collider_margin) +
+                         " exceeds the mesh's bounding-box diagonal " + format_double(diagonal));
+  return Status::ok();
 }
 
 std::string state_path(const std::string& checkpoint) {
@@ -172,15 +204,20 @@ Status build_variational_tree(const Mesh& mesh, const BuildOptions& o, const Est
       if (w && o.saved) o.saved(st);
     };
   }
+  if (o.started) o.started();
   *tree = build_variational(mesh, opt, est.estimate, resuming ? &resume : nullptr, report);
   const Status valid = validate_tree(*tree, "variational tree");
   VOBB_ASSERT(valid, valid.message().c_str());  // a builder bug, not bad input
+  if (o.finished) o.finished(*report);
   return Status::ok();
 }
 
 // A certification's checkpoint in `folder`: loads what is saved into `resume` and points `opt`
 // at it, and saves after each stage. The fingerprint names the mesh, the tree and the path.
 struct CertifySaver {
+  CertifySaver() = default;
+  CertifySaver(const CertifySaver&) = delete;  // opt's resume pointer and callback point into it
+  CertifySaver& operator=(const CertifySaver&) = delete;
   exact::CertifyState resume;
   std::unique_ptr<exact::CertifyCheckpoint> files;
   bool warned = false;
@@ -311,15 +348,8 @@ Status check_build_options(const BuildOptions& o) {
 Status build_tree(const Mesh& mesh, const BuildOptions& o, Tree* tree, BuildReport* report) {
   Status s = check_build_options(o);
   if (!s) return s;
-  if (o.collider_margin > 0) {
-    // A margin beyond the model's size is no collider of this model, and it keeps the grown
-    // boxes' volumes far from overflow.
-    const Aabb box = mesh.bounds();
-    const double diagonal = (box.hi - box.lo).norm();
-    if (o.collider_margin > diagonal)
-      return Status::error("--collider-margin " + format_double(o.collider_margin) +
-                           " exceeds the mesh's bounding-box diagonal " + format_double(diagonal));
-  }
+  s = check_margin(mesh, o);
+  if (!s) return s;
   BuildReport local;
   BuildReport* r = report ? report : &local;
   *r = BuildReport();
@@ -356,25 +386,11 @@ Status read_queries(const Mesh& mesh, const std::vector<std::string>& paths, Bui
     colliders.insert(colliders.end(), stream.colliders.begin(), stream.colliders.end());
   }
   if (colliders.empty()) return Status::error("--queries: the files hold no colliders");
-  std::string bytes;
-  for (const collision::Collider& c : colliders) {
-    double v[17] = {c.shape == collision::ColliderShape::kSphere ? 0.0 : 1.0,
-                    c.center[0],
-                    c.center[1],
-                    c.center[2],
-                    c.radius,
-                    c.half[0],
-                    c.half[1],
-                    c.half[2]};
-    for (int k = 0; k < 3; ++k)
-      for (int i = 0; i < 3; ++i) v[8 + 3 * k + i] = c.axes[k][i];
-    bytes.append(reinterpret_cast<const char*>(v), sizeof v);
-  }
-  o->queries_digest = sha256_hex(bytes.data(), bytes.size());
   return Status::ok();
 }
 
 Status check_tree_fits(const Mesh& mesh, const Tree& tree, const std::string& tree_name) {
+  if (const Status s = validate_tree(tree, tree_name); !s) return s;
   if (tree.mesh_triangles != mesh.faces.size())
     return Status::error(tree_name + ": tree indexes " + std::to_string(tree.mesh_triangles) +
                          " triangles but the mesh has " + std::to_string(mesh.faces.size()));
@@ -398,6 +414,9 @@ Status estimate_obv(const Mesh& mesh, const std::vector<Obb>& boxes, const Estim
   const size_t n = boxes.size();
   for (const Obb& b : boxes)
     if (const std::string d = box_defect(b); !d.empty()) return Status::error("box refused: " + d);
+  for (int m : o.ms)
+    if (m < 1 || m > 4096)
+      return Status::error("--m " + std::to_string(m) + " is not within 1..4096");
   bool want_cpu = o.cpu;
   std::unique_ptr<detail::GlEstimate> gl;
   if (o.gl) {
@@ -506,9 +525,13 @@ const exact::LayerCertificate& CompareResult::layer(int tree, size_t level) cons
 }
 
 Status compare(const Mesh& mesh, const CompareOptions& co, CompareResult* r) {
+  *r = CompareResult();
   BuildOptions o = co.build;
   o.method = Method::kVariational;
+  if (!o.queries.empty()) return Status::error("--queries applies to build only");
   Status s = check_build_options(o);
+  if (!s) return s;
+  s = check_margin(mesh, o);
   if (!s) return s;
   Estimator est;
   s = make_estimator(mesh, o, &est);
@@ -534,21 +557,23 @@ Status compare(const Mesh& mesh, const CompareOptions& co, CompareResult* r) {
       s = build_variational_tree(mesh, o, est, &r->trees[1], &r->search);
       if (!s) return s;
     }
-    r->trees[i].mesh_sha256 = mesh_sha256(mesh);
     r->build_seconds[i] = seconds_since(t0);
-    // With a checkpoint, each tree's certification keeps its own folder beside the build's state.
+    // With a checkpoint, each tree's certification keeps its own folder beside the build's
+    // state. Its fingerprint hashes the tree without its mesh hash, as compare's checkpoints
+    // always have (the mesh is named in the fingerprint on its own).
     const std::string folder =
         o.checkpoint.empty() ? std::string() : certify_folder(o.checkpoint, r->trees[i].method);
     s = certify_with(mesh, r->trees[i], copt, folder, co.rational ? "auto; rational" : "auto",
                      &r->certificates[i]);
     if (!s) return s;
   }
+  const std::string sha = mesh_sha256(mesh);
+  for (Tree& t : r->trees) t.mesh_sha256 = sha;
   r->levels = std::max(r->certificates[0].layers.size(), r->certificates[1].layers.size());
   // e over layers 0 .. D of the deeper tree, with its weights. For a tree of depth D this is
   // certify's e. Its enclosure gives the nearest double; where it cannot (a rounding tie within
   // 1e-35), or with `rational`, the layers' rationals do.
   const int depth = static_cast<int>(r->levels) - 1;
-  r->e_rational = co.rational;
   for (int i = 0; i < 2; ++i) {
     exact::MpInterval e(0);
     for (size_t l = 0; l < r->levels; ++l)
@@ -565,6 +590,7 @@ Status compare(const Mesh& mesh, const CompareOptions& co, CompareResult* r) {
     for (size_t l = 0; l < r->levels; ++l) omv.push_back(r->layer(i, l).omv);
     r->e_exact[i] = tree_error(omv);
     r->e[i] = to_double_nearest(r->e_exact[i]);
+    r->e_rational[i] = true;
   }
   return Status::ok();
 }

@@ -1,14 +1,20 @@
 // vobb's public face: the one header a C++ user includes. Load a solid, build a tree, certify
 // it exactly, estimate the outer volume of boxes, compare the two builders, and weigh layers
-// into the tree error e (DESIGN §1). Every call returns a Status: bad input (a mesh that is no
-// solid, a tree of another mesh, options that contradict each other, a damaged checkpoint)
-// is an error with a one-line message, never an exception or an abort. The library prints
-// nothing; what a run would say (the renderer, a resumed state, a checkpoint not saved) goes
-// to the `note` callbacks.
+// into the tree error e (DESIGN §1).
 //
-// The core (target vobb::vobb) needs CGAL, Eigen, GMP, MPFR and TBB. The GL backend and the
-// figures are the GL component (<vobb/gl.h>, target vobb::gl): without it, Backend::kGl is
-// refused and kAuto takes the CPU twin.
+// - Meshes: the calls take a solid mesh, as load_solid gives it (a precondition; load_solid
+//   refuses a mesh that is no solid, naming the defect).
+// - Every call returns a Status: bad input (a tree of another mesh or of a broken structure,
+//   options out of range or contradicting each other, a damaged checkpoint) is an error with a
+//   one-line message, not an exception or an abort. Out of memory throws std::bad_alloc.
+// - The library prints nothing: what a run would say (the renderer, a resumed state, a
+//   checkpoint not saved) goes to the `note` and `warning` callbacks. Callbacks may be called
+//   from TBB's threads, one call at a time.
+//
+// The core (target vobb::vobb) needs CGAL, Eigen, GMP, MPFR, TBB and OpenSSL's libcrypto. The GL
+// backend and the figures are the GL component (<vobb/gl.h>, target vobb::gl, enable_gl()):
+// without it, Backend::kGl is refused and kAuto takes the CPU twin. Formats other than OFF,
+// OBJ, PLY and STL need the assimp component (vobb::assimp, enable_assimp()).
 #pragma once
 
 #include <cstdint>
@@ -31,8 +37,8 @@
 namespace vobb {
 
 // ---- loading -------------------------------------------------------------------------------
-// load_solid(path, &loaded) (common/io/mesh_io.h): reads OFF, OBJ, PLY and STL exactly (others
-// through assimp where built with it, in single precision) and refuses a mesh that is not a
+// load_solid(path, &loaded) (common/io/mesh_report.h): reads OFF, OBJ, PLY and STL exactly
+// (others through the assimp component, in single precision) and refuses a mesh that is not a
 // solid, naming the defect. read_tree and write_tree (common/tree_io.h) read and write trees.
 
 // ---- the tree error ------------------------------------------------------------------------
@@ -62,10 +68,8 @@ struct BuildOptions {
   Objective objective = Objective::kObv;  // kOmv: shares by the polyhedral solver, any backend
   double collider_margin = 0;             // world units, 0 .. the mesh's bounding-box diagonal
   // When not empty, the search minimises the recorded queries that hit each box instead of
-  // OBV (collision/query_objective.h), and no OBV estimator is made. queries_digest names them
-  // in the checkpoint's fingerprint (the CLI gives the SHA-256 of the colliders read).
+  // OBV (collision/query_objective.h), and no OBV estimator is made.
   std::vector<collision::Collider> queries;
-  std::string queries_digest;
   std::string checkpoint;  // a folder; empty: none. A build started again with it resumes.
   double time_budget = 0;  // seconds; 0: none. Then the nodes not yet split get the baseline split
   std::function<void(const VariationalProgress&)> progress;
@@ -74,6 +78,9 @@ struct BuildOptions {
   std::function<void(const std::string&)> note, warning;
   // Called after each checkpoint saved, with its state (a test's place to interrupt a run).
   std::function<void(const VariationalState&)> saved;
+  // Called when the variational search starts and when it ends, with its counts.
+  std::function<void()> started;
+  std::function<void(const VariationalReport&)> finished;
 };
 
 struct BuildReport {
@@ -82,7 +89,7 @@ struct BuildReport {
 };
 
 // Reads recorded-query files (`vobb collide --record-queries`) made for this mesh into
-// options->queries, and names them in options->queries_digest.
+// options->queries.
 Status read_queries(const Mesh& mesh, const std::vector<std::string>& paths, BuildOptions* options);
 // The combinations of options that contradict each other, refused with the flag's name.
 Status check_build_options(const BuildOptions& options);
@@ -101,19 +108,20 @@ struct CertifyOptions {
   std::function<void(const std::string&)> note, warning;  // as for BuildOptions
   std::function<void(const exact::CertifyState&)> saved;  // after each checkpoint saved
 };
-// Checks that the tree indexes this mesh (its triangle count and, when recorded, its SHA-256),
-// then certifies it (exact/certify.h): OMV, sum of OBV and overlap per layer, e, containment.
-// Creates no GL context. *certificate->ok() says whether it certifies.
+// Checks the tree's structure (validate_tree) and that it indexes this mesh (its triangle count
+// and, when recorded, its SHA-256), then certifies it (exact/certify.h): OMV, sum of OBV and
+// overlap per layer, e, containment. Creates no GL context. *certificate->ok() says whether it
+// certifies.
 Status certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& options,
                exact::Certificate* certificate);
-// The tree-against-mesh check alone, with `tree_name` in its message.
+// Those checks alone, with `tree_name` in their messages.
 Status check_tree_fits(const Mesh& mesh, const Tree& tree, const std::string& tree_name);
 
 // ---- estimating OBV ------------------------------------------------------------------------
 struct EstimateOptions {
   bool gl = false, cpu = false, poly = false, exact = false;  // which estimates to make
   bool gl_fallback = false;  // where GL cannot run (or m exceeds its limit): the CPU twin, noted
-  std::vector<int> ms = {8, 16, 32};  // the cubemap's resolutions
+  std::vector<int> ms = {8, 16, 32};  // the cubemap's resolutions, each 1..4096
   bool r_bound = false;               // also R(m), the cubemap's rigorous texel bound
   std::function<void(const std::string&)> note;
 };
@@ -128,7 +136,7 @@ struct ObvRun {
 struct ObvReport {
   std::string renderer;          // GL's, when it ran
   std::vector<PolyObv> poly;     // the enclosures, when any estimate was made
-  std::vector<ObvRun> runs;      // poly first, then CPU, then GL, each m ascending as given
+  std::vector<ObvRun> runs;      // poly first, then CPU, then GL, each in the order of ms
   std::vector<char> unresolved;  // per box: the cubemap's plan could not hold it
   std::vector<Rational> exact;   // per box, when asked
   std::vector<double> exact_seconds;
@@ -143,7 +151,8 @@ struct CompareOptions {
   BuildOptions build;  // its method is ignored: the baseline and the variational tree are built
   bool rational = false;
   std::function<void(const std::string&)> progress;  // the certifications' stages
-  // build.note and build.warning also get the certifications' notes.
+  // build.warning also gets the certifications' notes and warnings (a resumed certification is
+  // said even where notes are not wanted).
   std::function<void(const exact::CertifyState&)>
       certify_saved;  // after each certification checkpoint
 };
@@ -155,15 +164,16 @@ struct CompareResult {
   // Layers 0..levels-1 of the deeper tree; a shallower tree's leaf layer repeats below its last.
   size_t levels = 0;
   // e of each tree over those layers with the deeper tree's weights: the nearest double, and the
-  // rational where `rational` was asked or the enclosure could not round.
+  // rational where `rational` was asked or the enclosure could not round (e_rational[i]).
   double e[2] = {0, 0};
-  bool e_rational = false;
+  bool e_rational[2] = {false, false};
   Rational e_exact[2];
   bool certified() const { return certificates[0].ok() && certificates[1].ok(); }
   const exact::LayerCertificate& layer(int tree, size_t level) const;
 };
-// Both builders on one mesh, both trees certified. With build.checkpoint, the variational build
-// keeps its state there as build_tree does, and each certification its own folder
+// Both builders on one mesh, both trees certified; `*result` is replaced. build.queries is
+// refused (the recorded-query objective is build_tree's). With build.checkpoint, the variational
+// build keeps its state there as build_tree does, and each certification its own folder
 // (certify-obbtree/, certify-variational/).
 Status compare(const Mesh& mesh, const CompareOptions& options, CompareResult* result);
 // The files compare keeps in its checkpoint folder, relative to it.
