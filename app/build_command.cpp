@@ -48,9 +48,8 @@ class BuildCommand final : public Command {
     Status s = check_build_options(shape);
     if (!s) return refuse(s);
     LoadedMesh loaded;
-    s = load_solid(mesh_, &loaded);
+    s = load_input_solid(mesh_, &loaded);
     if (!s) return refuse(s);
-    note_precision(mesh_, loaded);
     if (!flags_.queries.empty()) {
       s = read_queries(loaded.mesh, flags_.queries, &o);
       if (!s) return refuse(s);

@@ -130,9 +130,8 @@ class CertifyCommand final : public Command {
 
   int run() override {
     LoadedMesh mesh;
-    Status s = load_solid(mesh_, &mesh);
+    Status s = load_input_solid(mesh_, &mesh);
     if (!s) return refuse(s);
-    note_precision(mesh_, mesh);
     Tree tree;
     s = read_tree(tree_path_, &tree);
     if (!s) return refuse(s);

@@ -18,6 +18,7 @@
 
 #include "common/atomic_file.h"
 #include "common/io/mesh_io.h"
+#include "common/io/mesh_report.h"
 #include "common/status.h"
 #include "common/text_util.h"
 
@@ -173,6 +174,12 @@ inline void note_precision(const std::string& path, const LoadedMesh& mesh) {
                              ": read in single precision through assimp (" + one_line(mesh.format) +
                              "): the results are for its coordinates rounded to float32; OFF, "
                              "OBJ, PLY and ASCII STL files are read as written\n";
+}
+// A command's mesh: read as a solid (load_solid), its single-precision read noted.
+inline Status load_input_solid(const std::string& path, LoadedMesh* mesh) {
+  const Status s = load_solid(path, mesh);
+  if (s) note_precision(path, *mesh);
+  return s;
 }
 inline void say_pending_notes() {
   std::string& note = pending_precision_note();

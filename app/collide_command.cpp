@@ -85,9 +85,8 @@ CLI::App* add_collide_command(CLI::App& app, CollideFlags* f) {
 
 int run_collide_command(const CollideFlags& f) {
   LoadedMesh mesh;
-  Status s = load_solid(f.mesh, &mesh);
+  Status s = load_input_solid(f.mesh, &mesh);
   if (!s) return refuse(s);
-  note_precision(f.mesh, mesh);
   const std::string sha = mesh_sha256(mesh.mesh);
   std::vector<Tree> trees(f.trees.size());
   std::vector<collision::NamedTree> named;

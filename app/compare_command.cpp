@@ -101,9 +101,8 @@ class CompareCommand final : public Command {
 
   int run() override {
     LoadedMesh loaded;
-    Status s = load_solid(mesh_, &loaded);
+    Status s = load_input_solid(mesh_, &loaded);
     if (!s) return refuse(s);
-    note_precision(mesh_, loaded);
     CompareOptions o;
     o.build = build_options(flags_);
     o.rational = rational_;

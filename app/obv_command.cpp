@@ -45,9 +45,8 @@ class ObvCommand final : public Command {
 
   int run() override {
     LoadedMesh mesh;
-    Status s = load_solid(mesh_, &mesh);
+    Status s = load_input_solid(mesh_, &mesh);
     if (!s) return refuse(s);
-    note_precision(mesh_, mesh);
     std::vector<Obb> boxes;
     s = read_boxes(boxes_path_, &boxes);
     if (!s) return refuse(s);
