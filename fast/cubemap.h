@@ -29,8 +29,8 @@ struct BoxFrame {
   Vec3 local(const Vec3& p) const { return to_local * (p - center); }
   // A bound on |local(p) - t|, axis by axis, where t is p's exact coordinates in the box as
   // stored (the parallelepiped c + sum t_k h_k a_k with the axes' doubles taken exactly): the
-  // rounding of the inverse, of p - c and of the product (box_frame derives it). Infinite
-  // where the frame is too ill-conditioned to bound.
+  // rounding of the inverse, of p - c and of the product (docs/derivations.md, "The box frame's
+  // rounding"). Infinite where the frame is too ill-conditioned to bound.
   Vec3 local_error(const Vec3& p) const;
   double inverse_error =
       0;  // alpha of box_frame: h_k |t_k - (to_local (p - c))_k| <= alpha |p - c|_inf

@@ -53,7 +53,8 @@ struct LocalTriangle {
   Vec3 normal;   // (p1 - p0) x (p2 - p0), outward for a solid (corrected for mirrored frames)
   double plane;  // normal . p0: along d the face's plane is at zeta = plane / (normal . d)
   // The exact face, or this plane's rounding, may pass so near the centre that the plan's
-  // hits on it cannot be trusted (texel_plan.cpp; resolution_bound counts them whole).
+  // hits on it cannot be trusted (docs/derivations.md, "Edge ties"; resolution_bound counts them
+  // whole).
   bool near_centre = false;
 };
 
@@ -73,11 +74,11 @@ struct BoxPlan {
   double constant = 0;     // local-volume constant of the formula above
   std::vector<LocalTriangle> tris;
   std::vector<TexelSpan> spans;
-  bool flat =
-      false;  // zero volume, or a scale that underflows (texel_plan.cpp): OBV 0, nothing to draw
-  // A face may pass within the frame's rounding of the centre (texel_plan.cpp): the exact
-  // class of the centre and the plan's faces may disagree there, so a texel the faces cover
-  // may be off by two pyramids instead of one (resolution_bound).
+  bool flat = false;  // zero volume, or a scale that underflows (docs/derivations.md, "The box
+                      // frame's rounding"): OBV 0, nothing to draw
+  // A face may pass within the frame's rounding of the centre (docs/derivations.md, "Faces near the
+  // centre"): the exact class of the centre and the plan's faces may disagree there, so a texel the
+  // faces cover may be off by two pyramids instead of one (resolution_bound).
   bool centre_near_surface = false;
   // The box's view of the mesh does not fit the plan's doubles: axes that double cannot
   // invert, or a face the box keeps lying beyond 2^300 box units (a half extent 1e-306 beside
@@ -174,10 +175,10 @@ inline bool texel_hit(const LocalTriangle& t, const Texel& x, bool far_count, do
 // that a thin box's stretched local axis does not inflate it), the centre's exact class and
 // the plan's faces may disagree: the bound counts two pyramids per covered texel, and two
 // more per texel such a face covers (its hits may be wrong either way). Every other face's
-// plane, as the plan holds it, puts each hit within 2^-20 of its depth (texel_plan.cpp),
-// worth 3e-6 pyramids per (texel, face) pair, which the bound adds. Evaluating the plan's
-// doubles is bounded apart (cpu_rounding_bound, gl_deviation_bound), and so is the volume
-// scale's rounding (fast/cubemap_bound.h).
+// plane, as the plan holds it, puts each hit within 2^-20 of its depth (docs/derivations.md, "Faces
+// near the centre"), worth 3e-6 pyramids per (texel, face) pair, which the bound adds. Evaluating
+// the plan's doubles is bounded apart (cpu_rounding_bound, gl_deviation_bound), and so is the
+// volume scale's rounding (fast/cubemap_bound.h).
 double resolution_bound(const BoxPlan& plan, int m);
 
 // Scale factor 2^-e bringing the largest |x_i| into [0.5, 1): exact in binary, so it keeps
@@ -191,8 +192,9 @@ inline double pow2_normalizer(double a, double b, double c, double d = 0) {
 }
 
 // Round-off of evaluating a plan in a floating-point format, against evaluating the same plan
-// (the same doubles) in exact arithmetic. texel_plan.cpp derives the per-pair terms; both
-// estimators' bounds are built from it (cpu_rounding_bound below, gl_deviation_bound).
+// (the same doubles) in exact arithmetic. docs/derivations.md ("Round-off of evaluating a plan")
+// derives the per-pair terms; both estimators' bounds are built from it (cpu_rounding_bound below,
+// gl_deviation_bound).
 struct RoundingModel {
   double u;  // unit round-off: 2^-53 for double, 2^-24 for float
   // Three times the least magnitude the format keeps (FLT_MIN where GLSL may flush
