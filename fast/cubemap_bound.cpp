@@ -5,19 +5,7 @@
 
 namespace vobb {
 
-// ---- the deviation bound -----------------------------------------------------------------
-//
-// |GL - CPU| <= |GL - exact(plan)| + |CPU - exact(plan)|. The first term is the plan evaluated
-// with u = 2^-24 (analyse_plan_rounding, texel_plan.cpp, derives the per-pair terms) and GL's
-// summation: each texel blends its hits in float (assuming round-to-nearest float blending,
-// which GL does not promise but every implementation we know does), and the reduction adds per
-// lane ceil(6m^2 / 256) texels and then 8 tree levels: at most K = H + ceil(6m^2/256) + 8
-// additions per term, H the most terms in one texel, so the summation error is at most
-// gamma_K sum |values| (Higham, Accuracy and Stability of Numerical Algorithms, 2nd ed.,
-// eq. 4.4). GLSL may flush subnormals, hence the FLT_MIN terms. The read-back sum is then
-// assembled in double exactly as the CPU twin does, so the second term, cpu_rounding_bound,
-// also covers that assembly. The bound is first-principles, not fitted: the test asserts it,
-// and reports how close the observed deviations come to it.
+// The GL deviation bound. Derivation: docs/derivations.md, "The GL deviation bound".
 namespace {
 constexpr double kFloatMin = 1.1754943508222875e-38;  // FLT_MIN, 2^-126
 }  // namespace

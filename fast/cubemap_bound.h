@@ -11,8 +11,8 @@
 namespace vobb {
 
 // An upper bound on |GL estimate - CPU twin estimate| for a box with this plan at resolution
-// m, in world volume units, from float32 rounding in the shaders (cubemap_bound.cpp gives the
-// derivation).
+// m, in world volume units, from float32 rounding in the shaders (docs/derivations.md, "The GL
+// deviation bound").
 double gl_deviation_bound(const BoxPlan& plan, int m);
 
 // Whether the shaders can evaluate this plan (above): false when a face's scaled plane is
