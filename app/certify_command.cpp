@@ -135,8 +135,6 @@ class CertifyCommand final : public Command {
     Tree tree;
     s = read_tree(tree_path_, &tree);
     if (!s) return refuse(s);
-    s = check_tree_fits(mesh.mesh, tree, tree_path_);
-    if (!s) return refuse(s);
     CertifyOptions o;
     o.path = path_ == "clip"   ? exact::OmvPath::kClip
              : path_ == "nef"  ? exact::OmvPath::kNef
@@ -144,6 +142,7 @@ class CertifyCommand final : public Command {
                                : exact::OmvPath::kAuto;
     o.rational = rational_;
     o.checkpoint = checkpoint_;
+    o.tree_name = tree_path_;
     if (!quiet_)
       o.progress = [](const std::string& line) {
         std::fprintf(stderr, "certify: %s\n", line.c_str());

@@ -77,8 +77,7 @@ Status make_estimator(const Mesh& mesh, const BuildOptions& o, Estimator* e) {
   }
   if (o.backend == Backend::kGl || (o.backend == Backend::kAuto && o.m >= kAutoGlFromM)) {
     const bool auto_gl = o.backend == Backend::kAuto;
-    Status s = auto_gl && detail::gl_factory() == nullptr ? Status::error("no GL")
-                                                          : make_gl(mesh, auto_gl, &e->gl);
+    const Status s = make_gl(mesh, auto_gl, &e->gl);  // under kAuto a failure falls back
     if (!s && !auto_gl) return s;
     if (s && o.m > e->gl->max_m())
       return Status::error("--m " + std::to_string(o.m) + " exceeds the GL estimator's limit");
@@ -137,6 +136,14 @@ std::string build_fingerprint(const Mesh& mesh, const BuildOptions& o,
                                 : std::string()) +
          (o.queries.empty() ? std::string() : "; recorded queries " + queries_digest(o.queries)) +
          (o.objective == Objective::kOmv ? "; objective omv" : "");
+}
+
+// The OBB-Tree baseline at the options' depth and arity.
+Tree baseline_tree(const Mesh& mesh, const BuildOptions& o) {
+  ObbTreeOptions opt;
+  opt.depth = o.depth;
+  opt.arity = o.arity;
+  return build_obbtree(mesh, opt);
 }
 
 // A margin beyond the model's size is no collider of this model, and it keeps the grown boxes'
@@ -354,10 +361,7 @@ Status build_tree(const Mesh& mesh, const BuildOptions& o, Tree* tree, BuildRepo
   BuildReport* r = report ? report : &local;
   *r = BuildReport();
   if (o.method == Method::kObbTree) {
-    ObbTreeOptions opt;
-    opt.depth = o.depth;
-    opt.arity = o.arity;
-    *tree = build_obbtree(mesh, opt);
+    *tree = baseline_tree(mesh, o);
   } else {
     Estimator est;
     s = make_estimator(mesh, o, &est);
@@ -401,7 +405,7 @@ Status check_tree_fits(const Mesh& mesh, const Tree& tree, const std::string& tr
 
 Status certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& o,
                exact::Certificate* certificate) {
-  Status s = check_tree_fits(mesh, tree, "tree");
+  Status s = check_tree_fits(mesh, tree, o.tree_name);
   if (!s) return s;
   return certify_with(mesh, tree, o, o.checkpoint,
                       std::string(path_name(o.path)) + (o.rational ? "; rational" : ""),
@@ -549,10 +553,7 @@ Status compare(const Mesh& mesh, const CompareOptions& co, CompareResult* r) {
   for (int i = 0; i < 2; ++i) {
     const auto t0 = std::chrono::steady_clock::now();
     if (i == 0) {
-      ObbTreeOptions opt;
-      opt.depth = o.depth;
-      opt.arity = o.arity;
-      r->trees[0] = build_obbtree(mesh, opt);
+      r->trees[0] = baseline_tree(mesh, o);
     } else {
       s = build_variational_tree(mesh, o, est, &r->trees[1], &r->search);
       if (!s) return s;

@@ -107,6 +107,7 @@ struct CertifyOptions {
   std::function<void(const std::string&)> progress;       // one line per finished stage
   std::function<void(const std::string&)> note, warning;  // as for BuildOptions
   std::function<void(const exact::CertifyState&)> saved;  // after each checkpoint saved
+  std::string tree_name = "tree";  // how messages name the tree (its file, say)
 };
 // Checks the tree's structure (validate_tree) and that it indexes this mesh (its triangle count
 // and, when recorded, its SHA-256), then certifies it (exact/certify.h): OMV, sum of OBV and

@@ -58,20 +58,26 @@ inline Mesh bipyramid_on_ray(const Vec3& d, int k, unsigned seed) {
 inline const Vec3 kTurnedA0(-0.8221300000911982, -0.511570111605987, -0.2497964848861659);
 inline const Vec3 kTurnedA1(-0.4326647158294003, 0.8466302197288976, -0.30986854425395105);
 inline const Vec3 kTurnedA2(0.3700047386538593, -0.14667410116730417, -0.9173784395877487);
-inline Mesh turned_cube() {
-  Mesh cube;
-  for (int i = 0; i < 8; ++i)
-    cube.vertices.push_back((i & 1 ? 1 : -1) * kTurnedA2 + (i & 2 ? 1 : -1) * kTurnedA0 +
-                            (i & 4 ? 1 : -1) * kTurnedA1);
+// The 12 outward triangles of a cube whose vertex i is at corner (i & 1, i & 2, i & 4) of some
+// right-handed frame.
+inline void add_cube_faces(Mesh* cube) {
   for (const auto& q : {std::array<int32_t, 4>{0, 4, 6, 2},
                         {1, 3, 7, 5},
                         {0, 1, 5, 4},
                         {2, 6, 7, 3},
                         {0, 2, 3, 1},
                         {4, 5, 7, 6}}) {
-    cube.faces.push_back({q[0], q[1], q[2]});
-    cube.faces.push_back({q[0], q[2], q[3]});
+    cube->faces.push_back({q[0], q[1], q[2]});
+    cube->faces.push_back({q[0], q[2], q[3]});
   }
+}
+
+inline Mesh turned_cube() {
+  Mesh cube;
+  for (int i = 0; i < 8; ++i)
+    cube.vertices.push_back((i & 1 ? 1 : -1) * kTurnedA2 + (i & 2 ? 1 : -1) * kTurnedA0 +
+                            (i & 4 ? 1 : -1) * kTurnedA1);
+  add_cube_faces(&cube);
   return cube;
 }
 

@@ -66,15 +66,7 @@ TEST(TexelPlan, ThinBoxesDoNotTakeFarFacesAsNearTheCentre) {
 TEST(TexelPlan, EdgesThroughTheCentreAreMarkedExactly) {
   Mesh cube;
   for (int i = 0; i < 8; ++i) cube.vertices.emplace_back(i & 1, (i >> 1) & 1, (i >> 2) & 1);
-  for (const auto& q : {std::array<int32_t, 4>{0, 4, 6, 2},
-                        {1, 3, 7, 5},
-                        {0, 1, 5, 4},
-                        {2, 6, 7, 3},
-                        {0, 2, 3, 1},
-                        {4, 5, 7, 6}}) {
-    cube.faces.push_back({q[0], q[1], q[2]});
-    cube.faces.push_back({q[0], q[2], q[3]});
-  }
+  test::add_cube_faces(&cube);
   const BoxPlanner planner(cube);
   int marked = 0, unmarked = 0;
   for (const Vec3& c : {Vec3(0, 0, 0), Vec3(0.5, 0.5, 0), Vec3(0.5, 0, 0), Vec3(0.3, 0.2, 0.1)}) {
