@@ -303,17 +303,22 @@ class Cell {
   std::vector<std::vector<int>> faces_;
 };
 
-// The double path's shortcut for a face whose shadow lies in the shadow of one upper and one
-// lower facet of the cell (docs/derivations.md, "Shared outer volume"): over the shadow the
-// cell's chord runs from z_b to z_t, both linear, and the prism holds clamp(z_face - z_b, 0,
-// z_t - z_b) of it, which is linear on each part of the shadow cut by the two lines where the
-// clamp switches; a linear function's integral over a triangle is its area times its mean at
-// the corners. The decisions are taken in rounded doubles (an estimate; the interval and
-// rational paths always clip the cell).
+// The double path's prism volumes, in the plane (docs/derivations.md, "Shared outer volume"):
+// over the cell's shadow the chord runs from z_b to z_t, and a face's prism holds
+// clamp(z_f - z_b, 0, z_t - z_b) = min(z_f, z_t) - min(z_f, z_b) of it. The upper facets'
+// shadows tile the cell's shadow, and z_t is linear on each, as z_b is on the lower facets'. So
+// the face's term is the sum over the upper facets of the integral of min(z_f, z_t) over the
+// facet's shadow clipped to the face's, less the same over the lower facets; each is cut by the
+// line z_f = z_t into two convex parts with a linear integrand, whose integral is a fan's
+// triangles' areas times the means at their corners. Only the face's edges and that line clip:
+// a facet's noisy short edges (rounded cut points of the cell) never do. Decisions are taken in
+// rounded doubles: an estimate (the interval and rational paths clip the cell in space).
 class ChordMap {
  public:
   explicit ChordMap(const Cell<double>& cell) {
     const auto& v = cell.vertices();
+    z_ref_ = INFINITY;
+    for (const auto& p : v) z_ref_ = std::min(z_ref_, p[2]);
     for (const std::vector<int>& f : cell.faces()) {
       // The facet's normal by Newell's sum; its z sign says upper (> 0) or lower (< 0).
       double n[3] = {0, 0, 0};
@@ -325,78 +330,133 @@ class ChordMap {
         n[2] += (a[0] - b[0]) * (a[1] + b[1]);
       }
       const double len = std::abs(n[0]) + std::abs(n[1]) + std::abs(n[2]);
-      if (!(std::abs(n[2]) > 1e-9 * len)) continue;  // (nearly) vertical: bounds no chord
+      if (!(std::abs(n[2]) > 1e-9 * len)) continue;  // (nearly) vertical: its shadow is no area
+      if (f.size() + 5 > kCapacity) throw InconsistentSides();  // no facet of a clipped box
       Facet facet;
-      const auto& p = v[f[0]];
-      // z over the facet's plane: z = z0 - (n0 (x - x0) + n1 (y - y0)) / n2.
-      facet.gx = -n[0] / n[2];
-      facet.gy = -n[1] / n[2];
-      facet.z0 = p[2] - facet.gx * p[0] - facet.gy * p[1];
-      const bool upper = n[2] > 0;
-      // Shadow edges, oriented so that the inside is to their left.
+      facet.upper = n[2] > 0;
+      // The shadow's corners, counter-clockwise (a lower facet's are seen from below), with the
+      // facet's height there.
+      facet.shadow.n = static_cast<int>(f.size());
       for (size_t k = 0; k < f.size(); ++k) {
-        const auto& a = v[f[k]];
-        const auto& b = v[f[(k + 1) % f.size()]];
-        if (upper)
-          facet.edges.push_back({a[0], a[1], b[0], b[1]});
-        else
-          facet.edges.push_back({b[0], b[1], a[0], a[1]});
+        const auto& a = v[f[facet.upper ? k : f.size() - 1 - k]];
+        facet.shadow.p[k] = {a[0], a[1], a[2] - z_ref_, 0};
+        if (k == 0) facet.lo = facet.hi = {a[0], a[1]};
+        for (int i = 0; i < 2; ++i) {
+          facet.lo[i] = std::min(facet.lo[i], a[i]);
+          facet.hi[i] = std::max(facet.hi[i], a[i]);
+        }
       }
-      (upper ? top_ : bottom_).push_back(std::move(facet));
+      facets_.push_back(facet);
     }
   }
 
-  // The face's signed vol(cell ∩ prism(face)) into *term, where the shortcut applies.
-  bool prism_volume(const Vec3 (&q)[3], double* term) const {
-    const Facet* t = holding(top_, q);
-    if (t == nullptr) return false;
-    const Facet* b = holding(bottom_, q);
-    if (b == nullptr) return false;
-    // Over the shadow: g = z_face - z_b and h = z_t - z_b, both linear; the prism holds
-    // clamp(g, 0, h) of each chord: h where g >= h, g where 0 < g < h, else nothing.
-    Poly tri;
-    tri.n = 3;
-    for (int k = 0; k < 3; ++k) {
-      const double zb = b->z(q[k]);
-      tri.p[k] = {q[k][0], q[k][1], q[k][2] - zb, t->z(q[k]) - zb};
+  // The face's signed vol(cell ∩ prism(face)): q its corners (the column along +z), `sign` the
+  // sign of its normal's z (+-1).
+  double prism_volume(const Vec3 (&q)[3], int sign) const {
+    double lo[2], hi[2];
+    for (int i = 0; i < 2; ++i) {
+      lo[i] = std::min({q[0][i], q[1][i], q[2][i]});
+      hi[i] = std::max({q[0][i], q[1][i], q[2][i]});
     }
-    Poly over, under, inside;
-    tri.clip([](const Pt& p) { return p.g - p.h; }, &over);   // g >= h
-    tri.clip([](const Pt& p) { return p.h - p.g; }, &under);  // g <= h
-    under.clip([](const Pt& p) { return p.g; }, &inside);     // and g >= 0
-    *term = over.integral([](const Pt& p) { return p.h; }) +
-            inside.integral([](const Pt& p) { return p.g; });
-    return true;
+    // The face's height over the plane, from its first corner: accurate within its shadow.
+    const double e1x = q[1][0] - q[0][0], e1y = q[1][1] - q[0][1], e1z = q[1][2] - q[0][2];
+    const double e2x = q[2][0] - q[0][0], e2y = q[2][1] - q[0][1], e2z = q[2][2] - q[0][2];
+    const double nz = e1x * e2y - e1y * e2x;
+    const double gx = -(e1y * e2z - e1z * e2y) / nz, gy = -(e1z * e2x - e1x * e2z) / nz;
+    const double z0 = q[0][2] - z_ref_;
+    // The face's edges as lines a x + b y + c >= 0 on its inner side.
+    double line[3][3];
+    for (int k = 0; k < 3; ++k) {
+      const Vec3& a = q[k];
+      const Vec3& b = q[(k + 1) % 3];
+      line[k][0] = -sign * (b[1] - a[1]);
+      line[k][1] = sign * (b[0] - a[0]);
+      line[k][2] = -(line[k][0] * a[0] + line[k][1] * a[1]);
+    }
+    double sum = 0;
+    Poly buf[2];
+    for (const Facet& facet : facets_) {
+      if (hi[0] < facet.lo[0] || lo[0] > facet.hi[0] || hi[1] < facet.lo[1] || lo[1] > facet.hi[1])
+        continue;
+      // The facet's shadow within the face's.
+      const Poly* part = &facet.shadow;
+      for (int k = 0; k < 3 && part->n > 0; ++k) {
+        const double* l = line[k];
+        Poly* cut = part == &buf[0] ? &buf[1] : &buf[0];
+        if (part->clip([l](const Pt& p) { return l[0] * p.x + l[1] * p.y + l[2]; }, cut))
+          part = cut;
+      }
+      if (part->n == 0) continue;
+      Poly* with_face = part == &buf[0] ? &buf[0] : &buf[1];
+      if (part != with_face) {  // the whole facet: a copy to write f into
+        with_face->n = part->n;
+        std::copy(part->p, part->p + part->n, with_face->p);
+      }
+      for (int k = 0; k < with_face->n; ++k) {
+        Pt& p = with_face->p[k];
+        p.f = z0 + gx * (p.x - q[0][0]) + gy * (p.y - q[0][1]);
+      }
+      // min(z_f, z_facet): z_f where z_f <= z_facet, else z_facet (the rest, strictly, so that a
+      // face on the facet's plane counts once).
+      Poly below, above;
+      double term = 0;
+      if (with_face->clip([](const Pt& p) { return p.z - p.f; }, &below))
+        term += below.integral([](const Pt& p) { return p.f; });
+      else
+        term += with_face->integral([](const Pt& p) { return p.f; });
+      if (with_face->clip([](const Pt& p) { return p.f - p.z; }, &above, true))
+        term += above.integral([](const Pt& p) { return p.z; });
+      else
+        term += with_face->integral([](const Pt& p) { return p.z; });
+      sum += facet.upper ? term : -term;
+    }
+    return sign * sum;
   }
 
  private:
-  // A point of the shadow with the values of g and h there.
+  // A facet of a box clipped by a few planes has a few corners; one clipped by three lines and
+  // then one more gains at most one corner each.
+  static constexpr int kCapacity = 48;
+  // A point of the shadow with the facet's height z and the face's f there (above z_ref_).
   struct Pt {
-    double x, y, g, h;
+    double x, y, z, f;
   };
-  // A convex polygon of the shadow (a triangle clipped by at most two lines: 5 corners).
+  // A convex polygon of the shadow, counter-clockwise.
   struct Poly {
-    Pt p[6];
+    Pt p[kCapacity];
     int n = 0;
-    // The part where f >= 0 (f linear, given per corner), in the same cyclic order.
+    // The part where f >= 0 (f > 0 if strict; f linear, given per corner), in the same cyclic
+    // order, into *out; false, and *out untouched, where that is all of it. Throws
+    // InconsistentSides where the rounded values change sign more often than a convex
+    // polygon's can.
     template <class F>
-    void clip(const F& f, Poly* out) const {
+    bool clip(const F& fn, Poly* out, bool strict = false) const {
+      double val[kCapacity];
+      bool in[kCapacity];
+      bool all = true;
+      for (int i = 0; i < n; ++i) {
+        val[i] = fn(p[i]);
+        all &= in[i] = strict ? val[i] > 0 : val[i] >= 0;
+      }
+      if (all) return false;
       out->n = 0;
       for (int i = 0; i < n; ++i) {
+        if (out->n + 2 > kCapacity) throw InconsistentSides();
+        const int j = (i + 1) % n;
         const Pt& a = p[i];
-        const Pt& b = p[(i + 1) % n];
-        const double fa = f(a), fb = f(b);
-        if (fa >= 0) out->p[out->n++] = a;
-        if ((fa >= 0) != (fb >= 0)) {
-          const double s = fa / (fa - fb);
-          out->p[out->n++] = {a.x + s * (b.x - a.x), a.y + s * (b.y - a.y), a.g + s * (b.g - a.g),
-                              a.h + s * (b.h - a.h)};
+        const Pt& b = p[j];
+        if (in[i]) out->p[out->n++] = a;
+        if (in[i] != in[j]) {
+          const double s = val[i] / (val[i] - val[j]);
+          out->p[out->n++] = {a.x + s * (b.x - a.x), a.y + s * (b.y - a.y), a.z + s * (b.z - a.z),
+                              a.f + s * (b.f - a.f)};
         }
       }
       if (out->n < 3) out->n = 0;
+      return true;
     }
-    // The integral of v (linear, given per corner) over the polygon, signed by its orientation:
-    // per fan triangle, its signed area times the mean of v at its corners.
+    // The integral of v (linear, given per corner) over the polygon: per fan triangle, its
+    // signed area times the mean of v at its corners.
     template <class V>
     double integral(const V& v) const {
       double sum = 0;
@@ -409,21 +469,12 @@ class ChordMap {
     }
   };
   struct Facet {
-    double gx = 0, gy = 0, z0 = 0;
-    std::vector<std::array<double, 4>> edges;  // ax, ay, bx, by
-    double z(const Vec3& p) const { return z0 + gx * p[0] + gy * p[1]; }
-    bool holds(const Vec3& p) const {
-      for (const auto& e : edges)
-        if ((e[2] - e[0]) * (p[1] - e[1]) - (e[3] - e[1]) * (p[0] - e[0]) < 0) return false;
-      return true;
-    }
+    bool upper = false;
+    Poly shadow;
+    std::array<double, 2> lo, hi;  // the shadow's bounds
   };
-  static const Facet* holding(const std::vector<Facet>& facets, const Vec3 (&q)[3]) {
-    for (const Facet& f : facets)
-      if (f.holds(q[0]) && f.holds(q[1]) && f.holds(q[2])) return &f;
-    return nullptr;
-  }
-  std::vector<Facet> top_, bottom_;
+  double z_ref_ = 0;  // the cell's lowest z: heights are taken above it
+  std::vector<Facet> facets_;
 };
 
 // vol(cell \ X): the cell's volume less the signed prism decomposition of X within it, over
@@ -465,11 +516,8 @@ NT outside_volume(const Mesh& mesh, const AabbTree& faces, const Cell<NT>& cell_
             orient2d(q[0], q[1], q[2], 0, 1);  // the sign of the face normal's z, exactly
         if (sign == 0) return;                 // a vertical face bounds no column
         if constexpr (std::is_same_v<NT, double>) {
-          double term;
-          if (chords->prism_volume(q, &term)) {
-            inside += term;
-            return;
-          }
+          inside += chords->prism_volume(q, sign);
+          return;
         }
         // The prism's 4 half-spaces: the 3 vertical sides through its edges, then below its plane.
         Plane<NT> h[4];
