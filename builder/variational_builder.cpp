@@ -198,9 +198,13 @@ class NodeSplitter {
   bool spent() const { return shared_->spent; }
 
   // Box update: per group, the orientation search (or the covariance axes alone), starting
-  // from s->axes; fills s->obv. False when the time budget cut it short: then the groups
-  // not reached keep their axes and an OBV of 0, so s->sum() is not to be compared.
-  bool update_boxes(State* s) {
+  // from s->axes; fills s->obv, and under kOmv scores the state's overlaps (score_overlaps).
+  // Under kOmv the search itself weighs each trial box's share with the other groups' boxes
+  // unless shares_in_search is false; then it minimises OBV alone, and only the state's score
+  // sees the overlaps. False when the time budget cut it short: then the groups not reached
+  // keep their axes and an OBV of 0, so s->sum() is not to be compared.
+  bool update_boxes(State* s, bool shares_in_search = true) {
+    const bool search_omv = omv() && shares_in_search;
     s->obv.assign(s->groups.size(), 0.0);
     for (size_t g = 0; g < s->groups.size(); ++g) {
       if (stopped()) return false;
@@ -209,13 +213,13 @@ class NodeSplitter {
       // Under kOmv a box's value is its OBV less what it shares with the other groups' boxes as
       // they stand (those before g already searched). Under kObv it is its OBV.
       std::vector<Obb> others;
-      if (omv())
+      if (search_omv)
         for (size_t h = 0; h < s->groups.size(); ++h)
           if (h != g) others.push_back(tight_box(mesh_, s->groups[h], s->axes[h]));
       auto values = [&](const std::vector<Obb>& boxes, std::vector<double>* obv) {
         *obv = measure(boxes);
         std::vector<double> v = *obv;
-        if (omv() && !stopped()) {
+        if (search_omv && !stopped()) {
           const std::vector<double> shared = overlap_with(boxes, others);
           for (size_t i = 0; i < v.size(); ++i) v[i] -= shared[i];
         }
@@ -1052,7 +1056,10 @@ class Builder {
         }
       // Screen every move by the best of a few fixed orientations per new group (the two old
       // parents' axes and the group's covariance axes); only the two best screened get the full
-      // orientation search, which costs a hundred estimates or more per group.
+      // orientation search, which costs a hundred estimates or more per group. Under kOmv that
+      // search minimises OBV alone and the move is judged by the searched state's objective,
+      // overlaps included: the search's shares were three quarters of the sweeps' share time,
+      // for e lower by at most 0.7 % (docs/BENCHMARKS.md, "Overlap-aware objective").
       std::vector<NodeSplitter::State> cand(moves.size());
       std::vector<double> screen(moves.size());
       for (size_t c = 0; c < moves.size(); ++c) {
@@ -1092,7 +1099,8 @@ class Builder {
         const Move& mv = moves[order[r]];
         NodeSplitter::State s = cand[order[r]];
         const double before = current(mv.a, mv.b);  // sets the context for mv.a and mv.b
-        if (!splitter->update_boxes(&s)) break;     // cut short by the time budget: not comparable
+        if (!splitter->update_boxes(&s, false))
+          break;  // cut short by the time budget: not comparable
         // Kept only for a drop of 0.1 % or more of the pair's objective: smaller drops are
         // within the estimator's discretization error at the m the builders use
         // (docs/BENCHMARKS.md: median relative error ~1e-4, tails ~1e-3), so they would chase

@@ -492,7 +492,9 @@ NT outside_volume(const Mesh& mesh, const AabbTree& faces, const Cell<NT>& cell_
   for (int d = 0; d < 6; ++d) {
     size_t n = 0;
     const Aabb column = column_of(bounds, d);
-    faces.visit_accepted([&](const Aabb& b) { return column.overlaps(b); }, [&](int32_t) { ++n; });
+    // Counted only until it reaches the fewest so far, which it then cannot beat.
+    faces.visit_accepted([&](const Aabb& b) { return n < fewest && column.overlaps(b); },
+                         [&](int32_t) { ++n; });
     if (n < fewest) fewest = n, dir = d;
   }
   const Cell<NT> cell = cell_xyz.mapped(dir);
