@@ -1058,8 +1058,7 @@ class Builder {
       // parents' axes and the group's covariance axes); only the two best screened get the full
       // orientation search, which costs a hundred estimates or more per group. Under kOmv that
       // search minimises OBV alone and the move is judged by the searched state's objective,
-      // overlaps included: the search's shares were three quarters of the sweeps' share time,
-      // for e lower by at most 0.7 % (docs/BENCHMARKS.md, "Overlap-aware objective").
+      // overlaps included (why: docs/derivations.md, "The variational builder", Objective).
       std::vector<NodeSplitter::State> cand(moves.size());
       std::vector<double> screen(moves.size());
       for (size_t c = 0; c < moves.size(); ++c) {

@@ -12,7 +12,9 @@
 // NT is double (a point value, rounded), an interval type (an enclosure) or Rational (exact).
 // Every branch is a sign taken through box_clip::ClipTraits<NT>::sign; an interval type's
 // specialisation throws where its enclosure does not decide, and the caller then asks again
-// in rationals. With the same decisions the three follow the same arithmetic.
+// in rationals. The interval and rational types clip the cell by each prism in space and,
+// with the same decisions, follow the same arithmetic; double takes each prism's volume in the
+// plane instead (ChordMap), the builder's estimate.
 // Degenerate contacts (a vertex or an edge on a plane) are handled; a cell clipped to nothing
 // or to a flat remainder is empty.
 #pragma once
@@ -362,6 +364,8 @@ class ChordMap {
     const double e1x = q[1][0] - q[0][0], e1y = q[1][1] - q[0][1], e1z = q[1][2] - q[0][2];
     const double e2x = q[2][0] - q[0][0], e2y = q[2][1] - q[0][1], e2z = q[2][2] - q[0][2];
     const double nz = e1x * e2y - e1y * e2x;
+    // Rounded to 0 only where the shadow's area is round-off of the face's: nothing to add.
+    if (nz == 0) return 0;
     const double gx = -(e1y * e2z - e1z * e2y) / nz, gy = -(e1z * e2x - e1x * e2z) / nz;
     const double z0 = q[0][2] - z_ref_;
     // The face's edges as lines a x + b y + c >= 0 on its inner side.
@@ -477,6 +481,51 @@ class ChordMap {
   std::vector<Facet> facets_;
 };
 
+// The interval and rational paths' term of one face (corners q, the column along +z, `sign`
+// the sign of its normal's z): the signed vol(cell ∩ prism(face)), the cell clipped in space
+// by the prism's four half-spaces. A prism that holds the whole cell adds its sign to *whole
+// instead (the cell's volume, once, at the end). side and value are scratch.
+template <class NT>
+NT prism_volume_in_space(const Cell<NT>& cell, const Vec3 (&q)[3], int sign, long* whole,
+                         std::vector<int>* side, std::vector<NT>* value) {
+  // The prism's 4 half-spaces: the 3 vertical sides through its edges, then below its plane.
+  Plane<NT> h[4];
+  for (int k = 0; k < 3; ++k) {
+    const Vec3& a = q[k];
+    const Vec3& b = q[(k + 1) % 3];
+    h[k].n[0] = NT(b[1]) - NT(a[1]);
+    h[k].n[1] = NT(a[0]) - NT(b[0]);
+    h[k].n[2] = NT(0);
+    if (sign < 0) h[k].n[0] = -h[k].n[0], h[k].n[1] = -h[k].n[1];
+    h[k].d = h[k].n[0] * NT(a[0]) + h[k].n[1] * NT(a[1]);
+  }
+  {
+    NT e1[3], e2[3];
+    for (int i = 0; i < 3; ++i)
+      e1[i] = NT(q[1][i]) - NT(q[0][i]), e2[i] = NT(q[2][i]) - NT(q[0][i]);
+    const NT nrm[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                       e1[0] * e2[1] - e1[1] * e2[0]};
+    for (int i = 0; i < 3; ++i) h[3].n[i] = sign > 0 ? nrm[i] : NT(-nrm[i]);
+    h[3].d = h[3].n[0] * NT(q[0][0]) + h[3].n[1] * NT(q[0][1]) + h[3].n[2] * NT(q[0][2]);
+  }
+  const Plane<NT>* cutting[4];
+  int n_cutting = 0;
+  for (int k = 0; k < 4; ++k) {
+    bool any_pos, any_neg;
+    cell.sides(h[k], side, value, &any_pos, &any_neg);
+    if (!any_neg) return NT(0);  // beyond or on the plane: the prism adds no volume
+    if (any_pos) cutting[n_cutting++] = &h[k];
+  }
+  if (n_cutting == 0) {  // the whole cell, added once at the end
+    *whole += sign;
+    return NT(0);
+  }
+  Cell<NT> piece = cell.clipped(*cutting[0]);
+  for (int k = 1; k < n_cutting && !piece.empty(); ++k) piece = piece.clipped(*cutting[k]);
+  if (piece.empty()) return NT(0);
+  return sign > 0 ? piece.volume() : NT(-piece.volume());
+}
+
 // vol(cell \ X): the cell's volume less the signed prism decomposition of X within it, over
 // the faces of `faces` (AabbTree::over_faces(mesh)) that meet the column above `reach`, a
 // double box that holds the exact cell. The direction and the faces are chosen from `reach`
@@ -505,62 +554,23 @@ NT outside_volume(const Mesh& mesh, const AabbTree& faces, const Cell<NT>& cell_
   std::vector<int> side;
   std::vector<NT> value;
   const Aabb column = column_of(bounds, dir);
-  faces.visit_accepted(
-      [&](const Aabb& b) { return column.overlaps(b); },
-      [&](int32_t f) {
-        Vec3 q[3];
-        for (int k = 0; k < 3; ++k) {
-          const Vec3& p = mesh.corner(f, k);
-          const std::array<double, 3> m = to_direction(dir, p[0], p[1], p[2]);
-          q[k] = Vec3(m[0], m[1], m[2]);
-        }
-        const int sign =
-            orient2d(q[0], q[1], q[2], 0, 1);  // the sign of the face normal's z, exactly
-        if (sign == 0) return;                 // a vertical face bounds no column
-        if constexpr (std::is_same_v<NT, double>) {
-          inside += chords->prism_volume(q, sign);
-          return;
-        }
-        // The prism's 4 half-spaces: the 3 vertical sides through its edges, then below its plane.
-        Plane<NT> h[4];
-        for (int k = 0; k < 3; ++k) {
-          const Vec3& a = q[k];
-          const Vec3& b = q[(k + 1) % 3];
-          h[k].n[0] = NT(b[1]) - NT(a[1]);
-          h[k].n[1] = NT(a[0]) - NT(b[0]);
-          h[k].n[2] = NT(0);
-          if (sign < 0) h[k].n[0] = -h[k].n[0], h[k].n[1] = -h[k].n[1];
-          h[k].d = h[k].n[0] * NT(a[0]) + h[k].n[1] * NT(a[1]);
-        }
-        {
-          NT e1[3], e2[3];
-          for (int i = 0; i < 3; ++i)
-            e1[i] = NT(q[1][i]) - NT(q[0][i]), e2[i] = NT(q[2][i]) - NT(q[0][i]);
-          const NT nrm[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
-                             e1[0] * e2[1] - e1[1] * e2[0]};
-          for (int i = 0; i < 3; ++i) h[3].n[i] = sign > 0 ? nrm[i] : NT(-nrm[i]);
-          h[3].d = h[3].n[0] * NT(q[0][0]) + h[3].n[1] * NT(q[0][1]) + h[3].n[2] * NT(q[0][2]);
-        }
-        const Plane<NT>* cutting[4];
-        int n_cutting = 0;
-        for (int k = 0; k < 4; ++k) {
-          bool any_pos, any_neg;
-          cell.sides(h[k], &side, &value, &any_pos, &any_neg);
-          if (!any_neg) return;  // beyond or on the plane: the prism adds no volume
-          if (any_pos) cutting[n_cutting++] = &h[k];
-        }
-        if (n_cutting == 0) {
-          whole += sign;
-          return;
-        }
-        Cell<NT> piece = cell.clipped(*cutting[0]);
-        for (int k = 1; k < n_cutting && !piece.empty(); ++k) piece = piece.clipped(*cutting[k]);
-        if (piece.empty()) return;
-        if (sign > 0)
-          inside += piece.volume();
-        else
-          inside -= piece.volume();
-      });
+  faces.visit_accepted([&](const Aabb& b) { return column.overlaps(b); },
+                       [&](int32_t f) {
+                         Vec3 q[3];
+                         for (int k = 0; k < 3; ++k) {
+                           const Vec3& p = mesh.corner(f, k);
+                           const std::array<double, 3> m = to_direction(dir, p[0], p[1], p[2]);
+                           q[k] = Vec3(m[0], m[1], m[2]);
+                         }
+                         // The sign of the face normal's z, exactly; a vertical face bounds no
+                         // column.
+                         const int sign = orient2d(q[0], q[1], q[2], 0, 1);
+                         if (sign == 0) return;
+                         if constexpr (std::is_same_v<NT, double>)
+                           inside += chords->prism_volume(q, sign);
+                         else
+                           inside += prism_volume_in_space(cell, q, sign, &whole, &side, &value);
+                       });
   if (whole != 0) inside += NT(static_cast<double>(whole)) * vol;
   return vol - inside;
 }
