@@ -105,6 +105,12 @@ std::array<Vec3, 3> rotate(const std::array<Vec3, 3>& axes, int about, double an
 // (ω, layer_weight in common/tree.h) and are few, so it costs little there.
 constexpr int kAdjustLevels = 4;
 
+// Under kOmv the top-down orientation search weighs each trial box's shares for the boxes of
+// levels 1..kShareSearchLevels, the few big ones that shape the top; below, it minimises OBV
+// and the Lloyd states are still scored with their shares (why this bound: docs/derivations.md,
+// "The variational builder", Objective).
+constexpr int kShareSearchLevels = 2;
+
 // What the splitters of one build share. With concurrent_estimates, several splitters (one
 // per thread) search nodes at once: the counts add up, and the time budget once spent is
 // spent for all.
@@ -200,11 +206,12 @@ class NodeSplitter {
   // Box update: per group, the orientation search (or the covariance axes alone), starting
   // from s->axes; fills s->obv, and under kOmv scores the state's overlaps (score_overlaps).
   // Under kOmv the search itself weighs each trial box's share with the other groups' boxes
-  // unless shares_in_search is false; then it minimises OBV alone, and only the state's score
-  // sees the overlaps. False when the time budget cut it short: then the groups not reached
-  // keep their axes and an OBV of 0, so s->sum() is not to be compared.
+  // for boxes of levels 1..kShareSearchLevels, unless shares_in_search is false; else it
+  // minimises OBV alone, and only the state's score sees the overlaps. False when the time budget
+  // cut it short: then the groups not reached keep their axes and an OBV of 0, so s->sum() is not
+  // to be compared.
   bool update_boxes(State* s, bool shares_in_search = true) {
-    const bool search_omv = omv() && shares_in_search;
+    const bool search_omv = omv() && shares_in_search && level_ <= kShareSearchLevels;
     s->obv.assign(s->groups.size(), 0.0);
     for (size_t g = 0; g < s->groups.size(); ++g) {
       if (stopped()) return false;

@@ -118,7 +118,7 @@ std::string queries_digest(const std::vector<collision::Collider>& colliders) {
 }
 
 // What a variational build depends on, for its checkpoints: a state saved under another
-// fingerprint is refused, so a resumed build is the build that was interrupted. "builder 2":
+// fingerprint is refused, so a resumed build is the build that was interrupted. "builder 3":
 // bump when the builder's decisions change, so that older states are refused.
 std::string build_fingerprint(const Mesh& mesh, const BuildOptions& o,
                               const std::string& estimator) {
@@ -126,7 +126,7 @@ std::string build_fingerprint(const Mesh& mesh, const BuildOptions& o,
   // The recorded-query builds name the estimator they would have had, as they always did.
   const std::string named =
       estimator == "queries" ? (o.backend == Backend::kPoly ? "poly" : "cpu") : estimator;
-  return "builder 2; mesh " + mesh_sha256(mesh) + "; depth " + std::to_string(o.depth) +
+  return "builder 3; mesh " + mesh_sha256(mesh) + "; depth " + std::to_string(o.depth) +
          "; arity " + std::to_string(o.arity) + "; lloyd " + std::to_string(o.lloyd) + "; seed " +
          std::to_string(o.seed) + "; axis search " + on(o.axis_search) + "; adjust " +
          on(o.adjust) + "; merge " + on(o.merge) + "; sweeps " + std::to_string(o.sweeps) + "; m " +
