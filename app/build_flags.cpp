@@ -15,9 +15,9 @@ namespace vobb::app {
 namespace {
 
 const char* const kObjectiveHelp =
-    "What the variational search minimises per set of boxes: obv (the sum of their OBV) or omv "
-    "(that sum less "
-    "what each shares outside the solid with those before it, by the polyhedral solver: their OMV)";
+    "What the variational search minimises per set of boxes: omv (the default: the sum of their "
+    "OBV less what each shares outside the solid with those before it, by the polyhedral solver: "
+    "their OMV, which the certificate charges) or obv (the sum of their OBV, the paper's; faster)";
 const char* const kThreadsHelp =
     "Threads of a variational build: the nodes of a level searched at once, and each batch's "
     "estimates (CPU twin) or plans (GL) (default: every core this process may use); the tree is "
@@ -39,7 +39,7 @@ struct ProgressLine {
   const char* objective_name() const {
     const bool grown = flags.options.collider_margin > 0;
     if (!flags.queries.empty()) return "hits";
-    if (flags.objective == "omv") return grown ? "grown OMV" : "OMV";
+    if (flags.objective != "obv") return grown ? "grown OMV" : "OMV";
     return grown ? "grown OBV" : "OBV";
   }
 
@@ -129,7 +129,6 @@ void add_build_flags(CLI::App* cmd, BuildFlags* f, bool compare) {
                 "measured to raise e, so off)");
   cmd->add_flag("--no-merge", f->no_merge, "Ablation: no bottom-up merging sweeps");
   cmd->add_option("--objective", f->objective, kObjectiveHelp)
-      ->capture_default_str()
       ->check(CLI::IsMember({"obv", "omv"}));
   cmd->add_option("--sweeps", o.sweeps, "Most bottom-up merging sweeps")
       ->capture_default_str()
@@ -190,7 +189,7 @@ BuildOptions build_options(const BuildFlags& f) {
               : f.backend == "cpu"  ? Backend::kCpu
               : f.backend == "poly" ? Backend::kPoly
                                     : Backend::kAuto;
-  o.objective = f.objective == "omv" ? Objective::kOmv : Objective::kObv;
+  if (!f.objective.empty()) o.objective = f.objective == "omv" ? Objective::kOmv : Objective::kObv;
   o.axis_search = !f.no_axis_search;
   o.merge = !f.no_merge;
   auto line = std::make_shared<ProgressLine>();

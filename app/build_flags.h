@@ -16,7 +16,7 @@ namespace vobb::app {
 struct BuildFlags {
   std::string method = "variational";
   std::string backend = "auto";
-  std::string objective = "obv";
+  std::string objective;  // "obv", "omv", or empty: the default (BuildOptions::objective)
   std::vector<std::string> queries;  // query files (build only)
   int threads = 0;
   bool quiet = false;

@@ -43,6 +43,8 @@ UpperBoundResult run_upper_bound_study(const UpperBoundConfig& config, const Sta
       o.sweeps = config.max_sweeps;
       o.m = config.variational_m;
       o.backend = vobb::Backend::kCpu;
+      // build_tree's default objective, named here as the report names it.
+      if (o.method == Method::kVariational) o.objective = Objective::kOmv;
       Tree tree;
       const Status built = build_tree(mesh, o, &tree);
       VOBB_ASSERT(built, built.message().c_str());  // the options are the study's own

@@ -658,7 +658,8 @@ std::string summary_header(const SuiteOptions& options, const Plan& plan, const 
   md << "; trees on ";
   for (const auto& n : plan.trees) md << n << " ";
   md << "(depth " << plan.depth << "; variational: CPU twin at m = " << uc.variational_m << ", "
-     << plan.lloyd << " Lloyd iterations, at most " << plan.sweeps << " merging sweeps)\n";
+     << plan.lloyd << " Lloyd iterations, at most " << plan.sweeps
+     << " merging sweeps, objective omv)\n";
   md << "- Corpus: " << plan.boxes_per_size
      << " boxes per (mesh, size), sizes leaf / mid / root (validate/box_corpus.h: jittered "
         "OBB-Tree nodes of "

@@ -117,6 +117,13 @@ std::string queries_digest(const std::vector<collision::Collider>& colliders) {
   return sha256_hex(bytes.data(), bytes.size());
 }
 
+// What a variational search on an OBV estimator minimises: the objective set, else kOmv. The
+// recorded queries' search counts hits, and takes no shares.
+Objective search_objective(const BuildOptions& o) {
+  if (!o.queries.empty()) return Objective::kObv;
+  return o.objective.value_or(Objective::kOmv);
+}
+
 // What a variational build depends on, for its checkpoints: a state saved under another
 // fingerprint is refused, so a resumed build is the build that was interrupted. "builder 3":
 // bump when the builder's decisions change, so that older states are refused.
@@ -135,7 +142,7 @@ std::string build_fingerprint(const Mesh& mesh, const BuildOptions& o,
          (o.collider_margin > 0 ? "; collider margin " + format_double(o.collider_margin)
                                 : std::string()) +
          (o.queries.empty() ? std::string() : "; recorded queries " + queries_digest(o.queries)) +
-         (o.objective == Objective::kOmv ? "; objective omv" : "");
+         (search_objective(o) == Objective::kOmv ? "; objective omv" : "");
 }
 
 // The OBB-Tree baseline at the options' depth and arity.
@@ -177,7 +184,7 @@ Status build_variational_tree(const Mesh& mesh, const BuildOptions& o, const Est
   // The overlap-aware objective's shares: the polyhedral solver's doubles, whatever the OBV
   // estimator (the cubemap has no form for them).
   std::unique_ptr<PolyOverlapSolver> shares;
-  if (o.objective == Objective::kOmv) {
+  if (search_objective(o) == Objective::kOmv) {
     opt.objective = Objective::kOmv;
     shares = std::make_unique<PolyOverlapSolver>(mesh);
     const PolyOverlapSolver* p = shares.get();
@@ -337,10 +344,10 @@ Status check_build_options(const BuildOptions& o) {
     return Status::error("--queries applies to --method variational only");
   if (!o.queries.empty() && o.collider_margin > 0)
     return Status::error("--queries and --collider-margin are two objectives; choose one");
-  if (o.objective == Objective::kOmv && !variational)
+  if (o.objective && !variational)
     return Status::error("--objective applies to --method variational only");
-  if (!o.queries.empty() && o.objective == Objective::kOmv)
-    return Status::error("--queries and --objective omv are two objectives; choose one");
+  if (!o.queries.empty() && o.objective)
+    return Status::error("--queries and --objective are two objectives; choose one");
   // The baseline takes well under a second and has no search to budget or resume.
   if (!o.checkpoint.empty() && !variational)
     return Status::error("--checkpoint applies to --method variational only");

@@ -97,7 +97,9 @@ TEST(CliBadInput, MissingFileDirectoryAndUsage) {
   }
   // An objective that is neither, and two objectives at once, before the mesh is read.
   for (const char* args : {"build x.off -o t.json --objective sum",
-                           "build x.off -o t.json --objective omv --queries q.json"}) {
+                           "build x.off -o t.json --objective omv --queries q.json",
+                           "build x.off -o t.json --objective obv --queries q.json",
+                           "build x.off -o t.json --objective obv --method obbtree"}) {
     r = vobb_cli(args);
     EXPECT_EQ(r.code, 2) << args;
     EXPECT_EQ(line_count(r.err), 1u) << args << ": " << r.err;
@@ -976,9 +978,9 @@ TEST(Cli, KilledBuildResumesToTheSameTree) {
                                  " --collider-margin 0.1 --checkpoint " + dir);
   EXPECT_EQ(margin.code, 2);
   EXPECT_NE(margin.err.find("checkpoint of another build"), std::string::npos) << margin.err;
-  // So is the objective: the obv state is refused by an omv build.
+  // So is the objective: the default's (omv) state is refused by an obv build.
   const CliRun objective =
-      vobb_cli("build " + mesh + " -o " + resumed + args + " --objective omv --checkpoint " + dir);
+      vobb_cli("build " + mesh + " -o " + resumed + args + " --objective obv --checkpoint " + dir);
   EXPECT_EQ(objective.code, 2);
   EXPECT_NE(objective.err.find("checkpoint of another build"), std::string::npos) << objective.err;
   std::system(("rm -rf " + dir).c_str());

@@ -11,6 +11,7 @@
 #include "common/sha256.h"
 #include "data/analytic_meshes.h"
 #include "fast/cpu_estimator.h"
+#include "fast/poly_overlap.h"
 #include "test_common.h"
 
 namespace vobb {
@@ -27,7 +28,8 @@ BuildOptions small_build() {
 }
 
 // build_tree's variational tree is build_variational's with the CPU twin, bit for bit, and its
-// mesh_sha256 is the mesh's.
+// mesh_sha256 is the mesh's. Its objective is kOmv unless set, with the polyhedral solver's
+// shares; set to kObv, the builder's own default, no share is taken.
 TEST(BuildTree, IsTheBuilderWithTheChosenEstimator) {
   const Mesh mesh = analytic::polygonal_torus().mesh;
   const BuildOptions o = small_build();
@@ -42,11 +44,27 @@ TEST(BuildTree, IsTheBuilderWithTheChosenEstimator) {
   v.lloyd_iterations = o.lloyd;
   v.max_sweeps = o.sweeps;
   v.concurrent_estimates = true;
+  v.objective = Objective::kOmv;
+  const PolyOverlapSolver shares(mesh);
+  v.share = [&](const std::vector<ShareQuery>& q) { return shares.estimate(q); };
   const CpuObvEstimator cpu(mesh);
-  Tree direct =
-      build_variational(mesh, v, [&](const std::vector<Obb>& b) { return cpu.estimate(b, o.m); });
+  const ObvEstimate estimate = [&](const std::vector<Obb>& b) { return cpu.estimate(b, o.m); };
+  Tree direct = build_variational(mesh, v, estimate);
   direct.mesh_sha256 = mesh_sha256(mesh);
   EXPECT_EQ(tree_to_json(via_face), tree_to_json(direct));
+  EXPECT_GT(report.search.overlaps, 0u);
+
+  BuildOptions paper = o;
+  paper.objective = Objective::kObv;
+  Tree via_face_obv;
+  ASSERT_TRUE(build_tree(mesh, paper, &via_face_obv, &report).is_ok());
+  EXPECT_EQ(report.search.overlaps, 0u);
+  v.objective = Objective::kObv;
+  v.share = nullptr;
+  Tree direct_obv = build_variational(mesh, v, estimate);
+  direct_obv.mesh_sha256 = mesh_sha256(mesh);
+  EXPECT_EQ(tree_to_json(via_face_obv), tree_to_json(direct_obv));
+  EXPECT_NE(tree_to_json(via_face_obv), tree_to_json(via_face));  // the objective reached it
 }
 
 // Without the GL component, kGl is refused in one line and kAuto takes the CPU twin even from
@@ -81,7 +99,10 @@ TEST(BuildTree, RefusesOptionsThatContradictEachOther) {
        "--objective"},
       {[](BuildOptions* o) { o->collider_margin = -1; }, "--collider-margin"},
       {[](BuildOptions* o) { o->collider_margin = 1e9; }, "bounding-box diagonal"},
+      {[](BuildOptions* o) { o->method = Method::kObbTree, o->objective = Objective::kObv; },
+       "--objective"},
       {[](BuildOptions* o) { o->queries.resize(1), o->objective = Objective::kOmv; }, "--queries"},
+      {[](BuildOptions* o) { o->queries.resize(1), o->objective = Objective::kObv; }, "--queries"},
       {[](BuildOptions* o) { o->depth = 31; }, "--depth"},
       {[](BuildOptions* o) { o->arity = 1; }, "--arity"},
   };
