@@ -1,5 +1,6 @@
 // vobb compare MESH: both builders, both trees certified (vobb/vobb.h, compare): OMV per layer,
-// its change, and each tree's e; with --figure, both trees drawn (vobb/gl.h).
+// its change, and each tree's e; with --figure, both trees drawn (vobb/gl.h); with --tree, the
+// variational tree written as `build -o` writes it.
 #include <cstdio>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -9,6 +10,7 @@
 #include "app/cli_support.h"
 #include "app/command.h"
 #include "common/io/mesh_report.h"
+#include "common/tree_io.h"
 #include "vobb/gl.h"
 #include "vobb/vobb.h"
 
@@ -80,6 +82,9 @@ class CompareCommand final : public Command {
     cmd_->add_option("--figure", figure_,
                      "Also draw both trees' boxes at levels 1..8 over the mesh to this PNG")
         ->check(kPath);
+    cmd_->add_option("--tree", tree_,
+                     "Also write the variational tree it built and certified (as build -o does)")
+        ->check(kPath);
     cmd_->add_option("--figure-up", figure_up_,
                      "The mesh's up axis in the figure: x, y, z, -x, -y or -z")
         ->capture_default_str()
@@ -94,6 +99,12 @@ class CompareCommand final : public Command {
       s = check_output_is_not_checkpoint("--figure", figure_, flags_.options.checkpoint,
                                          compare_checkpoint_files());
     if (s) s = check_output_is_writable("--figure", figure_);
+    if (s) s = check_output_is_not_input("--tree", tree_, {mesh_});
+    if (s)
+      s = check_output_is_not_checkpoint("--tree", tree_, flags_.options.checkpoint,
+                                         compare_checkpoint_files());
+    if (s) s = check_outputs_differ("--tree", tree_, "--figure", figure_);
+    if (s) s = check_output_is_writable("--tree", tree_);
     return s;
   }
 
@@ -114,6 +125,10 @@ class CompareCommand final : public Command {
     CompareResult r;
     s = compare(loaded.mesh, o, &r);
     if (!s) return refuse(s);
+    if (!tree_.empty()) {
+      s = write_tree(r.trees[1], tree_);
+      if (!s) return could_not_finish(s);  // its folder took a file when the run started
+    }
     if (json_)
       print_json(r, rational_, loaded.single_precision);
     else
@@ -135,7 +150,7 @@ class CompareCommand final : public Command {
 
  private:
   CLI::App* cmd_ = nullptr;
-  std::string mesh_, figure_, figure_up_ = "y";
+  std::string mesh_, figure_, tree_, figure_up_ = "y";
   bool json_ = false, rational_ = false;
   BuildFlags flags_;
 };

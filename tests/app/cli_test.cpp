@@ -493,6 +493,38 @@ TEST(Cli, CompareWeighsTreesOfDifferentDepthsAlike) {
 // compare's variational build takes --checkpoint as build does, with the same fingerprint: a
 // build with the same flags resumes from the state compare saved (nothing left to search) and
 // writes the bytes of a build from scratch.
+// compare --tree writes the variational tree it certified: the bytes `build -o` writes with the
+// same flags, whose certificate is compare's e to the rational. An output that is the mesh or
+// the figure is refused before any work.
+TEST(Cli, CompareWritesTheTreeItCertified) {
+  const std::string mesh = test::temp_path("cmp_tree_torus.off");
+  test::write_off(analytic::polygonal_torus().mesh, mesh);
+  const std::string flags = " --depth 3 --m 8 --backend cpu --quiet";
+  const std::string from_compare = test::temp_path("cmp_tree.json"),
+                    from_build = test::temp_path("cmp_build.json");
+  CliRun r = vobb_cli("compare " + mesh + flags + " --json --rational --tree " + from_compare);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const nlohmann::json doc = nlohmann::json::parse(r.out);
+  ASSERT_EQ(vobb_cli("build " + mesh + " -o " + from_build + flags).code, 0);
+  ASSERT_FALSE(slurp(from_compare).empty());
+  EXPECT_EQ(slurp(from_compare), slurp(from_build));
+  r = vobb_cli("certify " + mesh + " " + from_compare + " --json --rational --quiet");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(
+      Rational(nlohmann::json::parse(r.out).at("weighted_error_rational").get<std::string>()) ==
+      Rational(doc.at("e_variational_rational").get<std::string>()));
+  const std::string figure = test::temp_path("cmp_tree.png");
+  for (const auto& [args, says] : std::vector<std::pair<std::string, std::string>>{
+           {" --tree " + mesh, "is the input file"},
+           {" --figure " + figure + " --tree " + figure, "is also the file of --figure"}}) {
+    r = vobb_cli("compare " + mesh + flags + args);
+    EXPECT_EQ(r.code, 2) << args;
+    EXPECT_EQ(line_count(r.err), 1u) << args << ": " << r.err;
+    EXPECT_NE(r.err.find(says), std::string::npos) << args << ": " << r.err;
+  }
+  for (const std::string& p : {mesh, from_compare, from_build}) std::remove(p.c_str());
+}
+
 TEST(Cli, CompareAndBuildShareACheckpoint) {
   const std::string mesh = write_cube("ck_cube.off", 1);
   const std::string dir = test::temp_path("ck_dir");
