@@ -1061,11 +1061,12 @@ class Builder {
             }
           }
         }
-      // Screen every move by the best of a few fixed orientations per new group (the two old
-      // parents' axes and the group's covariance axes); only the two best screened get the full
-      // orientation search, which costs a hundred estimates or more per group. Under kOmv that
-      // search minimises OBV alone and the move is judged by the searched state's objective,
-      // overlaps included (why: docs/derivations.md, "The variational builder", Objective).
+      // Screen every move by the sum of OBV of the best of a few fixed orientations per new group
+      // (the two old parents' axes and the group's covariance axes); only the two best screened
+      // get the full orientation search, which costs a hundred estimates or more per group.
+      // Under either objective the screen and that search weigh OBV alone; under kOmv the move
+      // is judged by the searched state's objective, overlaps included (why: docs/derivations.md,
+      // "The variational builder", Objective).
       std::vector<NodeSplitter::State> cand(moves.size());
       std::vector<double> screen(moves.size());
       for (size_t c = 0; c < moves.size(); ++c) {
@@ -1087,11 +1088,6 @@ class Builder {
           screen[c] += v[at];
           s.axes.push_back(boxes[at].axes);
           s.obv.push_back(v[at]);
-        }
-        if (omv) {  // the screened boxes' objective, overlaps included
-          splitter->set_context(context_for(*st, g, mv.a, mv.b));
-          splitter->score_overlaps(&s);
-          screen[c] = s.objective();
         }
       }
       std::vector<size_t> order(moves.size());
