@@ -17,7 +17,8 @@ namespace {
 const char* const kObjectiveHelp =
     "What the variational search minimises per set of boxes: omv (the default: the sum of their "
     "OBV less what each shares outside the solid with those before it, by the polyhedral solver: "
-    "their OMV, which the certificate charges) or obv (the sum of their OBV, the paper's; faster)";
+    "their OMV, which the certificate charges; with --collider-margin the default is obv) or obv "
+    "(the sum of their OBV, the paper's; faster)";
 const char* const kThreadsHelp =
     "Threads of a variational build: the nodes of a level searched at once, and each batch's "
     "estimates (CPU twin) or plans (GL) (default: every core this process may use); the tree is "
@@ -39,7 +40,8 @@ struct ProgressLine {
   const char* objective_name() const {
     const bool grown = flags.options.collider_margin > 0;
     if (!flags.queries.empty()) return "hits";
-    if (flags.objective != "obv") return grown ? "grown OMV" : "OMV";
+    if (flags.objective == "omv" || (flags.objective.empty() && !grown))
+      return grown ? "grown OMV" : "OMV";
     return grown ? "grown OBV" : "OBV";
   }
 

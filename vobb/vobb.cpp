@@ -117,11 +117,12 @@ std::string queries_digest(const std::vector<collision::Collider>& colliders) {
   return sha256_hex(bytes.data(), bytes.size());
 }
 
-// What a variational search on an OBV estimator minimises: the objective set, else kOmv. The
-// recorded queries' search counts hits, and takes no shares.
+// What a variational search minimises: the objective set, else kOmv, but for the collision
+// objectives. The recorded queries' search counts hits, and takes no shares; with a collider
+// margin the default is the sum, since a collider in a region two boxes share tests both.
 Objective search_objective(const BuildOptions& o) {
   if (!o.queries.empty()) return Objective::kObv;
-  return o.objective.value_or(Objective::kOmv);
+  return o.objective.value_or(o.collider_margin > 0 ? Objective::kObv : Objective::kOmv);
 }
 
 // What a variational build depends on, for its checkpoints: a state saved under another

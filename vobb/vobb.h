@@ -66,9 +66,10 @@ struct BuildOptions {
   uint64_t seed = 1;
   bool axis_search = true, adjust = false, merge = true;
   int sweeps = 3;
-  // What the search minimises per set of boxes; unset: kOmv where the search estimates OBV
-  // (docs/BENCHMARKS.md: it gives the lower exact e). kOmv takes its shares from the polyhedral
-  // solver, whatever the backend. Set, it is refused with kObbTree and with queries.
+  // What the search minimises per set of boxes; unset: kOmv (docs/BENCHMARKS.md: it gives the
+  // lower exact e), but kObv with a collider margin (a collider in a region two boxes share
+  // tests both: the sum counts the tests). kOmv takes its shares from the polyhedral solver,
+  // whatever the backend. Set, it is refused with kObbTree and with queries.
   std::optional<Objective> objective;
   double collider_margin = 0;  // world units, 0 .. the mesh's bounding-box diagonal
   // When not empty, the search minimises the recorded queries that hit each box instead of

@@ -67,6 +67,24 @@ TEST(BuildTree, IsTheBuilderWithTheChosenEstimator) {
   EXPECT_NE(tree_to_json(via_face_obv), tree_to_json(via_face));  // the objective reached it
 }
 
+// With a collider margin the default objective is the sum (a collider in a shared region tests
+// both boxes): the tree of kObv set, with no shares; kOmv set still takes them.
+TEST(BuildTree, ColliderMarginDefaultsToTheSum) {
+  const Mesh mesh = analytic::polygonal_torus().mesh;
+  BuildOptions o = small_build();
+  o.collider_margin = 0.05;
+  Tree by_default, by_sum, by_union;
+  BuildReport report;
+  ASSERT_TRUE(build_tree(mesh, o, &by_default, &report).is_ok());
+  EXPECT_EQ(report.search.overlaps, 0u);
+  o.objective = Objective::kObv;
+  ASSERT_TRUE(build_tree(mesh, o, &by_sum).is_ok());
+  EXPECT_EQ(tree_to_json(by_default), tree_to_json(by_sum));
+  o.objective = Objective::kOmv;
+  ASSERT_TRUE(build_tree(mesh, o, &by_union, &report).is_ok());
+  EXPECT_GT(report.search.overlaps, 0u);
+}
+
 // Without the GL component, kGl is refused in one line and kAuto takes the CPU twin even from
 // the m at which it would try a GPU.
 TEST(BuildTree, WithoutTheGlComponentGlIsRefusedAndAutoTakesTheCpuTwin) {
