@@ -37,11 +37,12 @@ struct ProgressLine {
   double last = -1, done0 = -1, sweep_t0 = 0;
   int sweep_seen = 0;
 
+  Objective objective = Objective::kObv;  // search_objective() of the build's options
+
   const char* objective_name() const {
     const bool grown = flags.options.collider_margin > 0;
     if (!flags.queries.empty()) return "hits";
-    if (flags.objective == "omv" || (flags.objective.empty() && !grown))
-      return grown ? "grown OMV" : "OMV";
+    if (objective == Objective::kOmv) return grown ? "grown OMV" : "OMV";
     return grown ? "grown OBV" : "OBV";
   }
 
@@ -196,6 +197,7 @@ BuildOptions build_options(const BuildFlags& f) {
   o.merge = !f.no_merge;
   auto line = std::make_shared<ProgressLine>();
   line->flags = f;
+  line->objective = search_objective(o);
   if (!f.quiet) {
     o.progress = [line](const VariationalProgress& p) { (*line)(p); };
     o.note = [](const std::string& s) { std::fprintf(stderr, "vobb: %s\n", one_line(s).c_str()); };

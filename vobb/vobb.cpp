@@ -117,14 +117,6 @@ std::string queries_digest(const std::vector<collision::Collider>& colliders) {
   return sha256_hex(bytes.data(), bytes.size());
 }
 
-// What a variational search minimises: the objective set, else kOmv, but for the collision
-// objectives. The recorded queries' search counts hits, and takes no shares; with a collider
-// margin the default is the sum, since a collider in a region two boxes share tests both.
-Objective search_objective(const BuildOptions& o) {
-  if (!o.queries.empty()) return Objective::kObv;
-  return o.objective.value_or(o.collider_margin > 0 ? Objective::kObv : Objective::kOmv);
-}
-
 // What a variational build depends on, for its checkpoints: a state saved under another
 // fingerprint is refused, so a resumed build is the build that was interrupted. "builder 3":
 // bump when the builder's decisions change, so that older states are refused.
@@ -333,6 +325,11 @@ Rational tree_error(const std::vector<Rational>& layer_omv) {
   Rational e(0);
   for (int l = 0; l <= depth; ++l) e += Rational(layer_weight(depth, l)) * layer_omv[l];
   return e;
+}
+
+Objective search_objective(const BuildOptions& o) {
+  if (!o.queries.empty()) return Objective::kObv;
+  return o.objective.value_or(o.collider_margin > 0 ? Objective::kObv : Objective::kOmv);
 }
 
 Status check_build_options(const BuildOptions& o) {

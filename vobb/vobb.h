@@ -96,6 +96,10 @@ struct BuildReport {
 // Reads recorded-query files (`vobb collide --record-queries`) made for this mesh into
 // options->queries.
 Status read_queries(const Mesh& mesh, const std::vector<std::string>& paths, BuildOptions* options);
+// What a variational build with these options minimises per set of boxes: the objective set,
+// else kOmv, but kObv with a collider margin; with queries the search counts hits and takes no
+// shares (kObv).
+Objective search_objective(const BuildOptions& options);
 // The combinations of options that contradict each other, refused with the flag's name.
 Status check_build_options(const BuildOptions& options);
 // Builds the tree of a solid mesh; fills every field, mesh_sha256 included. Deterministic: the

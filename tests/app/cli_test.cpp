@@ -493,6 +493,25 @@ TEST(Cli, CompareWeighsTreesOfDifferentDepthsAlike) {
 // compare's variational build takes --checkpoint as build does, with the same fingerprint: a
 // build with the same flags resumes from the state compare saved (nothing left to search) and
 // writes the bytes of a build from scratch.
+// The progress line names what the search minimises: the library's search_objective, so OMV by
+// default and OBV with a collider margin, unless --objective says otherwise.
+TEST(Cli, ProgressNamesTheObjectiveTheSearchMinimises) {
+  const std::string mesh = test::temp_path("progress_torus.off");
+  test::write_off(analytic::polygonal_torus().mesh, mesh);
+  const std::string out = test::temp_path("progress_tree.json");
+  for (const auto& [args, says] : std::vector<std::pair<std::string, std::string>>{
+           {"", "sum OMV "},
+           {" --objective obv", "sum OBV "},
+           {" --collider-margin 0.05", "sum grown OBV "},
+           {" --collider-margin 0.05 --objective omv", "sum grown OMV "}}) {
+    const CliRun r =
+        vobb_cli("build " + mesh + " -o " + out + " --depth 1 --m 4 --backend cpu" + args);
+    ASSERT_EQ(r.code, 0) << args << ": " << r.err;
+    EXPECT_NE(r.err.find(says), std::string::npos) << args << ": " << r.err;
+  }
+  for (const std::string& p : {mesh, out}) std::remove(p.c_str());
+}
+
 // compare --tree writes the variational tree it certified: the bytes `build -o` writes with the
 // same flags, whose certificate is compare's e to the rational. An output that is the mesh or
 // the figure is refused before any work.

@@ -73,6 +73,7 @@ TEST(BuildTree, ColliderMarginDefaultsToTheSum) {
   const Mesh mesh = analytic::polygonal_torus().mesh;
   BuildOptions o = small_build();
   o.collider_margin = 0.05;
+  EXPECT_EQ(search_objective(o), Objective::kObv);
   Tree by_default, by_sum, by_union;
   BuildReport report;
   ASSERT_TRUE(build_tree(mesh, o, &by_default, &report).is_ok());
