@@ -3,7 +3,8 @@
 // faces by their centroids' projection), each part's box screened over K seeded rotations by
 // its tight volume, the `top` best splits by the screen then refined (each part's rotation by
 // a descent on its tight volume) and measured. A level's OMV is what the variational builder's
-// level 1 is judged by (issue 33); this bounds what a better root split alone could give.
+// level 1 is judged by (issue 33): what a better root split could give, as far as a search
+// over plane splits finds (not a proven optimum).
 // With a tree, its level-1 partition is refitted the same way first, to compare like with like.
 // Every OMV printed is certify's filter (exact/filtered_solver.h): OBV(A) + OBV(B) less B's
 // share with A, an enclosure of the exact value of the two fit_obb boxes, printed as its
