@@ -15,4 +15,4 @@ plot 'error_by_m.csv' using (strcol(1) eq 'cpu' ? $2 : NaN):4 with linespoints l
  '' using (strcol(1) eq 'gl' ? $2 : NaN):4 with points pt 6 ps 2 lc rgb '#1f77b4' title 'GL median', \
  '' using (strcol(1) eq 'gl' ? $2 : NaN):5 with points pt 4 ps 2 lc rgb '#2ca02c' title 'GL p95', \
  '' using (strcol(1) eq 'gl' ? $2 : NaN):6 with points pt 8 ps 2 lc rgb '#d62728' title 'GL max', \
- 0.00012875935805144807*(x/32.0)**-2 with lines dt 2 lc rgb 'gray40' title 'm^{-2} (through the CPU median at 32)'
+ 0.00012875935799009378*(x/32.0)**-2 with lines dt 2 lc rgb 'gray40' title 'm^{-2} (through the CPU median at 32)'
