@@ -84,13 +84,12 @@ struct ProgressLine {
 // The one line after a variational build.
 void say_report(const VariationalReport& r) {
   std::fprintf(stderr,
-               "vobb: %zu boxes estimated (%zu more measured again, from the search's record), %zu "
-               "shares of "
-               "overlap estimated, %zu adjusted splits and %zu merges kept, %d sweeps (%zu "
-               "regroupings unchanged since "
-               "they found no move, not run again)%s\n",
-               r.estimates, r.reused, r.overlaps, r.adjustments, r.merges, r.sweeps,
-               r.regroups_skipped,
+               "vobb: %zu boxes estimated (%zu more asked again, answered from a record: %zu of "
+               "them from the node's regrouping in an earlier sweep), %zu shares of overlap "
+               "estimated, %zu adjusted splits and %zu merges kept, %d sweeps (%zu regroupings "
+               "unchanged since they found no move, not run again)%s\n",
+               r.estimates, r.reused, r.reused_earlier, r.overlaps, r.adjustments, r.merges,
+               r.sweeps, r.regroups_skipped,
                r.budget_spent ? "; time budget spent: the rest got the baseline split" : "");
 }
 

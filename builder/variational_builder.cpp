@@ -116,8 +116,9 @@ constexpr int kShareSearchLevels = 2;
 // spent for all.
 struct SearchShared {
   std::atomic<size_t> estimates{0};
-  std::atomic<size_t> reused{0};    // boxes of a search measured again, answered from its record
-  std::atomic<size_t> overlaps{0};  // shares estimated (kOmv)
+  std::atomic<size_t> reused{0};  // boxes of a search measured again, answered from its record
+  std::atomic<size_t> reused_earlier{0};  // of those, answered from an earlier search's record
+  std::atomic<size_t> overlaps{0};        // shares estimated (kOmv)
   std::atomic<size_t> adjustments{0};
   std::atomic<size_t> merges{0};
   std::atomic<size_t> regroups_skipped{0};
@@ -163,8 +164,24 @@ class NodeSplitter {
   void begin_search() {
     measured_.clear();
     measured_shares_.clear();
+    earlier_.boxes.clear();
     context_.clear();
   }
+
+  // What a search measured: its boxes' values, by their bits. (Not its shares: a later
+  // regrouping asks again for few of them, docs/BENCHMARKS.md, "Regroupings that start from
+  // their last run's record".)
+  struct Record;
+  // A new search that may also answer from what an earlier one measured (a node's regrouping
+  // in a later sweep asks again for many of the boxes its run in the sweep before measured);
+  // as begin_search() otherwise. The values are those the estimator would give again (it
+  // depends on the box alone), so the search's decisions are the same with the record or
+  // without.
+  void begin_search_from(Record record);
+  // What the current search asked for, with the values it got (answered from the earlier
+  // record or not), taken out; the earlier record's other entries are dropped, so a record
+  // carried from search to search holds no more than one search's boxes.
+  Record take_record();
 
   // The root: one group, its axes optimised like any child's.
   std::array<Vec3, 3> optimise_single(const std::vector<int32_t>& faces) {
@@ -333,6 +350,12 @@ class NodeSplitter {
       const auto hit = options_.reuse_known ? measured_.find(key) : measured_.end();
       if (hit != measured_.end()) {
         out[i] = hit->second;
+        continue;
+      }
+      if (const auto old = earlier_.boxes.find(key); old != earlier_.boxes.end()) {
+        out[i] = old->second;
+        measured_.emplace(key, old->second);
+        ++shared_->reused_earlier;
         continue;
       }
       in.push_back(all[i]);
@@ -766,7 +789,26 @@ class NodeSplitter {
   // The current search's shares, keyed by their boxes' bits (measure_share()).
   std::unordered_map<std::vector<uint64_t>, double, WordsHash> measured_shares_;
   std::vector<Obb> context_;  // set_context()
+
+ public:
+  struct Record {
+    std::unordered_map<BoxBits, double, BoxBitsHash> boxes;
+  };
+
+ private:
+  Record earlier_;  // begin_search_from(): answers what measured_ lacks
 };
+
+void NodeSplitter::begin_search_from(Record record) {
+  begin_search();
+  earlier_ = std::move(record);
+}
+
+NodeSplitter::Record NodeSplitter::take_record() {
+  Record r{std::move(measured_)};
+  begin_search();
+  return r;
+}
 
 std::vector<int32_t> merged(const std::vector<int32_t>& a, const std::vector<int32_t>& b) {
   std::vector<int32_t> out;
@@ -806,6 +848,7 @@ class Builder {
   void count(VariationalReport* report) const {
     report->estimates = shared_.estimates;
     report->reused = shared_.reused;
+    report->reused_earlier = shared_.reused_earlier;
     report->overlaps = shared_.overlaps;
     report->adjustments = shared_.adjustments;
     report->merges = shared_.merges;
@@ -945,6 +988,7 @@ class Builder {
     // Sized here, on this thread: the parallel regroupings of a level each write only their
     // own slot.
     settled_.resize(st->nodes.size());
+    known_.resize(st->nodes.size());
     for (int l = d - 1; l >= 1 && !out_of_time(st); --l) {
       std::vector<int32_t> grand;
       for (const TreeNode& n : st->nodes)
@@ -1005,7 +1049,23 @@ class Builder {
       return 0;
     }
     settled_[g].reset();
-    splitter->begin_search();
+    // The record of g's last regrouping, if any, and g's record again when this one ends
+    // (under kOmv only: see known_).
+    const bool records = options_.reuse_known && options_.objective == Objective::kOmv;
+    if (records && known_[g]) {
+      splitter->begin_search_from(std::move(*known_[g]));
+      known_[g].reset();
+    } else {
+      splitter->begin_search();
+    }
+    struct KeepRecord {
+      NodeSplitter* splitter;
+      std::optional<NodeSplitter::Record>* into;
+      bool keep;
+      ~KeepRecord() {
+        if (keep) *into = splitter->take_record();
+      }
+    } keep_record{splitter, &known_[g], records};
     std::vector<Obb> boxes;
     for (int32_t p : parents) boxes.push_back(tight_box(mesh_, st->nodes[p].faces, st->axes[p]));
     const std::vector<double> v = splitter->measure(boxes);
@@ -1259,6 +1319,15 @@ class Builder {
   // and finds no move again, the same tree. At most one copy of the mesh's face ids per level
   // above the last two, and none where reuse_known is off.
   std::vector<std::optional<RegroupInputs>> settled_;
+  // Per node g, under kOmv: what its last regrouping measured (NodeSplitter::Record), which its
+  // next one may answer from. Under kOmv a regrouping runs again where only its context (the
+  // layer's other boxes) changed, and asks again for most of the boxes of its last run; under
+  // kObv it runs again only where its own inputs changed, and asks for few of them
+  // (docs/BENCHMARKS.md, "Regroupings that start from their last run's record"), so nothing is
+  // kept. Per node, so what it saves does not depend on which thread ran which regrouping; not
+  // saved in a checkpoint (a resumed build measures those boxes again, to the same values).
+  // Empty where reuse_known is off.
+  std::vector<std::optional<NodeSplitter::Record>> known_;
   // Under kOmv, the boxes of the layer being regrouped, as they stood when its regroupings began.
   struct LayerBox {
     int32_t parent;

@@ -221,6 +221,10 @@ TEST(VariationalBuilder, ReusingWhatIsKnownChangesNothing) {
     EXPECT_GT(36 * skip.reused, skip.estimates + skip.reused);
     EXPECT_EQ(full.reused, 0u);
     EXPECT_LT(skip.estimates, full.estimates);
+    // Under kObv no regrouping's record is kept for the next sweep (VariationalBuilderOmv's
+    // test checks the kOmv side).
+    EXPECT_EQ(skip.reused_earlier, 0u);
+    EXPECT_EQ(full.reused_earlier, 0u);
     // Sweeps after the first that moved units: the states saved before and after them differ.
     for (size_t k = 1; k < saved.size(); ++k)
       if (saved[k - 1].sweeps >= 1 && saved[k].sweeps > saved[k - 1].sweeps &&
