@@ -71,8 +71,8 @@ struct VariationalOptions {
   int max_sweeps = 3;
   // What the search already knows is not worked out again: a regrouping whose inputs are those
   // with which it last found no move is not run (VariationalReport::regroups_skipped), and a
-  // box measured before in the same search, or in the same node's regrouping in an earlier
-  // sweep, takes the value it got (VariationalReport::reused).
+  // box measured before in the same search, or under kOmv in the same node's regrouping in an
+  // earlier sweep, takes the value it got (VariationalReport::reused).
   // false works everything out, to check that the tree is the same (test
   // ReusingWhatIsKnownChangesNothing), or for an estimator that is not a function of the box
   // alone (see ObvEstimate).
@@ -109,7 +109,7 @@ struct VariationalReport {
   size_t estimates = 0;       // boxes estimated
   size_t reused = 0;  // boxes a search measured again, given the value it had (not estimated)
   size_t reused_earlier = 0;  // of those, boxes that the node's regrouping in an earlier sweep
-                              // measured
+                              // measured (kOmv)
   size_t overlaps = 0;        // shares estimated (kOmv)
   // Regroupings of a sweep not run: their inputs were those with which they last found no
   // move (see build_variational), so they would find none again.
