@@ -100,10 +100,18 @@ int main(int argc, char** argv) {
   }
   const vobb::exact::FilteredSolver fs(mesh);
   std::mt19937_64 rng(7);
-  std::normal_distribution<double> gauss;
+  // Box-Muller on the generator's raw bits (whose sequence the standard fixes), so that every
+  // standard library draws the same rotations; std::normal_distribution's algorithm is not
+  // fixed.
+  auto gauss = [&] {
+    const double u1 = (static_cast<double>(rng() >> 11) + 1) * 0x1.0p-53,
+                 u2 = static_cast<double>(rng() >> 11) * 0x1.0p-53;
+    return std::sqrt(-2 * std::log(u1)) * std::cos(2 * M_PI * u2);
+  };
   std::vector<Mat3> rotations;
   for (int k = 0; k < K; ++k) {
-    Eigen::Quaterniond q(gauss(rng), gauss(rng), gauss(rng), gauss(rng));
+    Eigen::Quaterniond q;
+    q.coeffs() << gauss(), gauss(), gauss(), gauss();
     rotations.push_back(q.normalized().toRotationMatrix());
   }
   auto best_rotation = [&](const std::vector<int32_t>& faces) {
