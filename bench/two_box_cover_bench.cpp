@@ -3,7 +3,7 @@
 // faces by their centroids' projection), each part's box screened over K seeded rotations by
 // its tight volume, the `top` best splits by the screen then refined (each part's rotation by
 // a descent on its tight volume) and measured. A level's OMV is what the variational builder's
-// level 1 is judged by (issue 33): what a better root split could give, as far as a search
+// level 1 is judged by: what a better root split could give, as far as a search
 // over plane splits finds (not a proven optimum).
 // With a tree, its level-1 partition is refitted the same way first, to compare like with like.
 // Every OMV printed is certify's filter (exact/filtered_solver.h): OBV(A) + OBV(B) less B's
@@ -19,6 +19,7 @@
 #include <random>
 
 #include "bench/bench_util.h"
+#include "builder/variational_builder.h"
 #include "common/obb.h"
 #include "common/tree.h"
 #include "common/tree_io.h"
@@ -31,16 +32,10 @@ using vobb::Obb;
 using vobb::Vec3;
 using Mat3 = Eigen::Matrix3d;
 
-// The faces' tight box volume in the frame whose rows are R's.
+// The faces' tight box volume along the rows of R (the builder's tight_box).
 double tight_volume(const Mesh& mesh, const std::vector<int32_t>& faces, const Mat3& R) {
-  Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
-  for (int32_t f : faces)
-    for (int k = 0; k < 3; ++k) {
-      const Vec3 p = R * mesh.corner(f, k);
-      lo = lo.cwiseMin(p);
-      hi = hi.cwiseMax(p);
-    }
-  return (hi - lo).prod();
+  return vobb::volume(
+      vobb::tight_box(mesh, faces, {Vec3(R.row(0)), Vec3(R.row(1)), Vec3(R.row(2))}));
 }
 
 // Descent on the rotation from R: small turns about each frame axis, halving the step when no

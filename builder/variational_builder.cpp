@@ -1051,7 +1051,8 @@ class Builder {
     settled_[g].reset();
     // The record of g's last regrouping, if any, and g's record again when this one ends
     // (under kOmv only: see known_).
-    const bool records = options_.reuse_known && options_.objective == Objective::kOmv;
+    const bool omv = options_.objective == Objective::kOmv;
+    const bool records = options_.reuse_known && omv;
     if (records && known_[g]) {
       splitter->begin_search_from(std::move(*known_[g]));
       known_[g].reset();
@@ -1071,7 +1072,6 @@ class Builder {
     const std::vector<double> v = splitter->measure(boxes);
     std::map<int32_t, double> cur;
     for (size_t i = 0; i < parents.size(); ++i) cur[parents[i]] = v[i];
-    const bool omv = options_.objective == Objective::kOmv;
     // Under kOmv: the objective of parents a and b as they stand, their overlap with each other
     // and with the layer's other boxes included (context_for); else their sum of OBV.
     auto current = [&](int32_t a, int32_t b) {
