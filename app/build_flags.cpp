@@ -87,9 +87,10 @@ void say_report(const VariationalReport& r) {
                "vobb: %zu boxes estimated (%zu more asked again, answered from a record: %zu of "
                "them from the node's regrouping in an earlier sweep), %zu shares of overlap "
                "estimated, %zu adjusted splits and %zu merges kept, %d sweeps (%zu regroupings "
-               "unchanged since they found no move, not run again)%s\n",
+               "unchanged since they found no move, not run again), %zu boxes turned by the "
+               "refit%s\n",
                r.estimates, r.reused, r.reused_earlier, r.overlaps, r.adjustments, r.merges,
-               r.sweeps, r.regroups_skipped,
+               r.sweeps, r.regroups_skipped, r.refitted,
                r.budget_spent ? "; time budget spent: the rest got the baseline split" : "");
 }
 
@@ -130,6 +131,9 @@ void add_build_flags(CLI::App* cmd, BuildFlags* f, bool compare) {
                 "Also run the adjustment step (Lloyd from other planar splits at levels 1-4; "
                 "measured to raise e, so off)");
   cmd->add_flag("--no-merge", f->no_merge, "Ablation: no bottom-up merging sweeps");
+  cmd->add_flag("--no-refit", f->no_refit,
+                "Ablation: under omv, no last step turning each box (its faces fixed) where that "
+                "lowers its layers' estimated OMV");
   cmd->add_option("--objective", f->objective, kObjectiveHelp)
       ->check(CLI::IsMember({"obv", "omv"}));
   cmd->add_option("--sweeps", o.sweeps, "Most bottom-up merging sweeps")
@@ -194,6 +198,7 @@ BuildOptions build_options(const BuildFlags& f) {
   if (!f.objective.empty()) o.objective = f.objective == "omv" ? Objective::kOmv : Objective::kObv;
   o.axis_search = !f.no_axis_search;
   o.merge = !f.no_merge;
+  o.refit = !f.no_refit;
   auto line = std::make_shared<ProgressLine>();
   line->flags = f;
   line->objective = search_objective(o);

@@ -20,7 +20,7 @@ struct BuildFlags {
   std::vector<std::string> queries;  // query files (build only)
   int threads = 0;
   bool quiet = false;
-  bool no_axis_search = false, no_merge = false;
+  bool no_axis_search = false, no_merge = false, no_refit = false;
   BuildOptions options;  // what the flags set, but for method, backend, objective and queries
 };
 

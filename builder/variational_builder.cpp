@@ -111,6 +111,76 @@ constexpr int kAdjustLevels = 4;
 // "The variational builder", Objective).
 constexpr int kShareSearchLevels = 2;
 
+// The final refit under kOmv (VariationalOptions::refit): kRefitRotations seeded rotations
+// screened by each node's tight volume, the kRefitStarts best of them and the node's own axes
+// descended on that volume, and for the boxes of levels 0..kRefitObjectiveLevels a descent on
+// the estimated objective itself (why these: docs/derivations.md, "The final refit").
+constexpr int kRefitRotations = 1000;
+// A step of the search (a Lloyd iteration, a sweep's move, a sweep, a refit's turn) counts as a
+// gain only for a drop of this fraction of its objective or more: smaller drops are within the
+// estimator's discretization error at the m the builders use (docs/BENCHMARKS.md: median
+// relative error ~1e-4, tails ~1e-3), so they would chase noise.
+constexpr double kMinDrop = 1e-3;
+constexpr int kRefitStarts = 3;
+constexpr int kRefitObjectiveLevels = 2;
+
+// A uniformly random orientation (a unit quaternion from four normal deviates), drawn by
+// Box-Muller on the generator's raw bits, so that every machine and standard library draws the
+// same.
+std::array<Vec3, 3> random_axes(std::mt19937_64& rng) {
+  auto gauss = [&] {
+    const double u1 = (static_cast<double>(rng() >> 11) + 1) * 0x1.0p-53,
+                 u2 = static_cast<double>(rng() >> 11) * 0x1.0p-53;
+    return std::sqrt(-2 * std::log(u1)) * std::cos(2 * M_PI * u2);
+  };
+  Eigen::Quaterniond q;
+  q.coeffs() << gauss(), gauss(), gauss(), gauss();
+  const Eigen::Matrix3d rot = q.normalized().toRotationMatrix();
+  return orthonormalize({Vec3(rot.col(0)), Vec3(rot.col(1)), Vec3(rot.col(2))});
+}
+
+// The mesh vertices of the faces, each once, ascending.
+std::vector<int32_t> distinct_vertices(const Mesh& mesh, const std::vector<int32_t>& faces) {
+  std::vector<int32_t> v;
+  v.reserve(3 * faces.size());
+  for (int32_t f : faces)
+    for (int c = 0; c < 3; ++c) v.push_back(mesh.faces[f][c]);
+  std::sort(v.begin(), v.end());
+  v.erase(std::unique(v.begin(), v.end()), v.end());
+  return v;
+}
+
+// The product of the points' extents along the axes: the tight box's volume over 8.
+double extent_product(const Mesh& mesh, const std::vector<int32_t>& vertices,
+                      const std::array<Vec3, 3>& axes) {
+  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  for (int32_t v : vertices)
+    for (int k = 0; k < 3; ++k) {
+      const double t = mesh.vertices[v].dot(axes[k]);
+      lo[k] = std::min(lo[k], t);
+      hi[k] = std::max(hi[k], t);
+    }
+  return (hi - lo).prod();
+}
+
+// Descent on the tight volume from `axes`: turns of +-step about each axis, the same step again
+// while one gains, then half of it, while the step is above 1e-4 rad.
+std::array<Vec3, 3> descend_volume(const Mesh& mesh, const std::vector<int32_t>& vertices,
+                                   std::array<Vec3, 3> axes, double step) {
+  double best = extent_product(mesh, vertices, axes);
+  for (; step > 1e-4; step *= 0.5)
+    for (bool gained = true; gained;) {
+      gained = false;
+      for (int about = 0; about < 3; ++about)
+        for (double sign : {1.0, -1.0}) {
+          const std::array<Vec3, 3> turned = rotate(axes, about, sign * step);
+          const double v = extent_product(mesh, vertices, turned);
+          if (v < best) best = v, axes = turned, gained = true;
+        }
+    }
+  return axes;
+}
+
 // What the splitters of one build share. With concurrent_estimates, several splitters (one
 // per thread) search nodes at once: the counts add up, and the time budget once spent is
 // spent for all.
@@ -122,7 +192,8 @@ struct SearchShared {
   std::atomic<size_t> adjustments{0};
   std::atomic<size_t> merges{0};
   std::atomic<size_t> regroups_skipped{0};
-  std::atomic<bool> spent{false};  // a stopped() has returned true
+  std::atomic<size_t> refitted{0};  // boxes the final refit turned (kOmv)
+  std::atomic<bool> spent{false};   // a stopped() has returned true
 };
 
 class NodeSplitter {
@@ -261,17 +332,7 @@ class NodeSplitter {
         const int random_starts = level_ <= 3 ? 32 : 4;
         std::mt19937_64 rng(options_.seed ^ (0x9e3779b97f4a7c15ull * (faces.front() + 1)) ^
                             faces.size());
-        for (int r = 0; r < random_starts; ++r) {
-          Eigen::Quaterniond q;
-          auto gauss = [&] {  // Box-Muller on the generator's raw bits: the same on every machine
-            const double u1 = (static_cast<double>(rng() >> 11) + 1) * 0x1.0p-53,
-                         u2 = static_cast<double>(rng() >> 11) * 0x1.0p-53;
-            return std::sqrt(-2 * std::log(u1)) * std::cos(2 * M_PI * u2);
-          };
-          q.coeffs() << gauss(), gauss(), gauss(), gauss();
-          const Eigen::Matrix3d rot = q.normalized().toRotationMatrix();
-          starts.push_back(orthonormalize({Vec3(rot.col(0)), Vec3(rot.col(1)), Vec3(rot.col(2))}));
-        }
+        for (int r = 0; r < random_starts; ++r) starts.push_back(random_axes(rng));
         std::vector<Obb> start_boxes;
         for (const auto& a : starts) start_boxes.push_back(tight_box(mesh_, faces, a));
         const std::vector<double> sv = values(start_boxes, &obv_of);
@@ -511,7 +572,7 @@ class NodeSplitter {
       report(it, state.objective());
       const double before = best->objective();
       if (state.objective() < before) *best = state;
-      if (!(state.objective() < before * (1 - 1e-3))) break;
+      if (!(state.objective() < before * (1 - kMinDrop))) break;
     }
   }
 
@@ -853,6 +914,7 @@ class Builder {
     report->adjustments = shared_.adjustments;
     report->merges = shared_.merges;
     report->regroups_skipped = shared_.regroups_skipped;
+    report->refitted = shared_.refitted;
   }
 
   void start(VariationalState* st) {
@@ -971,6 +1033,120 @@ class Builder {
       }
     }
     return e;
+  }
+
+  // The last step under kOmv (VariationalOptions::refit): each node's box turned, its faces
+  // fixed, where that lowers the estimated e. A box's part of e is, over the layers it is in,
+  // ω(l) times its OBV less what it shares with the layer's other boxes (its OMV with them
+  // less theirs without it), so each turn kept lowers the estimated e by the drop it was kept
+  // for. The candidates are geometry alone (the nodes at once); their OBV is one batch per
+  // level; the choices are made node by node, root first, each against the boxes as they stand.
+  void refit(VariationalState* st) {
+    const int d = depth(*st);
+    const size_t n = st->nodes.size();
+    std::mt19937_64 rng(options_.seed ^ 0x5851f42d4c957f2dull);
+    std::vector<std::array<Vec3, 3>> rotations;
+    for (int k = 0; k < kRefitRotations; ++k) rotations.push_back(random_axes(rng));
+    // Per node: its axes, then the descents from them and from its best screened rotations.
+    std::vector<std::vector<std::array<Vec3, 3>>> candidates(n);
+    for_each_node(n, [&](size_t i) {
+      const std::vector<int32_t> vertices = distinct_vertices(mesh_, st->nodes[i].faces);
+      std::vector<std::pair<double, int>> screen;
+      for (int k = 0; k < kRefitRotations; ++k)
+        screen.emplace_back(extent_product(mesh_, vertices, rotations[k]), k);
+      std::partial_sort(screen.begin(), screen.begin() + kRefitStarts, screen.end());
+      auto& c = candidates[i];
+      c.push_back(st->axes[i]);
+      // The box's own basin first, at a step below the search's last (0.0125 rad).
+      c.push_back(descend_volume(mesh_, vertices, st->axes[i], 0.01));
+      for (int k = 0; k < kRefitStarts; ++k)
+        c.push_back(descend_volume(mesh_, vertices, rotations[screen[k].second], 0.2));
+    });
+    std::vector<Obb> boxes;  // the boxes as they stand
+    for (size_t i = 0; i < n; ++i)
+      boxes.push_back(tight_box(mesh_, st->nodes[i].faces, st->axes[i]));
+    std::vector<std::vector<int32_t>> layers(d + 1);
+    for (int l = 0; l <= d; ++l) layers[l] = layer_members(*st, l);
+    NodeSplitter& splitter = splitters_.local();
+    splitter.begin_search();
+    for (int level = 0; level <= d; ++level) {
+      // The OBV of every candidate of the level's nodes: one batch.
+      std::vector<size_t> at(n + 1, 0);
+      std::vector<Obb> batch;
+      std::vector<size_t> ids;
+      for (size_t i = 0; i < n; ++i)
+        if (st->nodes[i].level == level) {
+          at[ids.size()] = batch.size();
+          ids.push_back(i);
+          for (const auto& a : candidates[i])
+            batch.push_back(tight_box(mesh_, st->nodes[i].faces, a));
+        }
+      at[ids.size()] = batch.size();
+      forget_pace();
+      const std::vector<double> obv = splitter.measure(batch);
+      if (splitter.stopped()) return;  // values missing: the boxes stay as they are
+      for (size_t j = 0; j < ids.size(); ++j) {
+        const size_t i = ids[j];
+        std::vector<Obb> mine(batch.begin() + at[j], batch.begin() + at[j + 1]);
+        std::vector<double> value =
+            refit_values(*st, layers, boxes, i, mine,
+                         std::vector<double>(obv.begin() + at[j], obv.begin() + at[j + 1]));
+        if (splitter.stopped()) return;
+        size_t best = std::min_element(value.begin(), value.end()) - value.begin();
+        std::array<Vec3, 3> axes = candidates[i][best];
+        double least = value[best];
+        if (level <= kRefitObjectiveLevels) {
+          // The few big boxes: a descent on the value itself from the best candidate.
+          for (double step = 0.02; step > 4e-4;) {
+            std::vector<std::array<Vec3, 3>> turned;
+            std::vector<Obb> trial;
+            for (int about = 0; about < 3; ++about)
+              for (double sign : {1.0, -1.0}) {
+                turned.push_back(rotate(axes, about, sign * step));
+                trial.push_back(tight_box(mesh_, st->nodes[i].faces, turned.back()));
+              }
+            const std::vector<double> v =
+                refit_values(*st, layers, boxes, i, trial, splitter.measure(trial));
+            if (splitter.stopped()) return;
+            const size_t m = std::min_element(v.begin(), v.end()) - v.begin();
+            if (v[m] < least) {
+              least = v[m];
+              axes = turned[m];
+            } else {
+              step *= 0.5;
+            }
+          }
+        }
+        if (least < value[0] - kMinDrop * std::abs(value[0])) {
+          st->axes[i] = axes;
+          boxes[i] = tight_box(mesh_, st->nodes[i].faces, axes);
+          ++shared_.refitted;
+        }
+      }
+    }
+  }
+
+  // Per box of `trial` (node i's faces along other axes, with their estimated OBV): its part
+  // of the estimated e with the boxes as they stand, Σ over the layers i is in of ω(l) (OBV less
+  // its share with the layer's other boxes).
+  std::vector<double> refit_values(const VariationalState& st,
+                                   const std::vector<std::vector<int32_t>>& layers,
+                                   const std::vector<Obb>& boxes, size_t i,
+                                   const std::vector<Obb>& trial, const std::vector<double>& obv) {
+    const int d = static_cast<int>(layers.size()) - 1;
+    const TreeNode& node = st.nodes[i];
+    const int last = node.children.empty() ? d : node.level;
+    std::vector<double> value(trial.size(), 0.0);
+    NodeSplitter& splitter = splitters_.local();
+    for (int l = node.level; l <= last; ++l) {
+      std::vector<Obb> others;
+      for (int32_t j : layers[l])
+        if (j != static_cast<int32_t>(i)) others.push_back(boxes[j]);
+      const std::vector<double> shared = splitter.overlap_with(trial, others);
+      for (size_t c = 0; c < trial.size(); ++c)
+        value[c] += layer_weight(d, l) * (obv[c] - shared[c]);
+    }
+    return value;
   }
 
   // The nodes of layer l: those of level l, and the leaves above it.
@@ -1163,12 +1339,10 @@ class Builder {
         const double before = current(mv.a, mv.b);  // sets the context for mv.a and mv.b
         if (!splitter->update_boxes(&s, false))
           break;  // cut short by the time budget: not comparable
-        // Kept only for a drop of 0.1 % or more of the pair's objective: smaller drops are
-        // within the estimator's discretization error at the m the builders use
-        // (docs/BENCHMARKS.md: median relative error ~1e-4, tails ~1e-3), so they would chase
-        // noise.
+        // Kept only for a drop of kMinDrop or more of the pair's objective.
         const double gain = before - s.objective();
-        if (gain > before * 1e-3 && gain > best_gain) best_gain = gain, best = &mv, best_state = s;
+        if (gain > before * kMinDrop && gain > best_gain)
+          best_gain = gain, best = &mv, best_state = s;
       }
       if (!best) {
         // No move of this pass gains: a regrouping started from this state would find the
@@ -1391,9 +1565,11 @@ Tree build_variational(const Mesh& mesh, const VariationalOptions& options,
       gain = e - *known_e;
     }
     ++st.sweeps;
-    if (!(gain >= 1e-3 * e) || st.sweeps >= options.max_sweeps) st.sweeping_done = true;
+    if (!(gain >= kMinDrop * e) || st.sweeps >= options.max_sweeps) st.sweeping_done = true;
     save();
   }
+  if (options.objective == Objective::kOmv && options.refit && !builder.out_of_time(&st))
+    builder.refit(&st);
   report->budget_spent = st.budget_spent;
   report->sweeps = st.sweeps;
   builder.count(report);

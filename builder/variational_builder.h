@@ -12,6 +12,10 @@
 //   yet split get the baseline split. A budget that is not reached changes nothing.
 // - A node's children never have a larger estimated objective than the baseline split with
 //   optimised boxes.
+// - Under kOmv with `refit`, the last step turns boxes with their faces fixed (the partition
+//   stays the sweeps'), each turn kept only where it lowers the estimated e: a box's part of it
+//   is, over the layers it is in, ω(l) times its OBV less its share with the layer's other
+//   boxes as they stand. The checkpoints are the states before it, the same with it or without.
 #pragma once
 
 #include <array>
@@ -69,6 +73,9 @@ struct VariationalOptions {
   bool adjust = false;        // the adjustment step (see above: measured to hurt, so off)
   bool merge = true;          // ablation: the bottom-up merging sweeps
   int max_sweeps = 3;
+  // Under kOmv, the last step: each box turned, its faces fixed, where that lowers the
+  // estimated e (see build_variational). Ablation: false.
+  bool refit = true;
   // What the search already knows is not worked out again: a regrouping whose inputs are those
   // with which it last found no move is not run (VariationalReport::regroups_skipped), and a
   // box measured before in the same search, or under kOmv in the same node's regrouping in an
@@ -114,6 +121,7 @@ struct VariationalReport {
   // Regroupings of a sweep not run: their inputs were those with which they last found no
   // move (see build_variational), so they would find none again.
   size_t regroups_skipped = 0;
+  size_t refitted = 0;  // boxes the final refit turned (kOmv)
 };
 
 // Precondition: the mesh is a solid. Fills every field of the tree but mesh_sha256. `resume`,

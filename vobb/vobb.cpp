@@ -119,7 +119,9 @@ std::string queries_digest(const std::vector<collision::Collider>& colliders) {
 
 // What a variational build depends on, for its checkpoints: a state saved under another
 // fingerprint is refused, so a resumed build is the build that was interrupted. "builder 3":
-// bump when the builder's decisions change, so that older states are refused.
+// bump when the builder's decisions change, so that older states are refused. The refit
+// (BuildOptions::refit) runs after the last state, so the states are the same with it or
+// without, and it is not named.
 std::string build_fingerprint(const Mesh& mesh, const BuildOptions& o,
                               const std::string& estimator) {
   auto on = [](bool b) { return std::string(b ? "on" : "off"); };
@@ -171,6 +173,7 @@ Status build_variational_tree(const Mesh& mesh, const BuildOptions& o, const Est
   opt.optimise_axes = o.axis_search;
   opt.adjust = o.adjust;
   opt.merge = o.merge;
+  opt.refit = o.refit;
   opt.max_sweeps = o.sweeps;
   opt.seed = o.seed;
   opt.margin = o.collider_margin;

@@ -66,6 +66,7 @@ struct BuildOptions {
   uint64_t seed = 1;
   bool axis_search = true, adjust = false, merge = true;
   int sweeps = 3;
+  bool refit = true;  // under kOmv: the last step's turns of boxes with their faces fixed
   // What the search minimises per set of boxes; unset: kOmv (docs/BENCHMARKS.md: it gives the
   // lower exact e), but kObv with a collider margin (a collider in a region two boxes share
   // tests both: the sum counts the tests). kOmv takes its shares from the polyhedral solver,

@@ -14,6 +14,7 @@
 #include "exact/certify.h"
 #include "fast/cpu_estimator.h"
 #include "fast/poly_overlap.h"
+#include "fast/poly_solver.h"
 #include "test_common.h"
 
 namespace vobb {
@@ -133,6 +134,46 @@ TEST(VariationalBuilderOmv, LowersTheExactErrorWhereSiblingsOverlap) {
   // their layer's OMV.
   EXPECT_GT(a.layers[1].overlap() * 10, a.layers[1].omv);
   EXPECT_LT(b.weighted_error, a.weighted_error);
+}
+
+// The last step's refit turns boxes with their faces fixed, and only where the estimated e
+// drops. With the polyhedral solver as the OBV estimator (exact to round-off, far below the
+// 0.1 % drop a turn must bring), the exact e must drop with it, decided as rationals; the
+// partition must be the one without it, node for node; and under kObv it must change nothing.
+TEST(VariationalBuilderOmv, RefitTurnsBoxesOnlyWhereTheExactErrorDrops) {
+  const Mesh mesh = analytic::polygonal_torus().mesh;
+  const PolyObvSolver poly(mesh);
+  const PolyOverlapSolver shares(mesh);
+  const ObvEstimate exact_obv = [&poly](const std::vector<Obb>& b) { return poly.estimate(b); };
+  VariationalOptions o = omv_options(shares, 4);
+  VariationalReport with_report, without_report;
+  const Tree with = build_variational(mesh, o, exact_obv, nullptr, &with_report);
+  o.refit = false;
+  const Tree without = build_variational(mesh, o, exact_obv, nullptr, &without_report);
+  EXPECT_GT(with_report.refitted, 0u);
+  EXPECT_EQ(without_report.refitted, 0u);
+  ASSERT_EQ(with.nodes.size(), without.nodes.size());
+  size_t turned = 0;
+  for (size_t i = 0; i < with.nodes.size(); ++i) {
+    EXPECT_EQ(with.nodes[i].faces, without.nodes[i].faces) << "node " << i;
+    EXPECT_EQ(with.nodes[i].children, without.nodes[i].children) << "node " << i;
+    turned += with.nodes[i].box.axes != without.nodes[i].box.axes;
+  }
+  EXPECT_EQ(turned, with_report.refitted);
+  EXPECT_TRUE(check_conservative(mesh, with).ok());
+  exact::CertifyOptions co;
+  co.rational = true;
+  const exact::Certificate a = exact::certify(mesh, with, co);
+  const exact::Certificate b = exact::certify(mesh, without, co);
+  ASSERT_TRUE(a.ok() && b.ok() && a.rational && b.rational);
+  EXPECT_TRUE(a.weighted_error < b.weighted_error)
+      << a.weighted_error_nearest << " against " << b.weighted_error_nearest;
+  // Under kObv the refit does not run: the same bytes with the flag or without.
+  VariationalOptions obv;
+  obv.depth = 4;
+  const std::string obv_with = tree_to_json(build_variational(mesh, obv, exact_obv));
+  obv.refit = false;
+  EXPECT_EQ(tree_to_json(build_variational(mesh, obv, exact_obv)), obv_with);
 }
 
 }  // namespace
