@@ -111,10 +111,12 @@ constexpr int kAdjustLevels = 4;
 // "The variational builder", Objective).
 constexpr int kShareSearchLevels = 2;
 
-// The final refit under kOmv (VariationalOptions::refit): kRefitRotations seeded rotations
-// screened by each node's tight volume, the kRefitStarts best of them and the node's own axes
-// descended on that volume, and for the boxes of levels 0..kRefitObjectiveLevels a descent on
-// the estimated objective itself (why these: docs/derivations.md, "The final refit").
+// The final refit under kOmv (VariationalOptions::refit), for the boxes of levels
+// 0..kRefitLevels: kRefitRotations seeded rotations screened by each node's tight volume, the
+// kRefitStarts best of them and the node's own axes descended on that volume, and for the
+// boxes of levels 0..kRefitObjectiveLevels a descent on the estimated objective itself (why
+// these: docs/derivations.md, "The final refit").
+constexpr int kRefitLevels = 4;
 constexpr int kRefitRotations = 1000;
 // A step of the search (a Lloyd iteration, a sweep's move, a sweep, a refit's turn) counts as a
 // gain only for a drop of this fraction of its objective or more: smaller drops are within the
@@ -1035,11 +1037,11 @@ class Builder {
     return e;
   }
 
-  // The last step under kOmv (VariationalOptions::refit): each node's box turned, its faces
-  // fixed, where that lowers the estimated e. A box's part of e is, over the layers it is in,
-  // ω(l) times its OBV less what it shares with the layer's other boxes (its OMV with them
-  // less theirs without it), so each turn kept lowers the estimated e by the drop it was kept
-  // for. The candidates are geometry alone (the nodes at once); their OBV is one batch per
+  // The last step under kOmv (VariationalOptions::refit): each box of levels 0..kRefitLevels
+  // turned, its faces fixed, where that lowers the estimated e. A box's part of e is, over the
+  // layers it is in, ω(l) times its OBV less what it shares with the layer's other boxes (its OMV
+  // with them less theirs without it), so each turn kept lowers the estimated e by the drop it was
+  // kept for. The candidates are geometry alone (the nodes at once); their OBV is one batch per
   // level; the choices are made node by node, root first, each against the boxes as they stand.
   void refit(VariationalState* st) {
     const int d = depth(*st);
@@ -1050,6 +1052,7 @@ class Builder {
     // Per node: its axes, then the descents from them and from its best screened rotations.
     std::vector<std::vector<std::array<Vec3, 3>>> candidates(n);
     for_each_node(n, [&](size_t i) {
+      if (st->nodes[i].level > kRefitLevels) return;
       const std::vector<int32_t> vertices = distinct_vertices(mesh_, st->nodes[i].faces);
       std::vector<std::pair<double, int>> screen;
       for (int k = 0; k < kRefitRotations; ++k)
@@ -1069,7 +1072,7 @@ class Builder {
     for (int l = 0; l <= d; ++l) layers[l] = layer_members(*st, l);
     NodeSplitter& splitter = splitters_.local();
     splitter.begin_search();
-    for (int level = 0; level <= d; ++level) {
+    for (int level = 0; level <= std::min(d, kRefitLevels); ++level) {
       // The OBV of every candidate of the level's nodes: one batch.
       std::vector<size_t> at(n + 1, 0);
       std::vector<Obb> batch;

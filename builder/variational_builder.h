@@ -12,10 +12,11 @@
 //   yet split get the baseline split. A budget that is not reached changes nothing.
 // - A node's children never have a larger estimated objective than the baseline split with
 //   optimised boxes.
-// - Under kOmv with `refit`, the last step turns boxes with their faces fixed (the partition
-//   stays the sweeps'), each turn kept only where it lowers the estimated e: a box's part of it
-//   is, over the layers it is in, ω(l) times its OBV less its share with the layer's other
-//   boxes as they stand. The checkpoints are the states before it, the same with it or without.
+// - Under kOmv with `refit`, the last step turns boxes of the top levels (0-4) with their faces
+//   fixed (the partition stays the sweeps'), each turn kept only where it lowers the estimated
+//   e: a box's part of it is, over the layers it is in, ω(l) times its OBV less its share with
+//   the layer's other boxes as they stand. The checkpoints are the states before it, the same
+//   with it or without.
 #pragma once
 
 #include <array>
@@ -73,8 +74,8 @@ struct VariationalOptions {
   bool adjust = false;        // the adjustment step (see above: measured to hurt, so off)
   bool merge = true;          // ablation: the bottom-up merging sweeps
   int max_sweeps = 3;
-  // Under kOmv, the last step: each box turned, its faces fixed, where that lowers the
-  // estimated e (see build_variational). Ablation: false.
+  // Under kOmv, the last step: each box of the top levels turned, its faces fixed, where that
+  // lowers the estimated e (see build_variational). Ablation: false.
   bool refit = true;
   // What the search already knows is not worked out again: a regrouping whose inputs are those
   // with which it last found no move is not run (VariationalReport::regroups_skipped), and a
