@@ -132,8 +132,8 @@ void add_build_flags(CLI::App* cmd, BuildFlags* f, bool compare) {
                 "measured to raise e, so off)");
   cmd->add_flag("--no-merge", f->no_merge, "Ablation: no bottom-up merging sweeps");
   cmd->add_flag("--no-refit", f->no_refit,
-                "Ablation: under omv, no last step turning each box (its faces fixed) where that "
-                "lowers its layers' estimated OMV");
+                "Ablation: under omv, no last step turning each box of levels 0-4 (its faces "
+                "fixed) where that lowers its layers' estimated OMV");
   cmd->add_option("--objective", f->objective, kObjectiveHelp)
       ->check(CLI::IsMember({"obv", "omv"}));
   cmd->add_option("--sweeps", o.sweeps, "Most bottom-up merging sweeps")
