@@ -1074,17 +1074,15 @@ class Builder {
     splitter.begin_search();
     for (int level = 0; level <= std::min(d, kRefitLevels); ++level) {
       // The OBV of every candidate of the level's nodes: one batch.
-      std::vector<size_t> at(n + 1, 0);
+      std::vector<size_t> ids, at{0};  // node ids[j]'s candidates are batch[at[j] .. at[j + 1])
       std::vector<Obb> batch;
-      std::vector<size_t> ids;
       for (size_t i = 0; i < n; ++i)
         if (st->nodes[i].level == level) {
-          at[ids.size()] = batch.size();
           ids.push_back(i);
           for (const auto& a : candidates[i])
             batch.push_back(tight_box(mesh_, st->nodes[i].faces, a));
+          at.push_back(batch.size());
         }
-      at[ids.size()] = batch.size();
       forget_pace();
       const std::vector<double> obv = splitter.measure(batch);
       if (splitter.stopped()) return;  // values missing: the boxes stay as they are
