@@ -183,6 +183,36 @@ std::array<Vec3, 3> descend_volume(const Mesh& mesh, const std::vector<int32_t>&
   return axes;
 }
 
+// Pattern search on a box's value over turns about its axes: each round scores the six turns
+// of +-step in one call of value(boxes) and keeps the least where it is below *best, else
+// halves the step, while the step is at least `last`. chosen(i) is told which of the call's
+// boxes was kept. False where stop(), asked before each round, ends it early.
+template <class Value, class Chosen, class Stop>
+bool descend_value(const Mesh& mesh, const std::vector<int32_t>& faces, double step, double last,
+                   std::array<Vec3, 3>* axes, double* best, const Value& value,
+                   const Chosen& chosen, const Stop& stop) {
+  while (step >= last) {
+    if (stop()) return false;
+    std::vector<std::array<Vec3, 3>> turned;
+    std::vector<Obb> boxes;
+    for (int about = 0; about < 3; ++about)
+      for (double sign : {1.0, -1.0}) {
+        turned.push_back(rotate(*axes, about, sign * step));
+        boxes.push_back(tight_box(mesh, faces, turned.back()));
+      }
+    const std::vector<double> v = value(boxes);
+    const size_t i = std::min_element(v.begin(), v.end()) - v.begin();
+    if (v[i] < *best) {
+      *best = v[i];
+      *axes = turned[i];
+      chosen(i);
+    } else {
+      step *= 0.5;
+    }
+  }
+  return true;
+}
+
 // What the splitters of one build share. With concurrent_estimates, several splitters (one
 // per thread) search nodes at once: the counts add up, and the time budget once spent is
 // spent for all.
@@ -340,25 +370,10 @@ class NodeSplitter {
         const std::vector<double> sv = values(start_boxes, &obv_of);
         for (size_t i = 0; i < starts.size(); ++i)
           if (sv[i] < best) best = sv[i], best_obv = obv_of[i], axes = starts[i];
-        for (double step = 0.2; step >= 0.0125;) {
-          if ((cut = stopped())) break;
-          std::vector<std::array<Vec3, 3>> trial;
-          std::vector<Obb> boxes;
-          for (int about = 0; about < 3; ++about)
-            for (double sign : {1.0, -1.0}) {
-              trial.push_back(rotate(axes, about, sign * step));
-              boxes.push_back(tight_box(mesh_, faces, trial.back()));
-            }
-          const std::vector<double> v = values(boxes, &obv_of);
-          const size_t i = std::min_element(v.begin(), v.end()) - v.begin();
-          if (v[i] < best) {
-            best = v[i];
-            best_obv = obv_of[i];
-            axes = trial[i];
-          } else {
-            step *= 0.5;
-          }
-        }
+        cut = !descend_value(
+            mesh_, faces, 0.2, 0.0125, &axes, &best,
+            [&](const std::vector<Obb>& boxes) { return values(boxes, &obv_of); },
+            [&](size_t i) { best_obv = obv_of[i]; }, [&] { return stopped(); });
       }
       s->axes[g] = axes;
       s->obv[g] = best_obv;
@@ -1098,25 +1113,13 @@ class Builder {
         double least = value[best];
         if (level <= kRefitObjectiveLevels) {
           // The few big boxes: a descent on the value itself from the best candidate.
-          for (double step = 0.02; step > 4e-4;) {
-            std::vector<std::array<Vec3, 3>> turned;
-            std::vector<Obb> trial;
-            for (int about = 0; about < 3; ++about)
-              for (double sign : {1.0, -1.0}) {
-                turned.push_back(rotate(axes, about, sign * step));
-                trial.push_back(tight_box(mesh_, st->nodes[i].faces, turned.back()));
-              }
-            const std::vector<double> v =
-                refit_values(*st, layers, boxes, i, trial, splitter.measure(trial));
-            if (splitter.stopped()) return;
-            const size_t m = std::min_element(v.begin(), v.end()) - v.begin();
-            if (v[m] < least) {
-              least = v[m];
-              axes = turned[m];
-            } else {
-              step *= 0.5;
-            }
-          }
+          const bool whole = descend_value(
+              mesh_, st->nodes[i].faces, 0.02, 6.25e-4, &axes, &least,
+              [&](const std::vector<Obb>& trial) {
+                return refit_values(*st, layers, boxes, i, trial, splitter.measure(trial));
+              },
+              [](size_t) {}, [&] { return splitter.stopped(); });
+          if (!whole || splitter.stopped()) return;  // values missing: the boxes stay
         }
         if (least < value[0] - kMinDrop * std::abs(value[0])) {
           st->axes[i] = axes;
@@ -1548,14 +1551,16 @@ Tree build_variational(const Mesh& mesh, const VariationalOptions& options,
     save();
   }
   // Bottom-up merging sweeps while the estimated e drops by 0.1 % or more.
-  std::optional<double> known_e;  // the estimated e after the last sweep, where it was taken
+  // The estimated e after the last sweep, where it was taken.
+  bool have_known_e = false;
+  double known_e = 0;
   while (options.merge && !st.sweeping_done && !builder.out_of_time(&st)) {
     if (st.sweeps >= options.max_sweeps) {
       st.sweeping_done = true;
       break;
     }
-    const double e = known_e ? *known_e : builder.estimated_e(st);
-    known_e.reset();
+    const double e = have_known_e ? known_e : builder.estimated_e(st);
+    have_known_e = false;
     if (builder.out_of_time(&st)) break;  // e may be missing boxes; no sweep is started
     double gain = builder.sweep(&st);
     if (options.objective == Objective::kOmv && !builder.out_of_time(&st)) {
@@ -1563,7 +1568,8 @@ Tree build_variational(const Mesh& mesh, const VariationalOptions& options,
       // two of them may both count a region their moves free: the sum of their gains can
       // exceed the drop. The drop itself decides (and the next sweep starts from that e).
       known_e = builder.estimated_e(st);
-      gain = e - *known_e;
+      have_known_e = true;
+      gain = e - known_e;
     }
     ++st.sweeps;
     if (!(gain >= kMinDrop * e) || st.sweeps >= options.max_sweeps) st.sweeping_done = true;
