@@ -6,6 +6,7 @@
 #include <string>
 
 #include "common/io/mesh_report.h"
+#include "common/tree_io.h"
 
 namespace vobb::bench {
 
@@ -20,6 +21,13 @@ double seconds(F&& f) {
 // Loads a solid, or prints why not (one line on stderr) and returns false.
 inline bool load_or_say(const std::string& path, LoadedMesh* mesh) {
   const Status s = load_solid(path, mesh);
+  if (!s) std::fprintf(stderr, "%s\n", s.message().c_str());
+  return static_cast<bool>(s);
+}
+
+// Reads a tree, or prints why not (one line on stderr) and returns false.
+inline bool read_tree_or_say(const std::string& path, Tree* tree) {
+  const Status s = read_tree(path, tree);
   if (!s) std::fprintf(stderr, "%s\n", s.message().c_str());
   return static_cast<bool>(s);
 }

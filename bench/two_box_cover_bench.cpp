@@ -120,11 +120,7 @@ int main(int argc, char** argv) {
   };
   if (with_tree) {
     vobb::Tree tree;
-    const vobb::Status read = vobb::read_tree(argv[2], &tree);
-    if (!read) {
-      std::fprintf(stderr, "%s\n", read.message().c_str());
-      return 2;
-    }
+    if (!vobb::bench::read_tree_or_say(argv[2], &tree)) return 2;
     std::vector<int32_t> ids = vobb::layer(tree, 1);
     if (ids.size() != 2) {
       std::fprintf(stderr, "%s: level 1 has %zu boxes, not 2\n", argv[2], ids.size());
