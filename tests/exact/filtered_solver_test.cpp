@@ -46,9 +46,13 @@ void expect_obv_enclosed(const FilteredSolver& fs, const std::vector<Obb>& boxes
     const Rational q = fs.rational().obv(boxes[j]);
     ASSERT_TRUE(e.value.contains(q)) << "box " << j;
     ASSERT_TRUE(holds(e.value.inf(), e.value.sup(), q)) << "box " << j;
-    if (e.exact) EXPECT_EQ(e.q, q) << "box " << j;
+    if (e.exact) {
+      EXPECT_EQ(e.q, q) << "box " << j;
+    }
     double d;
-    if (e.value.nearest(&d)) EXPECT_EQ(d, to_double_nearest(q)) << "box " << j;
+    if (e.value.nearest(&d)) {
+      EXPECT_EQ(d, to_double_nearest(q)) << "box " << j;
+    }
   }
 }
 

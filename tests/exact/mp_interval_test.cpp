@@ -31,7 +31,9 @@ TEST(MpInterval, EveryOperationEnclosesTheExactResult) {
     ASSERT_TRUE((x * y).contains(a * b));
     ASSERT_TRUE((-x).contains(-a));
     ASSERT_TRUE(abs(x).contains(abs(a)));
-    if (sgn(b) != 0) ASSERT_TRUE((x / y).contains(a / b));
+    if (sgn(b) != 0) {
+      ASSERT_TRUE((x / y).contains(a / b));
+    }
     // Wide operands of every sign class: (third - third) is an enclosure of 0 about 2^-128
     // wide, scaled to about +-2^-128 * 2^140 = +-4096, so a value of magnitude below that gets
     // an enclosure straddling 0 (the products' four-candidate case) and larger ones keep their
@@ -42,7 +44,9 @@ TEST(MpInterval, EveryOperationEnclosesTheExactResult) {
     ASSERT_TRUE((wx * wy).contains(a * b));
     ASSERT_TRUE((wx * y).contains(a * b));
     ASSERT_TRUE((x * wy).contains(a * b));
-    if (wy.inf() > 0 || wy.sup() < 0) ASSERT_TRUE((wx / wy).contains(a / b));
+    if (wy.inf() > 0 || wy.sup() < 0) {
+      ASSERT_TRUE((wx / wy).contains(a / b));
+    }
   }
 }
 
