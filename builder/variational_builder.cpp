@@ -1113,13 +1113,15 @@ class Builder {
         double least = value[best];
         if (level <= kRefitObjectiveLevels) {
           // The few big boxes: a descent on the value itself from the best candidate.
-          const bool whole = descend_value(
+          descend_value(
               mesh_, st->nodes[i].faces, 0.02, 6.25e-4, &axes, &least,
               [&](const std::vector<Obb>& trial) {
                 return refit_values(*st, layers, boxes, i, trial, splitter.measure(trial));
               },
               [](size_t) {}, [&] { return splitter.stopped(); });
-          if (!whole || splitter.stopped()) return;  // values missing: the boxes stay
+          // Cut short, or values missing from its last call (stopped() stays true once true):
+          // the boxes stay as they are.
+          if (splitter.stopped()) return;
         }
         if (least < value[0] - kMinDrop * std::abs(value[0])) {
           st->axes[i] = axes;
