@@ -75,7 +75,7 @@ std::pair<double, double> omv(const vobb::exact::FilteredSolver& fs, const Obb& 
   return {sum.inf(), sum.sup()};
 }
 
-// Four boxes' OMV, enclosed: [lo, hi]. `obv` holds each box's enclosed OBV.
+// A set of boxes' OMV, enclosed: [lo, hi]. `obv` holds each box's enclosed OBV.
 std::pair<double, double> omv(const vobb::exact::FilteredSolver& fs, const std::vector<Obb>& boxes,
                               const std::vector<vobb::exact::MpInterval>& obv) {
   const std::vector<std::vector<int32_t>> earlier = fs.rational().earlier_neighbours(boxes);
