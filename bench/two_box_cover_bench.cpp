@@ -151,10 +151,13 @@ class Search {
   }
 
   // The `top` best splits of `faces` (ascending) by the screen, in the screen's order, each
-  // refined and measured; `screen_seconds` gets the screen's time.
+  // refined and measured; `screen_seconds` gets the screen's time. None where there are fewer
+  // than 2 S faces (every cut must leave faces on both sides).
   std::vector<Cover> splits(const std::vector<int32_t>& faces, int top,
                             double* screen_seconds) const {
     const size_t n = faces.size();
+    *screen_seconds = 0;
+    if (n < 2 * S) return {};
     struct Split {
       double screen;  // the two parts' least tight volumes over the rotations
       int dir, cut;
@@ -322,9 +325,15 @@ int main(int argc, char** argv) {
       double ts = 0;
       halves[h] = search.splits(h == 0 ? c.a : c.b, top, &ts);
       t_halves += ts;
+      if (halves[h].empty()) break;
       std::stable_sort(halves[h].begin(), halves[h].end(),
                        [](const Cover& x, const Cover& y) { return x.mid() < y.mid(); });
       halves[h].resize(std::min<size_t>(halves[h].size(), U));
+    }
+    if (halves[0].empty() || halves[1].empty()) {
+      std::printf("level-1 split %d (rank %d): a half has fewer than %d faces to cut\n", t, c.rank,
+                  2 * Search::S);
+      continue;
     }
     // Each box's OBV once; then every pairing's four boxes.
     std::vector<vobb::exact::MpInterval> obv[2];
@@ -350,6 +359,10 @@ int main(int argc, char** argv) {
         "pairings (halves screened in %.1f s); 8 OMV(1) + 7 OMV(2) = %.4f\n",
         t, c.rank, c.mid(), l2, width, halves[0].size(), halves[1].size(), t_halves,
         8 * c.mid() + 7 * l2);
+  }
+  if (least_l2 == INFINITY) {
+    std::printf("no level 2 searched\n");
+    return 0;
   }
   std::printf("least level-2 OMV: %.6f; least 8 OMV(1) + 7 OMV(2): %.4f", least_l2, least_sum);
   if (with_tree) std::printf(" (the tree's: %.4f)", 8 * tree_l1 + 7 * tree_l2);
