@@ -67,14 +67,6 @@ Obb fit(const Mesh& mesh, const std::vector<int32_t>& faces, const Mat3& R) {
   return vobb::fit_obb(mesh, faces, {Vec3(R.row(0)), Vec3(R.row(1)), Vec3(R.row(2))});
 }
 
-// The two boxes' OMV, enclosed: [lo, hi].
-std::pair<double, double> omv(const vobb::exact::FilteredSolver& fs, const Obb& a, const Obb& b) {
-  const std::vector<Obb> boxes{a, b};
-  vobb::exact::MpInterval sum = fs.obv(a).value + fs.obv(b).value;
-  sum -= fs.overlap_term(boxes, 1, {0}).value;
-  return {sum.inf(), sum.sup()};
-}
-
 // A set of boxes' OMV, enclosed: [lo, hi]. `obv` holds each box's enclosed OBV.
 std::pair<double, double> omv(const vobb::exact::FilteredSolver& fs, const std::vector<Obb>& boxes,
                               const std::vector<vobb::exact::MpInterval>& obv) {
@@ -83,6 +75,11 @@ std::pair<double, double> omv(const vobb::exact::FilteredSolver& fs, const std::
   for (size_t j = 1; j < boxes.size(); ++j) sum += obv[j];
   for (size_t j = 1; j < boxes.size(); ++j) sum -= fs.overlap_term(boxes, j, earlier[j]).value;
   return {sum.inf(), sum.sup()};
+}
+
+// The two boxes' OMV, enclosed: [lo, hi].
+std::pair<double, double> omv(const vobb::exact::FilteredSolver& fs, const Obb& a, const Obb& b) {
+  return omv(fs, {a, b}, {fs.obv(a).value, fs.obv(b).value});
 }
 
 Vec3 direction(int d, int D) {  // the d-th of D points of a Fibonacci hemisphere
