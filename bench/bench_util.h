@@ -2,6 +2,7 @@
 #pragma once
 
 #include <chrono>
+#include <cstdint>
 #include <cstdio>
 #include <string>
 
@@ -30,6 +31,19 @@ inline bool read_tree_or_say(const std::string& path, Tree* tree) {
   const Status s = read_tree(path, tree);
   if (!s) std::fprintf(stderr, "%s\n", s.message().c_str());
   return static_cast<bool>(s);
+}
+
+// The lowest common ancestor of nodes a and b of a tree (node ids).
+inline int32_t common_ancestor(const Tree& t, int32_t a, int32_t b) {
+  while (a != b) {
+    if (t.nodes[a].level > t.nodes[b].level)
+      a = t.nodes[a].parent;
+    else if (t.nodes[b].level > t.nodes[a].level)
+      b = t.nodes[b].parent;
+    else
+      a = t.nodes[a].parent, b = t.nodes[b].parent;
+  }
+  return a;
 }
 
 }  // namespace vobb::bench

@@ -109,17 +109,7 @@ struct Probe {
     for (double x : per) s += x;
     return s;
   }
-  int32_t lca(int32_t a, int32_t b) const {
-    while (a != b) {
-      if (t.nodes[a].level > t.nodes[b].level)
-        a = t.nodes[a].parent;
-      else if (t.nodes[b].level > t.nodes[a].level)
-        b = t.nodes[b].parent;
-      else
-        a = t.nodes[a].parent, b = t.nodes[b].parent;
-    }
-    return a;
-  }
+  int32_t lca(int32_t a, int32_t b) const { return vobb::bench::common_ancestor(t, a, b); }
   struct Change {
     int32_t node;
     std::vector<int32_t> faces;

@@ -98,17 +98,7 @@ size_t paid_moves(const Mesh& mesh, vobb::Tree* tree, int rounds, double grow) {
       leaves.push_back(nd.id);
       for (int32_t f : nd.faces) leaf_of[f] = nd.id;
     }
-  auto lca = [&](int32_t a, int32_t b) {
-    while (a != b) {
-      if (t.nodes[a].level > t.nodes[b].level)
-        a = t.nodes[a].parent;
-      else if (t.nodes[b].level > t.nodes[a].level)
-        b = t.nodes[b].parent;
-      else
-        a = t.nodes[a].parent, b = t.nodes[b].parent;
-    }
-    return a;
-  };
+  auto lca = [&](int32_t a, int32_t b) { return vobb::bench::common_ancestor(t, a, b); };
   auto share = [&](const Obb& b, const std::vector<Obb>& earlier) {
     std::vector<Obb> near;
     for (const Obb& e : earlier)
@@ -277,17 +267,7 @@ int main(int argc, char** argv) {
       }
     return in;
   };
-  auto lca = [&](int32_t a, int32_t b) {
-    while (a != b) {
-      if (t.nodes[a].level > t.nodes[b].level)
-        a = t.nodes[a].parent;
-      else if (t.nodes[b].level > t.nodes[a].level)
-        b = t.nodes[b].parent;
-      else
-        a = t.nodes[a].parent, b = t.nodes[b].parent;
-    }
-    return a;
-  };
+  auto lca = [&](int32_t a, int32_t b) { return vobb::bench::common_ancestor(t, a, b); };
   size_t moved = 0;
   for (int pass = 1;; ++pass) {
     size_t moved_now = 0;
