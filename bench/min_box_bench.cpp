@@ -1,0 +1,182 @@
+// How small can any box around the whole mesh be? A branch and bound over rotations proves a
+// lower bound L on the volume of every box that holds the mesh's vertices, so on every tree's
+// root box; OMV(0) = vol(root box) - vol(X) is then at least L - vol(X) for every tree, and the
+// root's term in e at least (D + 1)(L - vol(X)) at depth D.
+//
+// Rotations are unit quaternions up to sign: the four cube faces q_i = 1 (i = 0..3) of
+// [-1, 1]^4, projected to the sphere, cover them. A cell is a cube on one face; its rotations lie
+// within angle 2a of its centre's, where a is the largest angle between the centre's quaternion
+// and a corner's (the cone of quaternions within a of the centre is convex, so the cube lies in it
+// when its corners do). A rotation by at most 2a moves each unit axis by at most 2 sin(a), so a
+// box axis of the cell holds the vertices in a width of at least w - 4 r sin(a), with w the width
+// along the centre's axis and r the largest distance of a vertex from a fixed point c. The cell's
+// bound is the product of the three; each width is first lowered by 1e-9 of the mesh's extent,
+// more than the round-off of the projections and of the centre's rotation matrix (about 1e-15 of
+// it), so the bound holds in exact arithmetic too. Best-first: the cell of least bound is split
+// in 8 (256 such cells at a time), and cells whose bound is at least the least box volume found (at
+// cells' centres) are dropped; the search ends when the least bound is within EPS of that volume,
+// or after MAXCELLS cells, and prints the least bound then: no box holding the vertices is smaller.
+// Usage: vobb-bench-min-box MESH [TREE [EPS MAXCELLS]]
+#include <tbb/parallel_for.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <limits>
+#include <queue>
+#include <vector>
+
+#include "bench/bench_util.h"
+#include "common/exact_predicates.h"
+#include "common/obb.h"
+#include "common/tree.h"
+
+namespace {
+
+using vobb::Vec3;
+
+struct Cell {
+  int face = 0;            // which quaternion coordinate is 1
+  Eigen::Vector3d lo, hi;  // the cube in the other three coordinates
+  double bound = 0;        // no rotation in the cell gives a smaller box volume
+  double centre_volume = 0;
+  bool operator<(const Cell& o) const { return bound > o.bound; }  // least bound on top
+};
+
+Eigen::Vector4d lift(int face, const Eigen::Vector3d& x) {
+  Eigen::Vector4d q;
+  for (int i = 0, j = 0; i < 4; ++i) q[i] = i == face ? 1.0 : x[j++];
+  return q.normalized();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc != 2 && argc != 3 && argc != 5) {
+    std::fprintf(stderr, "usage: vobb-bench-min-box MESH [TREE [EPS MAXCELLS]]\n");
+    return 2;
+  }
+  vobb::LoadedMesh loaded;
+  if (!vobb::bench::load_or_say(argv[1], &loaded)) return 2;
+  const vobb::Mesh& mesh = loaded.mesh;
+  vobb::Tree tree;
+  const bool with_tree = argc >= 3;
+  if (with_tree && !vobb::bench::read_tree_or_say(argv[2], &tree)) return 2;
+  const double eps = argc == 5 ? std::atof(argv[3]) : 1e-3;
+  const long max_cells = argc == 5 ? std::atol(argv[4]) : 20000000;
+  if (!(eps > 0 && eps < 1) || max_cells < 1) {
+    std::fprintf(stderr, "need 0 < EPS < 1 and MAXCELLS >= 1\n");
+    return 2;
+  }
+  std::vector<Vec3> p;
+  {
+    std::vector<char> used(mesh.vertices.size(), 0);
+    for (const auto& f : mesh.faces)
+      for (int k = 0; k < 3; ++k) used[f[k]] = 1;
+    for (size_t i = 0; i < used.size(); ++i)
+      if (used[i]) p.push_back(mesh.vertices[i]);
+  }
+  Vec3 lo = p[0], hi = p[0];
+  for (const Vec3& v : p) lo = lo.cwiseMin(v), hi = hi.cwiseMax(v);
+  const Vec3 c = (lo + hi) / 2;
+  double r = 0;
+  for (const Vec3& v : p) r = std::max(r, (v - c).norm());
+  const double slack = 1e-9 * (hi - lo).norm();
+  r *= 1 + 1e-12;
+
+  auto evaluate = [&](Cell* cell) {
+    const Eigen::Vector3d mid = (cell->lo + cell->hi) / 2;
+    const Eigen::Vector4d q0 = lift(cell->face, mid);
+    double cos_a = 1;
+    for (int corner = 0; corner < 8; ++corner) {
+      Eigen::Vector3d x;
+      for (int k = 0; k < 3; ++k) x[k] = (corner >> k & 1) ? cell->hi[k] : cell->lo[k];
+      cos_a = std::min(cos_a, std::abs(lift(cell->face, x).dot(q0)));
+    }
+    const double sin_a = std::sqrt(std::max(0.0, 1 - cos_a * cos_a)) * (1 + 1e-12) + 1e-15;
+    const Eigen::Matrix3d R =
+        Eigen::Quaterniond(q0[0], q0[1], q0[2], q0[3]).normalized().toRotationMatrix();
+    double vol = 1, bound = 1;
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 u = R.col(k);
+      double a = u.dot(p[0]), b = a;
+      for (const Vec3& v : p) {
+        const double t = u.dot(v);
+        a = std::min(a, t);
+        b = std::max(b, t);
+      }
+      vol *= b - a;
+      bound *= std::max(0.0, b - a - slack - 4 * r * sin_a);
+    }
+    cell->centre_volume = vol;
+    cell->bound = bound;
+  };
+
+  std::priority_queue<Cell> open;
+  double best = std::numeric_limits<double>::infinity();
+  const int n0 = 6;  // each face cut in n0^3 cubes to start
+  for (int face = 0; face < 4; ++face)
+    for (int i = 0; i < n0 * n0 * n0; ++i) {
+      Cell cell;
+      cell.face = face;
+      const int ijk[3] = {i % n0, i / n0 % n0, i / (n0 * n0)};
+      for (int k = 0; k < 3; ++k) {
+        cell.lo[k] = -1 + 2.0 * ijk[k] / n0;
+        cell.hi[k] = -1 + 2.0 * (ijk[k] + 1) / n0;
+      }
+      evaluate(&cell);
+      best = std::min(best, cell.centre_volume);
+      open.push(cell);
+    }
+  long cells = 4L * n0 * n0 * n0;
+  double least = 0;
+  const double secs = vobb::bench::seconds([&] {
+    // Up to 256 cells of least bound are split at once, their children evaluated in parallel.
+    while (!open.empty() && cells < max_cells && open.top().bound < best * (1 - eps)) {
+      std::vector<Cell> children;
+      while (!open.empty() && children.size() < 2048 && open.top().bound < best * (1 - eps)) {
+        const Cell top = open.top();
+        open.pop();
+        const Eigen::Vector3d mid = (top.lo + top.hi) / 2;
+        for (int child = 0; child < 8; ++child) {
+          Cell cell;
+          cell.face = top.face;
+          for (int k = 0; k < 3; ++k) {
+            const bool upper = child >> k & 1;
+            cell.lo[k] = upper ? mid[k] : top.lo[k];
+            cell.hi[k] = upper ? top.hi[k] : mid[k];
+          }
+          children.push_back(cell);
+        }
+      }
+      tbb::parallel_for(size_t(0), children.size(), [&](size_t i) { evaluate(&children[i]); });
+      cells += static_cast<long>(children.size());
+      for (const Cell& cell : children) best = std::min(best, cell.centre_volume);
+      for (const Cell& cell : children)
+        if (cell.bound < best) open.push(cell);
+    }
+  });
+  // Every dropped cell's bound was at least the least volume found then, so no rotation in it
+  // gives less than the least found now.
+  least = open.empty() ? best : std::min(open.top().bound, best);
+  const double vol_x = vobb::to_double_nearest(vobb::exact_signed_volume(mesh));
+  std::printf("vertices %zu, cells %ld in %.1f s, cells open %zu\n", p.size(), cells, secs,
+              open.size());
+  std::printf("every box holding the vertices has volume >= %.6f; least found %.6f (gap %.3f %%)\n",
+              least, best, 100 * (best - least) / best);
+  std::printf("vol(X) %.6f: every tree's OMV(0) >= %.6f\n", vol_x, least - vol_x);
+  if (with_tree) {
+    double root = 0;
+    for (const auto& nd : tree.nodes)
+      if (nd.level == 0) root = vobb::volume(nd.box);
+    std::printf(
+        "the tree's root box %.6f (OMV %.6f), %.3f %% above the bound; at depth %d the root's "
+        "term is >= %.4f for every tree, %.4f in this one\n",
+        root, root - vol_x, 100 * (root - least) / least, tree.depth,
+        (tree.depth + 1) * (least - vol_x), (tree.depth + 1) * (root - vol_x));
+  }
+  return 0;
+}
