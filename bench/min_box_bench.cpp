@@ -7,16 +7,16 @@
 // [-1, 1]^4, projected to the sphere, cover them. A cell is a cube on one face; its rotations lie
 // within angle 2a of its centre's, where a is the largest angle between the centre's quaternion
 // and a corner's (the cone of quaternions within a of the centre is convex, so the cube lies in it
-// when its corners do). A rotation by at most 2a moves each unit axis by at most 2 sin(a), so a
-// box axis of the cell holds the vertices in a width of at least w - 4 r sin(a), with w the width
-// along the centre's axis and r the largest distance of a vertex from a fixed point c. The cell's
-// bound is the product of the three; each width is first lowered by 1e-9 of the mesh's extent,
-// more than the round-off of the projections and of the centre's rotation matrix (about 1e-15 of
-// it), so the bound holds in exact arithmetic too. Best-first: the cell of least bound is split
-// in 8 (256 such cells at a time), and cells whose bound is at least the least box volume found (at
-// cells' centres) are dropped; the search ends when the least bound is within EPS of that volume,
-// or after MAXCELLS cells, and prints the least bound then: no box holding the vertices is smaller.
-// Usage: vobb-bench-min-box MESH [TREE [EPS MAXCELLS]]
+// when its corners do), taken from their chord. A rotation by at most 2a moves each unit axis by at
+// most 2 sin(a), so a box axis of the cell holds the vertices in a width of at least w - 4 r
+// sin(a), with w the width along the centre's axis and r the largest distance of a vertex from a
+// fixed point c. The cell's bound is the product of the three; each width is first lowered by 1e-9
+// of the mesh's extent, more than the round-off of the projections, of the centre's rotation matrix
+// and of sin(a) (about 1e-15 of it), so the bound holds in exact arithmetic too. Best-first: the
+// cell of least bound is split in 8 (256 such cells at a time), and cells whose bound is at least
+// the least box volume found (at cells' centres) are dropped; the search ends when the least bound
+// is within EPS of that volume, or after MAXCELLS cells, and prints the least bound then: no box
+// holding the vertices is smaller. Usage: vobb-bench-min-box MESH [TREE [EPS MAXCELLS]]
 #include <tbb/parallel_for.h>
 
 #include <Eigen/Geometry>
@@ -90,13 +90,17 @@ int main(int argc, char** argv) {
   auto evaluate = [&](Cell* cell) {
     const Eigen::Vector3d mid = (cell->lo + cell->hi) / 2;
     const Eigen::Vector4d q0 = lift(cell->face, mid);
-    double cos_a = 1;
+    // sin(a) from the largest chord d = |corner - centre| (a = 2 asin(d/2)): unlike 1 - cos^2,
+    // it loses no digits when a is small.
+    double d = 0;
     for (int corner = 0; corner < 8; ++corner) {
       Eigen::Vector3d x;
       for (int k = 0; k < 3; ++k) x[k] = (corner >> k & 1) ? cell->hi[k] : cell->lo[k];
-      cos_a = std::min(cos_a, std::abs(lift(cell->face, x).dot(q0)));
+      const Eigen::Vector4d q = lift(cell->face, x);
+      d = std::max(d, std::min((q - q0).norm(), (q + q0).norm()));
     }
-    const double sin_a = std::sqrt(std::max(0.0, 1 - cos_a * cos_a)) * (1 + 1e-12) + 1e-15;
+    const double sin_a =
+        (d >= std::sqrt(2.0) ? 1.0 : d * std::sqrt(1 - d * d / 4)) * (1 + 1e-12) + 1e-15;
     const Eigen::Matrix3d R =
         Eigen::Quaterniond(q0[0], q0[1], q0[2], q0[3]).normalized().toRotationMatrix();
     double vol = 1, bound = 1;
