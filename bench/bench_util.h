@@ -26,11 +26,19 @@ inline bool load_or_say(const std::string& path, LoadedMesh* mesh) {
   return static_cast<bool>(s);
 }
 
-// Reads a tree, or prints why not (one line on stderr) and returns false.
-inline bool read_tree_or_say(const std::string& path, Tree* tree) {
+// Reads a tree of the mesh's faces, or prints why not (one line on stderr) and returns false.
+inline bool read_tree_or_say(const std::string& path, const Mesh& mesh, Tree* tree) {
   const Status s = read_tree(path, tree);
-  if (!s) std::fprintf(stderr, "%s\n", s.message().c_str());
-  return static_cast<bool>(s);
+  if (!s) {
+    std::fprintf(stderr, "%s\n", s.message().c_str());
+    return false;
+  }
+  if (tree->mesh_triangles != mesh.faces.size()) {
+    std::fprintf(stderr, "%s: the tree indexes %zu triangles but the mesh has %zu\n", path.c_str(),
+                 static_cast<size_t>(tree->mesh_triangles), mesh.faces.size());
+    return false;
+  }
+  return true;
 }
 
 // The lowest common ancestor of nodes a and b of a tree (node ids).

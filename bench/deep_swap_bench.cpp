@@ -189,7 +189,7 @@ int main(int argc, char** argv) {
   vobb::LoadedMesh loaded;
   if (!vobb::bench::load_or_say(argv[1], &loaded)) return 2;
   vobb::Tree tree;
-  if (!vobb::bench::read_tree_or_say(argv[2], &tree)) return 2;
+  if (!vobb::bench::read_tree_or_say(argv[2], loaded.mesh, &tree)) return 2;
   const bool given = argc == 9;
   const int kmin = given ? std::atoi(argv[4]) : 2;
   const int kmax = given ? std::atoi(argv[5]) : tree.depth;

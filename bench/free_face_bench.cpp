@@ -242,7 +242,7 @@ int main(int argc, char** argv) {
   if (!vobb::bench::load_or_say(argv[1], &loaded)) return 2;
   const Mesh& mesh = loaded.mesh;
   vobb::Tree t;
-  if (!vobb::bench::read_tree_or_say(argv[2], &t)) return 2;
+  if (!vobb::bench::read_tree_or_say(argv[2], mesh, &t)) return 2;
   std::printf("start: estimated e %.6f\n", estimated_e(mesh, t));
   const size_t n = t.nodes.size();
   for (auto& nd : t.nodes) std::sort(nd.faces.begin(), nd.faces.end());

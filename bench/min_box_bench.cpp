@@ -64,7 +64,7 @@ int main(int argc, char** argv) {
   const vobb::Mesh& mesh = loaded.mesh;
   vobb::Tree tree;
   const bool with_tree = argc >= 3;
-  if (with_tree && !vobb::bench::read_tree_or_say(argv[2], &tree)) return 2;
+  if (with_tree && !vobb::bench::read_tree_or_say(argv[2], mesh, &tree)) return 2;
   const double eps = argc == 5 ? std::atof(argv[3]) : 1e-3;
   const long max_cells = argc == 5 ? std::atol(argv[4]) : 20000000;
   if (!(eps > 0 && eps < 1) || max_cells < 1) {

@@ -53,7 +53,7 @@ int main(int argc, char** argv) {
   vobb::LoadedMesh mesh;
   if (!vobb::bench::load_or_say(argv[1], &mesh)) return 2;
   vobb::Tree tree;
-  if (!vobb::bench::read_tree_or_say(argv[2], &tree)) return 2;
+  if (!vobb::bench::read_tree_or_say(argv[2], mesh.mesh, &tree)) return 2;
   const FilteredSolver fs(mesh.mesh);
   std::printf("%5s %6s %14s %14s %14s %8s %s\n", "level", "boxes", "G (all)", "siblings", "cousins",
               "cousin %", "by");

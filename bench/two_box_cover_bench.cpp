@@ -264,7 +264,7 @@ int main(int argc, char** argv) {
   double tree_l1 = NAN, tree_l2 = NAN;
   if (with_tree) {
     vobb::Tree tree;
-    if (!vobb::bench::read_tree_or_say(argv[2], &tree)) return 2;
+    if (!vobb::bench::read_tree_or_say(argv[2], mesh, &tree)) return 2;
     std::vector<int32_t> ids = vobb::layer(tree, 1);
     if (ids.size() != 2) {
       std::fprintf(stderr, "%s: level 1 has %zu boxes, not 2\n", argv[2], ids.size());
