@@ -11,12 +11,15 @@
 // most 2 sin(a), so a box axis of the cell holds the vertices in a width of at least w - 4 r
 // sin(a), with w the width along the centre's axis and r the largest distance of a vertex from a
 // fixed point c. The cell's bound is the product of the three; each width is first lowered by 1e-9
-// of the mesh's extent, more than the round-off of the projections, of the centre's rotation matrix
-// and of sin(a) (about 1e-15 of it), so the bound holds in exact arithmetic too. Best-first: the
-// cell of least bound is split in 8 (256 such cells at a time), and cells whose bound is at least
-// the least box volume found (at cells' centres) are dropped; the search ends when the least bound
-// is within EPS of that volume, or after MAXCELLS cells, and prints the least bound then: no box
-// holding the vertices is smaller. Usage: vobb-bench-min-box MESH [TREE [EPS MAXCELLS]]
+// of the mesh's extent plus 1e-14 of the points' largest norm, more than the round-off of the
+// projections, of the centre's rotation matrix and of sin(a), so the bound holds in exact
+// arithmetic too. A box here has orthonormal axes (DESIGN §1); a stored box's are orthonormal to
+// round-off, whose effect on a width (a few 1e-16 of r) the slack covers as well.
+// Best-first: the cell of least bound is split in 8 (256 such cells at a time), and cells whose
+// bound is at least the least box volume found (at cells' centres) are dropped; the search ends
+// when the least bound is within EPS of that volume, or after MAXCELLS cells (a batch may pass
+// it), and prints the least bound then, rounded down: no box holding the vertices is smaller.
+// Usage: vobb-bench-min-box MESH [TREE [EPS MAXCELLS]]
 #include <tbb/parallel_for.h>
 
 #include <Eigen/Geometry>
@@ -27,6 +30,7 @@
 #include <cstdlib>
 #include <limits>
 #include <queue>
+#include <string>
 #include <vector>
 
 #include "bench/bench_util.h"
@@ -45,6 +49,20 @@ struct Cell {
   double centre_volume = 0;
   bool operator<(const Cell& o) const { return bound > o.bound; }  // least bound on top
 };
+
+// q rounded toward minus infinity to `digits` decimals.
+std::string down(const vobb::Rational& q, int digits = 6) {
+  mpz_class scale = 1;
+  for (int i = 0; i < digits; ++i) scale *= 10;
+  mpz_class n;
+  mpz_fdiv_q(n.get_mpz_t(), mpz_class(q.get_num() * scale).get_mpz_t(), q.get_den().get_mpz_t());
+  const bool negative = n < 0;
+  const std::string digits_of = mpz_class(abs(n)).get_str();
+  std::string s =
+      std::string(std::max(0, digits + 1 - static_cast<int>(digits_of.size())), '0') + digits_of;
+  s.insert(s.size() - digits, ".");
+  return (negative ? "-" : "") + s;
+}
 
 Eigen::Vector4d lift(int face, const Eigen::Vector3d& x) {
   Eigen::Vector4d q;
@@ -79,12 +97,20 @@ int main(int argc, char** argv) {
     for (size_t i = 0; i < used.size(); ++i)
       if (used[i]) p.push_back(mesh.vertices[i]);
   }
+  if (p.empty()) {
+    std::fprintf(stderr, "%s: no faces\n", argv[1]);
+    return 2;
+  }
   Vec3 lo = p[0], hi = p[0];
   for (const Vec3& v : p) lo = lo.cwiseMin(v), hi = hi.cwiseMax(v);
   const Vec3 c = (lo + hi) / 2;
   double r = 0;
   for (const Vec3& v : p) r = std::max(r, (v - c).norm());
-  const double slack = 1e-9 * (hi - lo).norm();
+  // The projections are of the points as stored, so their round-off grows with |v| (about
+  // 3e-16 |v| each): the slack covers it wherever the mesh lies.
+  double far = 0;
+  for (const Vec3& v : p) far = std::max(far, v.norm());
+  const double slack = 1e-9 * (hi - lo).norm() + 1e-14 * far;
   r *= 1 + 1e-12;
 
   auto evaluate = [&](Cell* cell) {
@@ -97,7 +123,8 @@ int main(int argc, char** argv) {
       Eigen::Vector3d x;
       for (int k = 0; k < 3; ++k) x[k] = (corner >> k & 1) ? cell->hi[k] : cell->lo[k];
       const Eigen::Vector4d q = lift(cell->face, x);
-      d = std::max(d, std::min((q - q0).norm(), (q + q0).norm()));
+      // No cell straddles a coordinate 0 (6 cuts, then halvings), so <q, q0> > 0 and a < pi/2.
+      d = std::max(d, (q - q0).norm());
     }
     const double sin_a =
         (d >= std::sqrt(2.0) ? 1.0 : d * std::sqrt(1 - d * d / 4)) * (1 + 1e-12) + 1e-15;
@@ -166,21 +193,25 @@ int main(int argc, char** argv) {
   // Every dropped cell's bound was at least the least volume found then, so no rotation in it
   // gives less than the least found now.
   least = open.empty() ? best : std::min(open.top().bound, best);
-  const double vol_x = vobb::to_double_nearest(vobb::exact_signed_volume(mesh));
+  // The bounds are printed rounded down, in rationals, so that each printed figure is proven.
+  const vobb::Rational vol_x = vobb::exact_signed_volume(mesh);
+  const vobb::Rational floor_omv = vobb::Rational(least) - vol_x;
   std::printf("vertices %zu, cells %ld in %.1f s, cells open %zu\n", p.size(), cells, secs,
               open.size());
-  std::printf("every box holding the vertices has volume >= %.6f; least found %.6f (gap %.3f %%)\n",
-              least, best, 100 * (best - least) / best);
-  std::printf("vol(X) %.6f: every tree's OMV(0) >= %.6f\n", vol_x, least - vol_x);
+  std::printf("every box holding the vertices has volume >= %s; least found %.6f (gap %.3f %%)\n",
+              down(vobb::Rational(least)).c_str(), best, 100 * (best - least) / best);
+  std::printf("vol(X) %.6f: every tree's OMV(0) >= %s\n", vobb::to_double_nearest(vol_x),
+              down(floor_omv).c_str());
   if (with_tree) {
     double root = 0;
     for (const auto& nd : tree.nodes)
       if (nd.level == 0) root = vobb::volume(nd.box);
+    const double omv = root - vobb::to_double_nearest(vol_x);
     std::printf(
         "the tree's root box %.6f (OMV %.6f), %.3f %% above the bound; at depth %d the root's "
-        "term is >= %.4f for every tree, %.4f in this one\n",
-        root, root - vol_x, 100 * (root - least) / least, tree.depth,
-        (tree.depth + 1) * (least - vol_x), (tree.depth + 1) * (root - vol_x));
+        "term is >= %s for every tree, %.4f in this one\n",
+        root, omv, 100 * (root - least) / least, tree.depth,
+        down(vobb::Rational(tree.depth + 1) * floor_omv, 4).c_str(), (tree.depth + 1) * omv);
   }
   return 0;
 }
