@@ -54,6 +54,14 @@ Range range(const Mesh& mesh, const std::vector<int32_t>& faces, const std::arra
   return r;
 }
 
+// What b shares outside the solid with the earlier boxes that may meet it.
+double share(const vobb::PolyOverlapSolver& ov, const Obb& b, const std::vector<Obb>& earlier) {
+  std::vector<Obb> near;
+  for (const Obb& e : earlier)
+    if (!vobb::PolyOverlapSolver::apart(b, e)) near.push_back(e);
+  return near.empty() ? 0.0 : ov.estimate(b, near);
+}
+
 double estimated_e(const Mesh& mesh, const vobb::Tree& t) {
   const vobb::PolyObvSolver obv(mesh);
   const vobb::PolyOverlapSolver ov(mesh);
@@ -64,10 +72,7 @@ double estimated_e(const Mesh& mesh, const vobb::Tree& t) {
     for (const auto& n : t.nodes) {
       if (!(n.level == l || (n.level < l && n.children.empty()))) continue;
       const Obb b = vobb::tight_box(mesh, n.faces, n.box.axes);
-      std::vector<Obb> near;
-      for (const Obb& e : before)
-        if (!vobb::PolyOverlapSolver::apart(b, e)) near.push_back(e);
-      s += obv.estimate(b) - (near.empty() ? 0.0 : ov.estimate(b, near));
+      s += obv.estimate(b) - share(ov, b, before);
       before.push_back(b);
     }
     per[l] = (t.depth - l + 1) * s;
@@ -78,7 +83,9 @@ double estimated_e(const Mesh& mesh, const vobb::Tree& t) {
 }
 
 // Moves that are not free, scored by the estimated e (see the header comment).
-size_t paid_moves(const Mesh& mesh, vobb::Tree* tree, int rounds, double grow) {
+// leaf_of[f] is face f's leaf, kept up to date; leaves the leaves' ids.
+size_t paid_moves(const Mesh& mesh, vobb::Tree* tree, std::vector<int32_t>& leaf_of,
+                  const std::vector<int32_t>& leaves, int rounds, double grow) {
   vobb::Tree& t = *tree;
   const vobb::PolyObvSolver obv(mesh);
   const vobb::PolyOverlapSolver ov(mesh);
@@ -92,19 +99,7 @@ size_t paid_moves(const Mesh& mesh, vobb::Tree* tree, int rounds, double grow) {
   std::vector<std::vector<int32_t>> layer(D + 1);
   for (const auto& nd : t.nodes)
     for (int l = nd.level; l <= last(nd.id); ++l) layer[l].push_back(nd.id);
-  std::vector<int32_t> leaf_of(mesh.faces.size(), -1), leaves;
-  for (const auto& nd : t.nodes)
-    if (nd.children.empty()) {
-      leaves.push_back(nd.id);
-      for (int32_t f : nd.faces) leaf_of[f] = nd.id;
-    }
   auto lca = [&](int32_t a, int32_t b) { return vobb::bench::common_ancestor(t, a, b); };
-  auto share = [&](const Obb& b, const std::vector<Obb>& earlier) {
-    std::vector<Obb> near;
-    for (const Obb& e : earlier)
-      if (!vobb::PolyOverlapSolver::apart(b, e)) near.push_back(e);
-    return near.empty() ? 0.0 : ov.estimate(b, near);
-  };
   struct Move {
     int32_t f, from, to;
     double gain = 0;
@@ -145,9 +140,9 @@ size_t paid_moves(const Mesh& mesh, vobb::Tree* tree, int rounds, double grow) {
       std::vector<Obb> ob = others, oa = others;
       for (size_t j : here) {
         const int32_t i = m->boxes[j].first;
-        before += val[i] - share(box[i], ob);
+        before += val[i] - share(ov, box[i], ob);
         ob.push_back(box[i]);
-        after += m->vals[j] - share(m->boxes[j].second, oa);
+        after += m->vals[j] - share(ov, m->boxes[j].second, oa);
         oa.push_back(m->boxes[j].second);
       }
       gain += (D - l + 1) * (after - before);
@@ -315,7 +310,7 @@ int main(int argc, char** argv) {
     std::printf("pass %d: %zu faces moved\n", pass, moved_now);
     if (!moved_now) break;
   }
-  const size_t paid = rounds > 0 ? paid_moves(mesh, &t, rounds, grow) : 0;
+  const size_t paid = rounds > 0 ? paid_moves(mesh, &t, leaf_of, leaves, rounds, grow) : 0;
   for (auto& nd : t.nodes) nd.box = vobb::fit_obb(mesh, nd.faces, nd.box.axes);
   std::printf("end: %zu free moves, %zu paid moves, estimated e %.6f\n", moved, paid,
               estimated_e(mesh, t));
