@@ -163,7 +163,6 @@ int main(int argc, char** argv) {
       open.push(cell);
     }
   long cells = 4L * n0 * n0 * n0;
-  double least = 0;
   const double secs = vobb::bench::seconds([&] {
     // Up to 256 cells of least bound are split at once, their children evaluated in parallel.
     while (!open.empty() && cells < max_cells && open.top().bound < best * (1 - eps)) {
@@ -192,7 +191,7 @@ int main(int argc, char** argv) {
   });
   // Every dropped cell's bound was at least the least volume found then, so no rotation in it
   // gives less than the least found now.
-  least = open.empty() ? best : std::min(open.top().bound, best);
+  const double least = open.empty() ? best : std::min(open.top().bound, best);
   // The bounds are printed rounded down, in rationals, so that each printed figure is proven.
   const vobb::Rational vol_x = vobb::exact_signed_volume(mesh);
   const vobb::Rational floor_omv = vobb::Rational(least) - vol_x;
