@@ -1,30 +1,15 @@
 // How small can any box around the whole mesh be? A branch and bound over rotations proves a
-// lower bound L on the volume of every box that holds the mesh's vertices, so on every tree's
-// root box; OMV(0) = vol(root box) - vol(X) is then at least L - vol(X) for every tree, and the
-// root's term in e at least (D + 1)(L - vol(X)) at depth D.
-//
-// Rotations are unit quaternions up to sign: the four cube faces q_i = 1 (i = 0..3) of
-// [-1, 1]^4, projected to the sphere, cover them. A cell is a cube on one face; its rotations lie
-// within angle 2a of its centre's, where a is the largest angle between the centre's quaternion
-// and a corner's (the cone of quaternions within a of the centre is convex, so the cube lies in it
-// when its corners do), taken from their chord. A rotation by at most 2a moves each unit axis by at
-// most 2 sin(a), so a box axis of the cell holds the vertices in a width of at least w - 4 r
-// sin(a), with w the width along the centre's axis and r the largest distance of a vertex from a
-// fixed point c. The cell's bound is the product of the three; each width is first lowered by 1e-9
-// of the mesh's extent plus 1e-14 of the points' largest norm, more than the round-off of the
-// projections, of the centre's rotation matrix and of sin(a), so the bound holds in exact
-// arithmetic too. A box here has orthonormal axes (DESIGN §1); a stored box's are orthonormal to
-// round-off, whose effect on a width (a few 1e-16 of r) the slack covers as well.
-// Best-first: the cell of least bound is split in 8 (256 such cells at a time), and cells whose
-// bound is at least the least box volume found (at cells' centres) are dropped; the search ends
-// when the least bound is within EPS of that volume, or after MAXCELLS cells (a batch may pass
-// it), and prints the least bound then, rounded down: no box holding the vertices is smaller.
+// lower bound L on the volume of every box (orthonormal axes, DESIGN §1) that holds the mesh's
+// vertices, so on every tree's root box: OMV(0) >= L - vol(X) for every tree, and the root's term
+// in e is at least (D + 1)(L - vol(X)) at depth D. Cells of rotations are split best first until
+// the least bound is within EPS of the least box volume found, or after MAXCELLS cells (a batch
+// may pass it); the bounds are printed rounded down. Why each cell's bound holds, round-off
+// included: docs/derivations.md, "A floor under every root box".
 // Usage: vobb-bench-min-box MESH [TREE [EPS MAXCELLS]]
 #include <tbb/parallel_for.h>
 
 #include <Eigen/Geometry>
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
