@@ -134,6 +134,10 @@ void add_build_flags(CLI::App* cmd, BuildFlags* f, bool compare) {
   cmd->add_flag("--no-refit", f->no_refit,
                 "Ablation: under omv, no last step turning each box of levels 0-4 (its faces "
                 "fixed) where that lowers its layers' estimated OMV");
+  cmd->add_flag("--subtree-swaps", o.subtree_swaps,
+                "After the search, let subtrees under distant parents trade places while that "
+                "lowers the estimated e (scored by the polyhedral solver; several times the "
+                "search's time)");
   cmd->add_option("--objective", f->objective, kObjectiveHelp)
       ->check(CLI::IsMember({"obv", "omv"}));
   cmd->add_option("--sweeps", o.sweeps, "Most bottom-up merging sweeps")
@@ -220,6 +224,14 @@ BuildOptions build_options(const BuildFlags& f) {
       if (line->tty && line->last >= 0) std::fprintf(stderr, "\n");  // end the progress line
       line->last = -1;
       say_report(r);
+    };
+  if (!f.quiet)
+    o.swapped = [](const SubtreeSwapReport& r) {
+      std::fprintf(stderr,
+                   "vobb: subtree swaps: %zu pairs scored, %zu swaps in %zu rounds, estimated e "
+                   "%.9g -> %.9g%s\n",
+                   r.candidates, r.swaps, r.rounds, r.e_before, r.e_after,
+                   r.stopped ? "; time budget spent" : "");
     };
   return o;
 }

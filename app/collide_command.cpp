@@ -92,9 +92,8 @@ int run_collide_command(const CollideFlags& f) {
   std::vector<collision::NamedTree> named;
   for (size_t i = 0; i < f.trees.size(); ++i) {
     s = read_tree(f.trees[i], &trees[i]);
+    if (s) s = check_tree_fits(mesh.mesh, trees[i], f.trees[i]);
     if (!s) return refuse(s);
-    if (!trees[i].mesh_sha256.empty() && trees[i].mesh_sha256 != sha)
-      return refuse(Status::error(f.trees[i] + ": built for another mesh (sha256 differs)"));
     named.push_back({f.trees[i], &trees[i]});
   }
   collision::ExperimentOptions opt;

@@ -26,32 +26,13 @@ inline bool load_or_say(const std::string& path, LoadedMesh* mesh) {
   return static_cast<bool>(s);
 }
 
-// Reads a tree of the mesh's faces, or prints why not (one line on stderr) and returns false.
+// Reads a tree of this mesh (check_tree_fits), or prints why not (one line on stderr) and returns
+// false.
 inline bool read_tree_or_say(const std::string& path, const Mesh& mesh, Tree* tree) {
-  const Status s = read_tree(path, tree);
-  if (!s) {
-    std::fprintf(stderr, "%s\n", s.message().c_str());
-    return false;
-  }
-  if (tree->mesh_triangles != mesh.faces.size()) {
-    std::fprintf(stderr, "%s: the tree indexes %zu triangles but the mesh has %zu\n", path.c_str(),
-                 static_cast<size_t>(tree->mesh_triangles), mesh.faces.size());
-    return false;
-  }
-  return true;
-}
-
-// The lowest common ancestor of nodes a and b of a tree (node ids).
-inline int32_t common_ancestor(const Tree& t, int32_t a, int32_t b) {
-  while (a != b) {
-    if (t.nodes[a].level > t.nodes[b].level)
-      a = t.nodes[a].parent;
-    else if (t.nodes[b].level > t.nodes[a].level)
-      b = t.nodes[b].parent;
-    else
-      a = t.nodes[a].parent, b = t.nodes[b].parent;
-  }
-  return a;
+  Status s = read_tree(path, tree);
+  if (s) s = check_tree_fits(mesh, *tree, path);
+  if (!s) std::fprintf(stderr, "%s\n", s.message().c_str());
+  return static_cast<bool>(s);
 }
 
 }  // namespace vobb::bench

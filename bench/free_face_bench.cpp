@@ -5,7 +5,7 @@
 // same axes lies inside the old one), so no layer's union of tight boxes grows. f is moved
 // only where it touches an extent of a box on L's side (else nothing shrinks), and never out
 // of a leaf it is the last face of. Passes repeat until none moves a face. Prints the estimated
-// e before and after (polyhedral OBV and shares in double, as vobb-bench-deep-swap), and
+// e before and after (polyhedral OBV and shares in double, as swap_subtrees), and
 // writes the tree (fit_obb boxes along the same axes) to OUT for `vobb certify`.
 // With ROUNDS, moves that are not free follow: a face that touches an extent of its leaf's
 // chain moves to a leaf whose tight box, grown on each side by REACH times the face's largest
@@ -58,7 +58,7 @@ Range range(const Mesh& mesh, const std::vector<int32_t>& faces, const std::arra
 double share(const vobb::PolyOverlapSolver& ov, const Obb& b, const std::vector<Obb>& earlier) {
   std::vector<Obb> near;
   for (const Obb& e : earlier)
-    if (!vobb::PolyOverlapSolver::apart(b, e)) near.push_back(e);
+    if (!vobb::boxes_apart(b, e)) near.push_back(e);
   return near.empty() ? 0.0 : ov.estimate(b, near);
 }
 
@@ -99,7 +99,7 @@ size_t paid_moves(const Mesh& mesh, vobb::Tree* tree, std::vector<int32_t>& leaf
   std::vector<std::vector<int32_t>> layer(D + 1);
   for (const auto& nd : t.nodes)
     for (int l = nd.level; l <= last(nd.id); ++l) layer[l].push_back(nd.id);
-  auto lca = [&](int32_t a, int32_t b) { return vobb::bench::common_ancestor(t, a, b); };
+  auto lca = [&](int32_t a, int32_t b) { return vobb::common_ancestor(t, a, b); };
   struct Move {
     int32_t f, from, to;
     double gain = 0;
@@ -266,7 +266,7 @@ int main(int argc, char** argv) {
       }
     return in;
   };
-  auto lca = [&](int32_t a, int32_t b) { return vobb::bench::common_ancestor(t, a, b); };
+  auto lca = [&](int32_t a, int32_t b) { return vobb::common_ancestor(t, a, b); };
   size_t moved = 0;
   for (int pass = 1;; ++pass) {
     size_t moved_now = 0;

@@ -1597,4 +1597,9 @@ Tree build_variational(const Mesh& mesh, const VariationalOptions& options,
   return tree;
 }
 
+std::array<Vec3, 3> descend_tight_volume(const Mesh& mesh, const std::vector<int32_t>& faces,
+                                         const std::array<Vec3, 3>& axes, double step) {
+  return descend_volume(mesh, distinct_vertices(mesh, faces), axes, step);
+}
+
 }  // namespace vobb

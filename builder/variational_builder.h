@@ -136,4 +136,10 @@ Tree build_variational(const Mesh& mesh, const VariationalOptions& options,
 // the conservative padding of fit_obb: what the optimiser measures.
 Obb tight_box(const Mesh& mesh, const std::vector<int32_t>& faces, const std::array<Vec3, 3>& axes);
 
+// Axes, reached from `axes` (orthonormal), along which the faces' tight box is no larger: the
+// optimiser's descent on that volume, by turns of +-step about each axis, the same step again
+// while one gains, then half of it, while the step is above 1e-4 rad.
+std::array<Vec3, 3> descend_tight_volume(const Mesh& mesh, const std::vector<int32_t>& faces,
+                                         const std::array<Vec3, 3>& axes, double step);
+
 }  // namespace vobb

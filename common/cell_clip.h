@@ -92,6 +92,33 @@ std::vector<std::vector<int>> clipped_faces(const std::vector<std::vector<int>>&
 // id (the vertices to keep, in their new order).
 std::vector<int> compact_faces(std::vector<std::vector<int>>* faces, size_t n_ids);
 
+// The volume of a closed convex cell: vertices `v`, faces as vertex cycles counter-clockwise
+// from outside. A sum of cones from the first face's first vertex, each a triple product over
+// 6; a face through that vertex is a cone of height 0 and adds exactly nothing.
+template <class NT>
+NT cell_volume(const std::vector<std::array<NT, 3>>& v,
+               const std::vector<std::vector<int>>& faces) {
+  if (faces.empty()) return NT(0);
+  const int apex = faces[0][0];
+  const std::array<NT, 3>& p = v[apex];
+  NT sum(0);
+  for (const std::vector<int>& f : faces) {
+    if (std::find(f.begin(), f.end(), apex) != f.end()) continue;
+    NT a[3];
+    for (int i = 0; i < 3; ++i) a[i] = v[f[0]][i] - p[i];
+    for (size_t k = 1; k + 1 < f.size(); ++k) {
+      NT b[3], c[3];
+      for (int i = 0; i < 3; ++i) {
+        b[i] = v[f[k]][i] - p[i];
+        c[i] = v[f[k + 1]][i] - p[i];
+      }
+      sum += a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
+             a[2] * (b[0] * c[1] - b[1] * c[0]);
+    }
+  }
+  return sum / NT(6);
+}
+
 // A double interval [lo, hi] holding a value of NT (the value itself for double; see
 // NumberBounds' specialisations where NT is declared).
 template <class NT>
@@ -265,28 +292,7 @@ class Cell {
     return out;
   }
 
-  // Cones from the first face's first vertex; a face through it adds nothing.
-  NT volume() const {
-    if (faces_.empty()) return NT(0);
-    const int apex = faces_[0][0];
-    const std::array<NT, 3>& p = v_[apex];
-    NT sum(0);
-    for (const std::vector<int>& f : faces_) {
-      if (std::find(f.begin(), f.end(), apex) != f.end()) continue;
-      NT a[3];
-      for (int i = 0; i < 3; ++i) a[i] = v_[f[0]][i] - p[i];
-      for (size_t k = 1; k + 1 < f.size(); ++k) {
-        NT b[3], c[3];
-        for (int i = 0; i < 3; ++i) {
-          b[i] = v_[f[k]][i] - p[i];
-          c[i] = v_[f[k + 1]][i] - p[i];
-        }
-        sum += a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
-               a[2] * (b[0] * c[1] - b[1] * c[0]);
-      }
-    }
-    return sum / NT(6);
-  }
+  NT volume() const { return cell_volume(v_, faces_); }
 
   // Axis-aligned bounds holding the cell's vertices as NumberBounds encloses them.
   Aabb bounds() const {

@@ -133,6 +133,27 @@ Obb fit_obb(const Mesh& mesh, const std::vector<int32_t>& faces,
   return box;
 }
 
+bool boxes_apart(const Obb& a, const Obb& b) {
+  const Vec3 d = b.center - a.center;
+  // Every projection below is a few products and sums of numbers no larger than `scale`: their
+  // rounding is far below 1e-12 of it, so a gap wider than that is a true gap. Any direction
+  // separates convex sets, so the axes need not be exactly unit or orthogonal.
+  const double scale = d.cwiseAbs().sum() + a.half.sum() + b.half.sum();
+  const double slack = 1e-12 * scale + 1e-300;
+  auto split_by = [&](const Vec3& axis) {
+    const double n = axis.norm();
+    if (!(n > 1e-6)) return false;  // parallel edges: a degenerate axis decides nothing
+    const Vec3 u = axis / n;
+    double ra = 0, rb = 0;
+    for (int k = 0; k < 3; ++k) {
+      ra += a.half[k] * std::abs(u.dot(a.axes[k]));
+      rb += b.half[k] * std::abs(u.dot(b.axes[k]));
+    }
+    return std::abs(u.dot(d)) > ra + rb + slack;
+  };
+  return any_separating_axis(a, b, split_by);
+}
+
 Obb rotated_box(const Vec3& c, const Vec3& half, double angle, const Vec3& axis) {
   Obb b;
   b.center = c;

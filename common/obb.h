@@ -118,4 +118,8 @@ bool any_separating_axis(const BoxA& a, const BoxB& b, Separates separates) {
   return false;
 }
 
+// Whether two boxes are surely apart: one of the 15 separating axes splits them with a gap
+// wider than round-off can close. False where they may meet (touching boxes may).
+bool boxes_apart(const Obb& a, const Obb& b);
+
 }  // namespace vobb

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "common/sha256.h"
+
 namespace vobb {
 
 std::vector<int32_t> layer(const Tree& tree, int level) {
@@ -9,6 +11,14 @@ std::vector<int32_t> layer(const Tree& tree, int level) {
   for (const TreeNode& n : tree.nodes)
     if (n.level == level || (n.level < level && n.is_leaf())) out.push_back(n.id);
   return out;
+}
+
+int32_t common_ancestor(const Tree& tree, int32_t a, int32_t b) {
+  while (a != b) {
+    if (tree.nodes[a].level >= tree.nodes[b].level) a = tree.nodes[a].parent;
+    if (tree.nodes[b].level > tree.nodes[a].level) b = tree.nodes[b].parent;
+  }
+  return a;
 }
 
 Status validate_tree(const Tree& tree, const std::string& display) {
@@ -86,6 +96,16 @@ Status validate_tree(const Tree& tree, const std::string& display) {
     if (owner[f].first != static_cast<int32_t>(f))
       return fail("face " + std::to_string(f) + " is in no leaf");
   }
+  return Status::ok();
+}
+
+Status check_tree_fits(const Mesh& mesh, const Tree& tree, const std::string& display) {
+  if (const Status s = validate_tree(tree, display); !s) return s;
+  if (tree.mesh_triangles != mesh.faces.size())
+    return Status::error(display + ": tree indexes " + std::to_string(tree.mesh_triangles) +
+                         " triangles but the mesh has " + std::to_string(mesh.faces.size()));
+  if (!tree.mesh_sha256.empty() && tree.mesh_sha256 != mesh_sha256(mesh))
+    return Status::error(display + ": built for another mesh (sha256 differs)");
   return Status::ok();
 }
 

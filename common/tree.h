@@ -42,10 +42,17 @@ inline int layer_weight(int depth, int level) { return depth - level + 1; }
 // Node ids of layer `level` (0 <= level <= depth), ascending.
 std::vector<int32_t> layer(const Tree& tree, int level);
 
+// The lowest common ancestor of nodes a and b (ids) of a valid tree.
+int32_t common_ancestor(const Tree& tree, int32_t a, int32_t b);
+
 // Structural check: ids, parent/child links, levels, arity, depth, and that the leaves
 // partition the faces [0, mesh_triangles) with each inner node's faces the union of its
 // children's. Messages are one line prefixed with `display`.
 Status validate_tree(const Tree& tree, const std::string& display);
+
+// validate_tree, and that the tree indexes this mesh: its triangle count and, where the tree
+// records one, the mesh's SHA-256 (sha256.h). Messages are one line prefixed with `display`.
+Status check_tree_fits(const Mesh& mesh, const Tree& tree, const std::string& display);
 
 // Conservativeness by exact predicates: each face of each node lies in that node's box.
 struct ContainmentReport {

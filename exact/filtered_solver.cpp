@@ -211,28 +211,7 @@ class MpCell {
     return out;
   }
 
-  Mp volume() const {
-    if (faces_.empty()) return Mp(0);
-    const int apex = faces_[0][0];
-    const std::array<Mp, 3>& p = v_[apex];
-    Mp sum(0);
-    for (const std::vector<int>& f : faces_) {
-      // A face through the apex adds a cone of height 0: exactly nothing.
-      if (std::find(f.begin(), f.end(), apex) != f.end()) continue;
-      Mp a[3];
-      for (int i = 0; i < 3; ++i) a[i] = v_[f[0]][i] - p[i];
-      for (size_t k = 1; k + 1 < f.size(); ++k) {
-        Mp b[3], c[3];
-        for (int i = 0; i < 3; ++i) {
-          b[i] = v_[f[k]][i] - p[i];
-          c[i] = v_[f[k + 1]][i] - p[i];
-        }
-        sum += a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
-               a[2] * (b[0] * c[1] - b[1] * c[0]);
-      }
-    }
-    return sum / Mp(6);
-  }
+  Mp volume() const { return cell_clip::cell_volume(v_, faces_); }
 
   Aabb bounds() const {
     Aabb b;

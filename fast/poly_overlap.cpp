@@ -15,7 +15,7 @@ namespace {
 std::vector<Obb> meeting(const Obb& box, const std::vector<Obb>& earlier) {
   std::vector<Obb> out;
   for (const Obb& e : earlier)
-    if (!PolyOverlapSolver::apart(box, e)) out.push_back(e);
+    if (!boxes_apart(box, e)) out.push_back(e);
   return out;
 }
 
@@ -23,27 +23,6 @@ std::vector<Obb> meeting(const Obb& box, const std::vector<Obb>& earlier) {
 
 PolyOverlapSolver::PolyOverlapSolver(const Mesh& mesh)
     : mesh_(mesh), faces_(AabbTree::over_faces(mesh)) {}
-
-bool PolyOverlapSolver::apart(const Obb& a, const Obb& b) {
-  const Vec3 d = b.center - a.center;
-  // Every projection below is a few products and sums of numbers no larger than `scale`: their
-  // rounding is far below 1e-12 of it, so a gap wider than that is a true gap. Any direction
-  // separates convex sets, so the axes need not be exactly unit or orthogonal.
-  const double scale = d.cwiseAbs().sum() + a.half.sum() + b.half.sum();
-  const double slack = 1e-12 * scale + 1e-300;
-  auto split_by = [&](const Vec3& axis) {
-    const double n = axis.norm();
-    if (!(n > 1e-6)) return false;  // parallel edges: a degenerate axis decides nothing
-    const Vec3 u = axis / n;
-    double ra = 0, rb = 0;
-    for (int k = 0; k < 3; ++k) {
-      ra += a.half[k] * std::abs(u.dot(a.axes[k]));
-      rb += b.half[k] * std::abs(u.dot(b.axes[k]));
-    }
-    return std::abs(u.dot(d)) > ra + rb + slack;
-  };
-  return any_separating_axis(a, b, split_by);
-}
 
 Rational PolyOverlapSolver::exact(const Obb& box, const std::vector<Obb>& earlier) const {
   return cell_clip::shared_outside_volume<Rational>(mesh_, faces_, box, meeting(box, earlier));

@@ -49,10 +49,6 @@ class PolyOverlapSolver {
   // The exact value by the same arithmetic in rationals.
   Rational exact(const Obb& box, const std::vector<Obb>& earlier) const;
 
-  // Whether the boxes are surely apart: some separating axis (of the 15) splits them with a
-  // gap larger than round-off can close. False where they may meet.
-  static bool apart(const Obb& a, const Obb& b);
-
  private:
   const Mesh& mesh_;
   AabbTree faces_;

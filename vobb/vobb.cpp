@@ -10,6 +10,7 @@
 #include <memory>
 
 #include "builder/obbtree_builder.h"
+#include "builder/subtree_swaps.h"
 #include "collision/query_objective.h"
 #include "common/atomic_file.h"
 #include "common/sha256.h"
@@ -216,9 +217,23 @@ Status build_variational_tree(const Mesh& mesh, const BuildOptions& o, const Est
   }
   if (o.started) o.started();
   *tree = build_variational(mesh, opt, est.estimate, resuming ? &resume : nullptr, report);
+  if (o.finished) o.finished(*report);
+  if (o.subtree_swaps && !(opt.out_of_time && opt.out_of_time())) {
+    // Scored by the polyhedral solver whatever the backend: a swap's gain may be as small as
+    // 1e-4 of e, the cubemap's median error at m = 32 (docs/BENCHMARKS.md).
+    const PolyObvSolver obv(mesh);
+    if (!shares) shares = std::make_unique<PolyOverlapSolver>(mesh);
+    const PolyOverlapSolver* p = shares.get();
+    SubtreeSwapOptions so;
+    so.estimate = [&obv](const std::vector<Obb>& b) { return obv.estimate(b); };
+    so.share = [p](const std::vector<ShareQuery>& q) { return p->estimate(q); };
+    so.out_of_time = opt.out_of_time;
+    SubtreeSwapReport sr;
+    swap_subtrees(mesh, so, tree, &sr);
+    if (o.swapped) o.swapped(sr);
+  }
   const Status valid = validate_tree(*tree, "variational tree");
   VOBB_ASSERT(valid, valid.message().c_str());  // a builder bug, not bad input
-  if (o.finished) o.finished(*report);
   return Status::ok();
 }
 
@@ -349,6 +364,10 @@ Status check_build_options(const BuildOptions& o) {
     return Status::error("--objective applies to --method variational only");
   if (!o.queries.empty() && o.objective)
     return Status::error("--queries and --objective are two objectives; choose one");
+  if (o.subtree_swaps && !variational)
+    return Status::error("--subtree-swaps applies to --method variational only");
+  if (o.subtree_swaps && !o.queries.empty())
+    return Status::error("--subtree-swaps lowers e, which --queries does not minimise");
   // The baseline takes well under a second and has no search to budget or resume.
   if (!o.checkpoint.empty() && !variational)
     return Status::error("--checkpoint applies to --method variational only");
@@ -398,16 +417,6 @@ Status read_queries(const Mesh& mesh, const std::vector<std::string>& paths, Bui
     colliders.insert(colliders.end(), stream.colliders.begin(), stream.colliders.end());
   }
   if (colliders.empty()) return Status::error("--queries: the files hold no colliders");
-  return Status::ok();
-}
-
-Status check_tree_fits(const Mesh& mesh, const Tree& tree, const std::string& tree_name) {
-  if (const Status s = validate_tree(tree, tree_name); !s) return s;
-  if (tree.mesh_triangles != mesh.faces.size())
-    return Status::error(tree_name + ": tree indexes " + std::to_string(tree.mesh_triangles) +
-                         " triangles but the mesh has " + std::to_string(mesh.faces.size()));
-  if (!tree.mesh_sha256.empty() && tree.mesh_sha256 != mesh_sha256(mesh))
-    return Status::error(tree_name + ": built for another mesh (sha256 differs)");
   return Status::ok();
 }
 

@@ -23,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "builder/subtree_swaps.h"
 #include "builder/variational_builder.h"
 #include "collision/contact_predicates.h"
 #include "common/io/mesh_io.h"
@@ -67,6 +68,10 @@ struct BuildOptions {
   bool axis_search = true, adjust = false, merge = true;
   int sweeps = 3;
   bool refit = true;  // under kOmv: the last step's turns of boxes with their faces fixed
+  // After the search, swaps of subtrees across distant parents while each lowers the estimated
+  // e (builder/subtree_swaps.h), scored by the polyhedral solver whatever the backend. Off by
+  // default: it takes several times the search's time (docs/BENCHMARKS.md).
+  bool subtree_swaps = false;
   // What the search minimises per set of boxes; unset: kOmv (docs/BENCHMARKS.md: it gives the
   // lower exact e), but kObv with a collider margin (a collider in a region two boxes share
   // tests both: the sum counts the tests). kOmv takes its shares from the polyhedral solver,
@@ -87,6 +92,8 @@ struct BuildOptions {
   // Called when the variational search starts and when it ends, with its counts.
   std::function<void()> started;
   std::function<void(const VariationalReport&)> finished;
+  // Called after the subtree swaps, with their counts.
+  std::function<void(const SubtreeSwapReport&)> swapped;
 };
 
 struct BuildReport {
@@ -119,14 +126,12 @@ struct CertifyOptions {
   std::function<void(const exact::CertifyState&)> saved;  // after each checkpoint saved
   std::string tree_name = "tree";  // how messages name the tree (its file, say)
 };
-// Checks the tree's structure (validate_tree) and that it indexes this mesh (its triangle count
-// and, when recorded, its SHA-256), then certifies it (exact/certify.h): OMV, sum of OBV and
+// Checks that the tree is well formed and indexes this mesh (check_tree_fits, common/tree.h,
+// which also serves alone), then certifies it (exact/certify.h): OMV, sum of OBV and
 // overlap per layer, e, containment. Creates no GL context. *certificate->ok() says whether it
 // certifies.
 Status certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& options,
                exact::Certificate* certificate);
-// Those checks alone, with `tree_name` in their messages.
-Status check_tree_fits(const Mesh& mesh, const Tree& tree, const std::string& tree_name);
 
 // ---- estimating OBV ------------------------------------------------------------------------
 struct EstimateOptions {

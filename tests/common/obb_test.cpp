@@ -36,6 +36,25 @@ TEST(Obb, VolumeAndCorners) {
   EXPECT_EQ(c[7], Vec3(1.5, 3, 5));
 }
 
+// Apart only across a gap: boxes that overlap or touch may meet.
+TEST(Obb, ApartOnlyAcrossAGap) {
+  const Obb a = rotated_box(Vec3(0.5, 0.5, 0.5), Vec3(1, 1, 1));
+  EXPECT_TRUE(boxes_apart(a, rotated_box(Vec3(4, 0.5, 0.5), Vec3(1, 1, 1), 0.7)));
+  EXPECT_FALSE(boxes_apart(a, rotated_box(Vec3(2.5, 0.5, 0.5), Vec3(1, 1, 1))));  // x = 1.5
+  EXPECT_TRUE(boxes_apart(a, rotated_box(Vec3(2.5 + 1e-6, 0.5, 0.5), Vec3(1, 1, 1))));
+  EXPECT_FALSE(boxes_apart(a, rotated_box(Vec3(1, 1, 1), Vec3(1, 1, 1), 0.3)));
+  // Two bars crossing at right angles: apart 0.1 above each other, meeting 0.02 above.
+  Obb x, y;
+  x.center = Vec3(0, 0, 0);
+  x.half = Vec3(1, 0.01, 0.01);
+  y.center = Vec3(0, 0, 0.1);
+  y.axes = {Vec3(0, 1, 0), Vec3(0, 0, 1), Vec3(1, 0, 0)};
+  y.half = Vec3(1, 0.01, 0.01);
+  EXPECT_TRUE(boxes_apart(x, y));
+  y.center.z() = 0.02;
+  EXPECT_FALSE(boxes_apart(x, y));
+}
+
 TEST(Orthonormalize, GivesRightHandedUnitFrame) {
   std::mt19937_64 rng(3);
   for (int i = 0; i < 100; ++i) {

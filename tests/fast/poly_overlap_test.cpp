@@ -199,14 +199,14 @@ TEST(PolyOverlap, ApartOrTouchingBoxesShareNothing) {
   const PolyOverlapSolver poly(am.mesh);
   const Obb a = rotated_box(Vec3(0.5, 0.5, 0.5), Vec3(1, 1, 1));
   const Obb far = rotated_box(Vec3(4, 0.5, 0.5), Vec3(1, 1, 1), 0.7);
-  EXPECT_TRUE(PolyOverlapSolver::apart(a, far));
+  EXPECT_TRUE(boxes_apart(a, far));
   EXPECT_EQ(poly.estimate(a, {far}), 0.0);
   const PolyOverlap r = poly.evaluate(a, {far});
   EXPECT_EQ(r.lo, 0.0);
   EXPECT_EQ(r.hi, 0.0);
   // Sharing the face x = 1.5 exactly: no separating gap, and no volume in common.
   const Obb touching = rotated_box(Vec3(2.5, 0.5, 0.5), Vec3(1, 1, 1));
-  EXPECT_FALSE(PolyOverlapSolver::apart(a, touching));
+  EXPECT_FALSE(boxes_apart(a, touching));
   EXPECT_EQ(poly.exact(a, {touching}), 0);
   EXPECT_EQ(poly.evaluate(a, {touching}).hi, 0.0);
   EXPECT_EQ(poly.estimate(a, {touching}), 0.0);

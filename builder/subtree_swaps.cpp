@@ -1,0 +1,270 @@
+#include "builder/subtree_swaps.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
+#include <iterator>
+#include <limits>
+#include <tuple>
+#include <utility>
+#include <vector>
+
+#include "common/obb.h"
+
+namespace vobb {
+namespace {
+
+using Axes = std::array<Vec3, 3>;
+
+// The sorted faces f without `out` (a subset of f) and with `in` (disjoint from f).
+std::vector<int32_t> traded(const std::vector<int32_t>& f, const std::vector<int32_t>& out,
+                            const std::vector<int32_t>& in) {
+  std::vector<int32_t> rest, r;
+  std::set_difference(f.begin(), f.end(), out.begin(), out.end(), std::back_inserter(rest));
+  std::merge(rest.begin(), rest.end(), in.begin(), in.end(), std::back_inserter(r));
+  return r;
+}
+
+struct Change {
+  int32_t node = 0;
+  std::vector<int32_t> faces;
+  Axes axes;
+  Obb box;
+  double obv = 0;
+};
+
+struct Swap {
+  int32_t u = 0, v = 0;
+  double gain = 0;  // the change in the estimated e (negative lowers it)
+  std::vector<Change> changes;
+};
+
+// The tree with each node's axes, tight box and estimated OBV: what the search measures.
+struct State {
+  Tree tree;
+  std::vector<Axes> axes;
+  std::vector<Obb> box;
+  std::vector<double> obv;
+};
+
+class Search {
+ public:
+  Search(const Mesh& mesh, const SubtreeSwapOptions& o, Tree tree) : mesh_(mesh), o_(o) {
+    s_.tree = std::move(tree);
+    for (const TreeNode& n : s_.tree.nodes) {
+      s_.axes.push_back(n.box.axes);
+      s_.box.push_back(tight_box(mesh_, n.faces, n.box.axes));
+    }
+    s_.obv = o_.estimate(s_.box);
+    const int depth = s_.tree.depth;
+    for (int l = 0; l <= depth; ++l) layers_.push_back(layer(s_.tree, l));
+    changed_.assign(s_.tree.nodes.size(), 0);
+  }
+
+  // The estimated e: per layer, its boxes' OBV less each one's share with those before it.
+  double e() const {
+    const int depth = s_.tree.depth;
+    std::vector<double> per(depth + 1);
+    tbb::parallel_for(0, depth + 1, [&](int l) {
+      std::vector<ShareQuery> q;
+      std::vector<Obb> before;
+      double sum = 0;
+      for (int32_t i : layers_[l]) {
+        sum += s_.obv[i];
+        if (!before.empty()) q.push_back({s_.box[i], before});
+        before.push_back(s_.box[i]);
+      }
+      for (double x : q.empty() ? std::vector<double>() : o_.share(q)) sum -= x;
+      per[l] = layer_weight(depth, l) * sum;
+    });
+    double sum = 0;
+    for (double x : per) sum += x;
+    return sum;
+  }
+
+  // Pairs of level k that may trade places.
+  std::vector<Swap> candidates(int k) const {
+    const Tree& t = s_.tree;
+    std::vector<int32_t> at;
+    for (const TreeNode& n : t.nodes)
+      if (n.level == k) at.push_back(n.id);
+    std::vector<Swap> out;
+    for (size_t i = 0; i < at.size(); ++i)
+      for (size_t j = i + 1; j < at.size(); ++j) {
+        const int32_t u = at[i], v = at[j];
+        if (t.nodes[u].parent == t.nodes[v].parent) continue;
+        if (t.nodes[common_ancestor(t, u, v)].level > k - o_.gap) continue;
+        if (boxes_apart(s_.box[u], s_.box[v])) continue;
+        Swap s;
+        s.u = u;
+        s.v = v;
+        out.push_back(std::move(s));
+      }
+    return out;
+  }
+
+  // Fills the swap's chains' new faces, axes, boxes and OBV, and its gain.
+  void evaluate(Swap* s) const {
+    const Tree& t = s_.tree;
+    const int32_t c = common_ancestor(t, s->u, s->v);
+    const std::vector<int32_t>& fu = t.nodes[s->u].faces;
+    const std::vector<int32_t>& fv = t.nodes[s->v].faces;
+    std::vector<Obb> boxes;
+    for (int32_t a = t.nodes[s->u].parent, b = t.nodes[s->v].parent; a != c;
+         a = t.nodes[a].parent, b = t.nodes[b].parent) {
+      for (const auto& [node, out, in] : {std::tuple(a, &fu, &fv), std::tuple(b, &fv, &fu)}) {
+        Change& ch = s->changes.emplace_back();
+        ch.node = node;
+        ch.faces = traded(t.nodes[node].faces, *out, *in);
+        ch.axes = turned(ch.faces, s_.axes[node]);
+        ch.box = tight_box(mesh_, ch.faces, ch.axes);
+        boxes.push_back(ch.box);
+      }
+    }
+    const std::vector<double> obv = o_.estimate(boxes);
+    // Per chain level, the pair's shares before and after: a with the layer's other boxes, b
+    // with those and a.
+    std::vector<ShareQuery> q;
+    for (size_t j = 0; j < s->changes.size(); j += 2) {
+      Change& a = s->changes[j];
+      Change& b = s->changes[j + 1];
+      a.obv = obv[j];
+      b.obv = obv[j + 1];
+      std::vector<Obb> others;
+      for (int32_t i : layers_[t.nodes[a.node].level])
+        if (i != a.node && i != b.node) others.push_back(s_.box[i]);
+      q.push_back({s_.box[a.node], others});
+      q.push_back({a.box, others});
+      others.push_back(s_.box[a.node]);
+      q.push_back({s_.box[b.node], others});
+      others.back() = a.box;
+      q.push_back({b.box, std::move(others)});
+    }
+    const std::vector<double> share = o_.share(q);
+    double gain = 0;
+    for (size_t j = 0; j < s->changes.size(); j += 2) {
+      const Change& a = s->changes[j];
+      const Change& b = s->changes[j + 1];
+      const double before = s_.obv[a.node] + s_.obv[b.node] - share[2 * j] - share[2 * j + 2];
+      const double after = a.obv + b.obv - share[2 * j + 1] - share[2 * j + 3];
+      gain += layer_weight(t.depth, t.nodes[a.node].level) * (after - before);
+    }
+    s->gain = gain;
+  }
+
+  void apply(const Swap& s) {
+    Tree& t = s_.tree;
+    const int32_t p = t.nodes[s.u].parent, q = t.nodes[s.v].parent;
+    std::replace(t.nodes[p].children.begin(), t.nodes[p].children.end(), s.u, s.v);
+    std::replace(t.nodes[q].children.begin(), t.nodes[q].children.end(), s.v, s.u);
+    std::sort(t.nodes[p].children.begin(), t.nodes[p].children.end());
+    std::sort(t.nodes[q].children.begin(), t.nodes[q].children.end());
+    t.nodes[s.u].parent = q;
+    t.nodes[s.v].parent = p;
+    for (const Change& c : s.changes) {
+      t.nodes[c.node].faces = c.faces;
+      s_.axes[c.node] = c.axes;
+      s_.box[c.node] = c.box;
+      s_.obv[c.node] = c.obv;
+      changed_[c.node] = 1;
+    }
+  }
+
+  // One round at level k; false where it applied nothing (or ran out of time).
+  bool round(int k, SubtreeSwapReport* r) {
+    std::vector<Swap> cand = candidates(k);
+    tbb::parallel_for(size_t(0), cand.size(), [&](size_t i) { evaluate(&cand[i]); });
+    if (o_.out_of_time && o_.out_of_time()) return r->stopped = true, false;
+    r->candidates += cand.size();
+    std::sort(cand.begin(), cand.end(), [](const Swap& a, const Swap& b) {
+      return a.gain != b.gain ? a.gain < b.gain : std::pair(a.u, a.v) < std::pair(b.u, b.v);
+    });
+    const double e0 = r->e_after;
+    const State kept = s_;
+    const std::vector<char> changed = changed_;
+    std::vector<char> touched(s_.tree.nodes.size(), 0);
+    size_t applied = 0;
+    for (const Swap& s : cand) {
+      if (!(s.gain <= -o_.min_drop * e0)) break;
+      bool clash = touched[s.u] || touched[s.v];
+      for (const Change& c : s.changes) clash = clash || touched[c.node];
+      if (clash) continue;
+      apply(s);
+      touched[s.u] = touched[s.v] = 1;
+      for (const Change& c : s.changes) touched[c.node] = 1;
+      ++applied;
+    }
+    if (applied == 0) return false;
+    double e1 = e();
+    // Swaps of one round meet in the layers they share; where together they lower e less than
+    // the best one alone, take that one alone.
+    if (applied > 1 && e1 > e0 + cand[0].gain) {
+      s_ = kept;
+      changed_ = changed;
+      apply(cand[0]);
+      e1 = e();
+      applied = 1;
+      ++r->reverted;
+    }
+    r->swaps += applied;
+    r->e_after = e1;
+    ++r->rounds;
+    return true;
+  }
+
+  void run(SubtreeSwapReport* r) {
+    r->e_before = r->e_after = e();
+    for (int pass = 0; pass < o_.passes && !r->stopped; ++pass)
+      for (int k = o_.first_level; k <= s_.tree.depth && !r->stopped; ++k)
+        for (int i = 0; i < o_.rounds; ++i) {
+          if (o_.out_of_time && o_.out_of_time()) {
+            r->stopped = true;
+            break;
+          }
+          if (!round(k, r)) break;
+        }
+  }
+
+  // The tree, the changed nodes boxed by fit_obb.
+  Tree finished() {
+    for (size_t i = 0; i < changed_.size(); ++i)
+      if (changed_[i]) s_.tree.nodes[i].box = fit_obb(mesh_, s_.tree.nodes[i].faces, s_.axes[i]);
+    return std::move(s_.tree);
+  }
+
+ private:
+  // A chain node's axes for its new faces: the better of two descents on the tight volume from
+  // its old axes, first turns of 0.02 and 0.2 rad (the descent ends in a local minimum, and
+  // which one depends on its first turn).
+  Axes turned(const std::vector<int32_t>& faces, const Axes& from) const {
+    Axes best;
+    double least = std::numeric_limits<double>::infinity();
+    for (double step : kTurns) {
+      const Axes a = descend_tight_volume(mesh_, faces, from, step);
+      const double v = volume(tight_box(mesh_, faces, a));
+      if (v < least) least = v, best = a;
+    }
+    return best;
+  }
+  static constexpr double kTurns[] = {0.02, 0.2};
+
+  const Mesh& mesh_;
+  const SubtreeSwapOptions& o_;
+  State s_;
+  std::vector<std::vector<int32_t>> layers_;
+  std::vector<char> changed_;
+};
+
+}  // namespace
+
+void swap_subtrees(const Mesh& mesh, const SubtreeSwapOptions& options, Tree* tree,
+                   SubtreeSwapReport* report) {
+  SubtreeSwapReport r;
+  Search search(mesh, options, std::move(*tree));
+  search.run(&r);
+  *tree = search.finished();
+  if (report) *report = r;
+}
+
+}  // namespace vobb

@@ -1,0 +1,64 @@
+// Swaps of whole subtrees across distant parents, on a finished tree: the step the merging
+// sweeps cannot take (they regroup only under a common grandparent and turn only the parents).
+// Derivation and measurements: docs/derivations.md, "Swaps of subtrees across distant parents".
+//
+// Two nodes u, v of one level k, whose boxes may meet (boxes_apart) and whose lowest common
+// ancestor c is at level k - gap or above, trade places. Every node strictly between them and c
+// (the two chains) gives up one's faces for the other's and is turned by descend_tight_volume
+// from its axes. A swap's gain is the change in the estimated e over the layers it changes: per
+// layer, ω(l) times the two chain boxes' OBV less what they share with the layer's other boxes
+// and with each other, which is that layer's change in OMV exactly (the union's outer volume,
+// nothing dropped; docs/derivations.md, "Shared outer volume").
+//
+// Each round scores every candidate pair of a level at once and applies the best ones that
+// touch no node an applied swap touched, each lowering the estimated e by `min_drop` of it or
+// more; levels first_level..depth in turn, `passes` times, up to `rounds` rounds a level while
+// a round applies a swap.
+//
+// Contract:
+// - The tree stays valid (validate_tree) with the same ids, levels and root; only the nodes of
+//   applied swaps' chains change their faces, and they get fit_obb boxes (exactly conservative).
+//   Every other node keeps its box bit for bit, and the swapped nodes' children lists stay
+//   sorted.
+// - The estimated e never rises: a round whose swaps together do not lower it is replaced by
+//   its best swap alone, whose gain is exact up to the estimators' round-off.
+// - Deterministic: the same tree, options and estimator values give the same tree on any
+//   number of threads.
+// - With out_of_time, it stops within the round under way and keeps the rounds finished.
+#pragma once
+
+#include <cstddef>
+#include <functional>
+
+#include "builder/variational_builder.h"
+#include "common/mesh.h"
+#include "common/tree.h"
+
+namespace vobb {
+
+struct SubtreeSwapOptions {
+  int first_level = 2;                // 1..depth
+  int gap = 2;                        // the common ancestor at least this many levels up; >= 2
+  int rounds = 4;                     // per level and pass
+  int passes = 2;                     // over the levels
+  double min_drop = 1e-4;             // of the estimated e, per swap
+  ObvEstimate estimate;               // required; called from several threads at once
+  ShareEstimate share;                // required; likewise
+  std::function<bool()> out_of_time;  // may be empty
+};
+
+struct SubtreeSwapReport {
+  size_t candidates = 0;             // pairs scored, over all rounds
+  size_t swaps = 0;                  // applied
+  size_t rounds = 0;                 // finished
+  size_t reverted = 0;               // rounds replaced by their best swap alone
+  double e_before = 0, e_after = 0;  // estimated
+  bool stopped = false;              // out_of_time ended it
+};
+
+// Preconditions: the tree fits the mesh (check_tree_fits), its boxes have orthonormal axes, and
+// the options are in range.
+void swap_subtrees(const Mesh& mesh, const SubtreeSwapOptions& options, Tree* tree,
+                   SubtreeSwapReport* report = nullptr);
+
+}  // namespace vobb
