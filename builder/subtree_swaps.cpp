@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <iterator>
 #include <limits>
 #include <tuple>
@@ -72,7 +73,8 @@ class Search {
       double sum = 0;
       for (int32_t i : layers_[l]) {
         sum += s_.obv[i];
-        if (!before.empty()) q.push_back({s_.box[i], before});
+        q.push_back({s_.box[i], meeting(s_.box[i], before)});
+        if (q.back().earlier.empty()) q.pop_back();
         before.push_back(s_.box[i]);
       }
       for (double x : q.empty() ? std::vector<double>() : o_.share(q)) sum -= x;
@@ -134,12 +136,12 @@ class Search {
       std::vector<Obb> others;
       for (int32_t i : layers_[t.nodes[a.node].level])
         if (i != a.node && i != b.node) others.push_back(s_.box[i]);
-      q.push_back({s_.box[a.node], others});
-      q.push_back({a.box, others});
+      q.push_back({s_.box[a.node], meeting(s_.box[a.node], others)});
+      q.push_back({a.box, meeting(a.box, others)});
       others.push_back(s_.box[a.node]);
-      q.push_back({s_.box[b.node], others});
+      q.push_back({s_.box[b.node], meeting(s_.box[b.node], others)});
       others.back() = a.box;
-      q.push_back({b.box, std::move(others)});
+      q.push_back({b.box, meeting(b.box, others)});
     }
     const std::vector<double> share = o_.share(q);
     double gain = 0;
@@ -174,8 +176,12 @@ class Search {
   // One round at level k; false where it applied nothing (or ran out of time).
   bool round(int k, SubtreeSwapReport* r) {
     std::vector<Swap> cand = candidates(k);
-    tbb::parallel_for(size_t(0), cand.size(), [&](size_t i) { evaluate(&cand[i]); });
-    if (o_.out_of_time && o_.out_of_time()) return r->stopped = true, false;
+    std::atomic<bool> late{false};
+    tbb::parallel_for(size_t(0), cand.size(), [&](size_t i) {
+      if (late || (o_.out_of_time && o_.out_of_time())) return void(late = true);
+      evaluate(&cand[i]);
+    });
+    if (late) return r->stopped = true, false;
     r->candidates += cand.size();
     std::sort(cand.begin(), cand.end(), [](const Swap& a, const Swap& b) {
       return a.gain != b.gain ? a.gain < b.gain : std::pair(a.u, a.v) < std::pair(b.u, b.v);
@@ -207,6 +213,13 @@ class Search {
       applied = 1;
       ++r->reverted;
     }
+    // The best swap's gain is exact up to the estimators' error; where that error still leaves
+    // e no lower, the round is undone and the level ends.
+    if (!(e1 < e0)) {
+      s_ = kept;
+      changed_ = changed;
+      return false;
+    }
     r->swaps += applied;
     r->e_after = e1;
     ++r->rounds;
@@ -234,6 +247,17 @@ class Search {
   }
 
  private:
+  // The boxes of `pool` that may share volume with b: those whose circumscribed spheres meet
+  // b's, and then that no separating axis parts (boxes_apart). The others share none.
+  static std::vector<Obb> meeting(const Obb& b, const std::vector<Obb>& pool) {
+    std::vector<Obb> out;
+    for (const Obb& o : pool)
+      if ((o.center - b.center).norm() <= (o.half.norm() + b.half.norm()) * (1 + 1e-12) &&
+          !boxes_apart(b, o))
+        out.push_back(o);
+    return out;
+  }
+
   // A chain node's axes for its new faces: the better of two descents on the tight volume from
   // its old axes, first turns of 0.02 and 0.2 rad (the descent ends in a local minimum, and
   // which one depends on its first turn).

@@ -4,11 +4,12 @@
 //
 // Two nodes u, v of one level k, whose boxes may meet (boxes_apart) and whose lowest common
 // ancestor c is at level k - gap or above, trade places. Every node strictly between them and c
-// (the two chains) gives up one's faces for the other's and is turned by descend_tight_volume
-// from its axes. A swap's gain is the change in the estimated e over the layers it changes: per
-// layer, ω(l) times the two chain boxes' OBV less what they share with the layer's other boxes
-// and with each other, which is that layer's change in OMV exactly (the union's outer volume,
-// nothing dropped; docs/derivations.md, "Shared outer volume").
+// (the two chains) gives up one's faces for the other's and is turned: the smaller of two
+// descend_tight_volume boxes from its old axes, first turns 0.02 and 0.2 rad. A swap's gain is the
+// change in the estimated e over the layers it changes: per layer, ω(l) times the two chain boxes'
+// OBV less what they share with the layer's other boxes and with each other, which is that layer's
+// change in OMV exactly (the union's outer volume, nothing dropped; docs/derivations.md, "Shared
+// outer volume").
 //
 // Each round scores every candidate pair of a level at once and applies the best ones that
 // touch no node an applied swap touched, each lowering the estimated e by `min_drop` of it or
@@ -20,11 +21,13 @@
 //   applied swaps' chains change their faces, and they get fit_obb boxes (exactly conservative).
 //   Every other node keeps its box bit for bit, and the swapped nodes' children lists stay
 //   sorted.
-// - The estimated e never rises: a round whose swaps together do not lower it is replaced by
-//   its best swap alone, whose gain is exact up to the estimators' round-off.
+// - The estimated e falls with every round kept. A round whose swaps together gain less than
+//   its best swap alone is replaced by that swap alone, and a round that leaves e no lower is
+//   undone and ends its level.
 // - Deterministic: the same tree, options and estimator values give the same tree on any
 //   number of threads.
-// - With out_of_time, it stops within the round under way and keeps the rounds finished.
+// - With out_of_time, asked before each round and before each pair is scored, it stops within
+//   the scoring under way and keeps the rounds finished.
 #pragma once
 
 #include <cstddef>
@@ -44,13 +47,13 @@ struct SubtreeSwapOptions {
   double min_drop = 1e-4;             // of the estimated e, per swap
   ObvEstimate estimate;               // required; called from several threads at once
   ShareEstimate share;                // required; likewise
-  std::function<bool()> out_of_time;  // may be empty
+  std::function<bool()> out_of_time;  // may be empty; called from several threads at once
 };
 
 struct SubtreeSwapReport {
   size_t candidates = 0;             // pairs scored, over all rounds
   size_t swaps = 0;                  // applied
-  size_t rounds = 0;                 // finished
+  size_t rounds = 0;                 // kept (each applied swaps and lowered e)
   size_t reverted = 0;               // rounds replaced by their best swap alone
   double e_before = 0, e_after = 0;  // estimated
   bool stopped = false;              // out_of_time ended it

@@ -218,7 +218,7 @@ Status build_variational_tree(const Mesh& mesh, const BuildOptions& o, const Est
   if (o.started) o.started();
   *tree = build_variational(mesh, opt, est.estimate, resuming ? &resume : nullptr, report);
   if (o.finished) o.finished(*report);
-  if (o.subtree_swaps && !(opt.out_of_time && opt.out_of_time())) {
+  if (o.subtree_swaps) {
     // Scored by the polyhedral solver whatever the backend: a swap's gain may be as small as
     // 1e-4 of e, the cubemap's median error at m = 32 (docs/BENCHMARKS.md).
     const PolyObvSolver obv(mesh);
@@ -366,8 +366,10 @@ Status check_build_options(const BuildOptions& o) {
     return Status::error("--queries and --objective are two objectives; choose one");
   if (o.subtree_swaps && !variational)
     return Status::error("--subtree-swaps applies to --method variational only");
-  if (o.subtree_swaps && !o.queries.empty())
-    return Status::error("--subtree-swaps lowers e, which --queries does not minimise");
+  if (o.subtree_swaps && (!o.queries.empty() || o.collider_margin > 0))
+    return Status::error(std::string("--subtree-swaps lowers e, which ") +
+                         (o.queries.empty() ? "--collider-margin" : "--queries") +
+                         " does not minimise");
   // The baseline takes well under a second and has no search to budget or resume.
   if (!o.checkpoint.empty() && !variational)
     return Status::error("--checkpoint applies to --method variational only");

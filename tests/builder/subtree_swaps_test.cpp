@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
 
+#include <atomic>
 #include <string>
 
 #include "builder/exact_drop.h"
@@ -39,7 +40,7 @@ Tree baseline_torus(const Mesh& mesh) {
   return build_obbtree(mesh, b);
 }
 
-// With the polyhedral solver (exact to round-off) every applied swap lowers the estimated e by
+// With the polyhedral solver (exact to round-off) every round kept lowers the estimated e by
 // 1e-4 of it or more, far above the solvers' round-off and fit_obb's padding (both below 1e-12
 // of e): the exact e must drop too, decided as rationals.
 TEST(SubtreeSwaps, LowerTheExactErrorAndChangeOnlyTheSwappedChains) {
@@ -108,6 +109,24 @@ TEST(SubtreeSwaps, OutOfTimeKeepsTheTree) {
   swap_subtrees(mesh, o, &t, &r);
   EXPECT_TRUE(r.stopped);
   EXPECT_EQ(r.swaps, 0u);
+  EXPECT_EQ(tree_to_json(t), tree_to_json(baseline_torus(mesh)));
+}
+
+// Out of time once the first round's scoring has begun: that round is dropped, the tree is as
+// it was.
+TEST(SubtreeSwaps, OutOfTimeWhileScoringDropsTheRound) {
+  const Mesh mesh = analytic::polygonal_torus().mesh;
+  const Solvers solvers(mesh);
+  SubtreeSwapOptions o = solvers.options();
+  std::atomic<int> asked{0};
+  o.out_of_time = [&asked] { return ++asked > 1; };
+  Tree t = baseline_torus(mesh);
+  SubtreeSwapReport r;
+  swap_subtrees(mesh, o, &t, &r);
+  EXPECT_TRUE(r.stopped);
+  EXPECT_GT(asked.load(), 1);
+  EXPECT_EQ(r.swaps, 0u);
+  EXPECT_EQ(r.e_after, r.e_before);
   EXPECT_EQ(tree_to_json(t), tree_to_json(baseline_torus(mesh)));
 }
 
