@@ -1,6 +1,6 @@
 // Swaps of whole subtrees across distant parents, on a finished tree: the step the merging
 // sweeps cannot take (they regroup only under a common grandparent and turn only the parents).
-// Derivation and measurements: docs/derivations.md, "Swaps of subtrees across distant parents".
+// Derivation: docs/derivations.md, "Swaps of subtrees across distant parents".
 //
 // Two nodes u, v of one level k, whose boxes may meet (boxes_apart) and whose lowest common
 // ancestor c is at level k - gap or above, trade places. Every node strictly between them and c
@@ -19,7 +19,7 @@
 // Contract:
 // - The tree stays valid (validate_tree) with the same ids, levels and root; only the nodes of
 //   applied swaps' chains change their faces, and they get fit_obb boxes (exactly conservative).
-//   Every other node keeps its box bit for bit, and the swapped nodes' children lists stay
+//   Every other node keeps its box bit for bit, and the two parents' children lists stay
 //   sorted.
 // - The estimated e falls with every round kept. A round whose swaps together gain less than
 //   its best swap alone is replaced by that swap alone, and a round that leaves e no lower is
