@@ -73,7 +73,7 @@ class Search {
       double sum = 0;
       for (int32_t i : layers_[l]) {
         sum += s_.obv[i];
-        q.push_back({s_.box[i], meeting(s_.box[i], before)});
+        q.push_back({s_.box[i], boxes_meeting(s_.box[i], before)});
         if (q.back().earlier.empty()) q.pop_back();
         before.push_back(s_.box[i]);
       }
@@ -136,12 +136,12 @@ class Search {
       std::vector<Obb> others;
       for (int32_t i : layers_[t.nodes[a.node].level])
         if (i != a.node && i != b.node) others.push_back(s_.box[i]);
-      q.push_back({s_.box[a.node], meeting(s_.box[a.node], others)});
-      q.push_back({a.box, meeting(a.box, others)});
+      q.push_back({s_.box[a.node], boxes_meeting(s_.box[a.node], others)});
+      q.push_back({a.box, boxes_meeting(a.box, others)});
       others.push_back(s_.box[a.node]);
-      q.push_back({s_.box[b.node], meeting(s_.box[b.node], others)});
+      q.push_back({s_.box[b.node], boxes_meeting(s_.box[b.node], others)});
       others.back() = a.box;
-      q.push_back({b.box, meeting(b.box, others)});
+      q.push_back({b.box, boxes_meeting(b.box, others)});
     }
     const std::vector<double> share = o_.share(q);
     double gain = 0;
@@ -247,17 +247,6 @@ class Search {
   }
 
  private:
-  // The boxes of `pool` that may share volume with b: those whose circumscribed spheres meet
-  // b's, and then that no separating axis parts (boxes_apart). The others share none.
-  static std::vector<Obb> meeting(const Obb& b, const std::vector<Obb>& pool) {
-    std::vector<Obb> out;
-    for (const Obb& o : pool)
-      if ((o.center - b.center).norm() <= (o.half.norm() + b.half.norm()) * (1 + 1e-12) &&
-          !boxes_apart(b, o))
-        out.push_back(o);
-    return out;
-  }
-
   // A chain node's axes for its new faces: the better of two descents on the tight volume from
   // its old axes, first turns of 0.02 and 0.2 rad (the descent ends in a local minimum, and
   // which one depends on its first turn).

@@ -154,6 +154,13 @@ bool boxes_apart(const Obb& a, const Obb& b) {
   return any_separating_axis(a, b, split_by);
 }
 
+std::vector<Obb> boxes_meeting(const Obb& b, const std::vector<Obb>& pool) {
+  std::vector<Obb> out;
+  for (const Obb& o : pool)
+    if (!boxes_apart(b, o)) out.push_back(o);
+  return out;
+}
+
 Obb rotated_box(const Vec3& c, const Vec3& half, double angle, const Vec3& axis) {
   Obb b;
   b.center = c;

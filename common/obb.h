@@ -121,5 +121,8 @@ bool any_separating_axis(const BoxA& a, const BoxB& b, Separates separates) {
 // Whether two boxes are surely apart: one of the 15 separating axes splits them with a gap
 // wider than round-off can close. False where they may meet (touching boxes may).
 bool boxes_apart(const Obb& a, const Obb& b);
+// The boxes of `pool`, in order, that are not surely apart from b (the others share no volume
+// with it).
+std::vector<Obb> boxes_meeting(const Obb& b, const std::vector<Obb>& pool);
 
 }  // namespace vobb

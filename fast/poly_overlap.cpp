@@ -9,28 +9,17 @@
 
 namespace vobb {
 
-namespace {
-
-// The earlier boxes that may meet `box` (the others share nothing with it).
-std::vector<Obb> meeting(const Obb& box, const std::vector<Obb>& earlier) {
-  std::vector<Obb> out;
-  for (const Obb& e : earlier)
-    if (!boxes_apart(box, e)) out.push_back(e);
-  return out;
-}
-
-}  // namespace
-
 PolyOverlapSolver::PolyOverlapSolver(const Mesh& mesh)
     : mesh_(mesh), faces_(AabbTree::over_faces(mesh)) {}
 
 Rational PolyOverlapSolver::exact(const Obb& box, const std::vector<Obb>& earlier) const {
-  return cell_clip::shared_outside_volume<Rational>(mesh_, faces_, box, meeting(box, earlier));
+  return cell_clip::shared_outside_volume<Rational>(mesh_, faces_, box,
+                                                    boxes_meeting(box, earlier));
 }
 
 PolyOverlap PolyOverlapSolver::evaluate(const Obb& box, const std::vector<Obb>& earlier) const {
   PolyOverlap r;
-  const std::vector<Obb> near = meeting(box, earlier);
+  const std::vector<Obb> near = boxes_meeting(box, earlier);
   if (near.empty()) return r;  // [0, 0]: nothing shared
   try {
     CGAL::Protect_FPU_rounding<true> upward;
@@ -51,7 +40,7 @@ PolyOverlap PolyOverlapSolver::evaluate(const Obb& box, const std::vector<Obb>& 
 }
 
 double PolyOverlapSolver::estimate(const Obb& box, const std::vector<Obb>& earlier) const {
-  const std::vector<Obb> near = meeting(box, earlier);
+  const std::vector<Obb> near = boxes_meeting(box, earlier);
   if (near.empty()) return 0;
   CGAL::Protect_FPU_rounding<true> nearest(CGAL_FE_TONEAREST);
   // The rounded signs as they are; where they contradict each other (a degenerate contact,
