@@ -54,14 +54,6 @@ Range range(const Mesh& mesh, const std::vector<int32_t>& faces, const std::arra
   return r;
 }
 
-// What b shares outside the solid with the earlier boxes that may meet it.
-double share(const vobb::PolyOverlapSolver& ov, const Obb& b, const std::vector<Obb>& earlier) {
-  std::vector<Obb> near;
-  for (const Obb& e : earlier)
-    if (!vobb::boxes_apart(b, e)) near.push_back(e);
-  return near.empty() ? 0.0 : ov.estimate(b, near);
-}
-
 double estimated_e(const Mesh& mesh, const vobb::Tree& t) {
   const vobb::PolyObvSolver obv(mesh);
   const vobb::PolyOverlapSolver ov(mesh);
@@ -72,7 +64,7 @@ double estimated_e(const Mesh& mesh, const vobb::Tree& t) {
     for (const auto& n : t.nodes) {
       if (!(n.level == l || (n.level < l && n.children.empty()))) continue;
       const Obb b = vobb::tight_box(mesh, n.faces, n.box.axes);
-      s += obv.estimate(b) - share(ov, b, before);
+      s += obv.estimate(b) - ov.estimate(b, before);
       before.push_back(b);
     }
     per[l] = (t.depth - l + 1) * s;
@@ -140,9 +132,9 @@ size_t paid_moves(const Mesh& mesh, vobb::Tree* tree, std::vector<int32_t>& leaf
       std::vector<Obb> ob = others, oa = others;
       for (size_t j : here) {
         const int32_t i = m->boxes[j].first;
-        before += val[i] - share(ov, box[i], ob);
+        before += val[i] - ov.estimate(box[i], ob);
         ob.push_back(box[i]);
-        after += m->vals[j] - share(ov, m->boxes[j].second, oa);
+        after += m->vals[j] - ov.estimate(m->boxes[j].second, oa);
         oa.push_back(m->boxes[j].second);
       }
       gain += (D - l + 1) * (after - before);

@@ -221,11 +221,13 @@ Status build_variational_tree(const Mesh& mesh, const BuildOptions& o, const Est
   if (o.subtree_swaps) {
     // Scored by the polyhedral solver whatever the backend: a swap's gain may be as small as
     // 1e-4 of e, the cubemap's median error at m = 32 (docs/BENCHMARKS.md).
-    const PolyObvSolver obv(mesh);
+    std::unique_ptr<PolyObvSolver> own;
+    const PolyObvSolver* obv = est.poly.get();  // the build's own, with --backend poly
+    if (!obv) obv = (own = std::make_unique<PolyObvSolver>(mesh)).get();
     if (!shares) shares = std::make_unique<PolyOverlapSolver>(mesh);
     const PolyOverlapSolver* p = shares.get();
     SubtreeSwapOptions so;
-    so.estimate = [&obv](const std::vector<Obb>& b) { return obv.estimate(b); };
+    so.estimate = [obv](const std::vector<Obb>& b) { return obv->estimate(b); };
     so.share = [p](const std::vector<ShareQuery>& q) { return p->estimate(q); };
     so.out_of_time = opt.out_of_time;
     SubtreeSwapReport sr;
