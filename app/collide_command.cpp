@@ -92,7 +92,7 @@ int run_collide_command(const CollideFlags& f) {
   std::vector<collision::NamedTree> named;
   for (size_t i = 0; i < f.trees.size(); ++i) {
     s = read_tree(f.trees[i], &trees[i]);
-    if (s) s = check_tree_fits(mesh.mesh, trees[i], f.trees[i]);
+    if (s) s = check_tree_fits(mesh.mesh, trees[i], f.trees[i], sha);
     if (!s) return refuse(s);
     named.push_back({f.trees[i], &trees[i]});
   }

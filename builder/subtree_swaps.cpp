@@ -218,6 +218,7 @@ class Search {
     if (!(e1 < e0)) {
       s_ = kept;
       changed_ = changed;
+      ++r->undone;
       return false;
     }
     r->swaps += applied;

@@ -55,6 +55,7 @@ struct SubtreeSwapReport {
   size_t swaps = 0;                  // applied
   size_t rounds = 0;                 // kept (each applied swaps and lowered e)
   size_t reverted = 0;               // rounds replaced by their best swap alone
+  size_t undone = 0;                 // rounds undone: e no lower, as the estimators measure it
   double e_before = 0, e_after = 0;  // estimated
   bool stopped = false;              // out_of_time ended it
 };

@@ -99,12 +99,13 @@ Status validate_tree(const Tree& tree, const std::string& display) {
   return Status::ok();
 }
 
-Status check_tree_fits(const Mesh& mesh, const Tree& tree, const std::string& display) {
+Status check_tree_fits(const Mesh& mesh, const Tree& tree, const std::string& display,
+                       const std::string& sha) {
   if (const Status s = validate_tree(tree, display); !s) return s;
   if (tree.mesh_triangles != mesh.faces.size())
     return Status::error(display + ": tree indexes " + std::to_string(tree.mesh_triangles) +
                          " triangles but the mesh has " + std::to_string(mesh.faces.size()));
-  if (!tree.mesh_sha256.empty() && tree.mesh_sha256 != mesh_sha256(mesh))
+  if (!tree.mesh_sha256.empty() && tree.mesh_sha256 != (sha.empty() ? mesh_sha256(mesh) : sha))
     return Status::error(display + ": built for another mesh (sha256 differs)");
   return Status::ok();
 }

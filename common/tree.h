@@ -52,7 +52,10 @@ Status validate_tree(const Tree& tree, const std::string& display);
 
 // validate_tree, and that the tree indexes this mesh: its triangle count and, where the tree
 // records one, the mesh's SHA-256 (sha256.h). Messages are one line prefixed with `display`.
-Status check_tree_fits(const Mesh& mesh, const Tree& tree, const std::string& display);
+// `mesh_sha256`, where not empty, is taken as mesh_sha256(mesh) instead of hashing the mesh again
+// (a caller that checks several trees of one mesh hashes it once).
+Status check_tree_fits(const Mesh& mesh, const Tree& tree, const std::string& display,
+                       const std::string& mesh_sha256 = {});
 
 // Conservativeness by exact predicates: each face of each node lies in that node's box.
 struct ContainmentReport {

@@ -90,6 +90,10 @@ TEST(Tree, FitsOnlyTheMeshItIndexes) {
   for (Vec3& v : moved.vertices) v += Vec3(1, 0, 0);
   Status s = check_tree_fits(moved, t, "t.json");
   EXPECT_EQ(s.message(), "t.json: built for another mesh (sha256 differs)");
+  // A caller's hash of the mesh is used as given: the moved mesh's own hash is refused, the
+  // octahedron's is accepted whatever mesh comes with it.
+  EXPECT_FALSE(check_tree_fits(octahedron, t, "t.json", mesh_sha256(moved)));
+  EXPECT_TRUE(check_tree_fits(moved, t, "t.json", t.mesh_sha256));
   // Without a recorded SHA-256 the mesh is taken as the tree's where its count agrees.
   t.mesh_sha256.clear();
   EXPECT_TRUE(check_tree_fits(moved, t, "t.json"));
