@@ -106,15 +106,54 @@ class Search {
     return out;
   }
 
-  // Fills the swap's chains' new faces, axes, boxes and OBV, and its gain.
+  // The chain pairs (a on u's side, b on v's) between the swap's nodes and their common
+  // ancestor, from the nodes' parents up.
+  std::vector<std::pair<int32_t, int32_t>> chains(const Swap& s) const {
+    const Tree& t = s_.tree;
+    const int32_t c = common_ancestor(t, s.u, s.v);
+    std::vector<std::pair<int32_t, int32_t>> r;
+    for (int32_t a = t.nodes[s.u].parent, b = t.nodes[s.v].parent; a != c;
+         a = t.nodes[a].parent, b = t.nodes[b].parent)
+      r.emplace_back(a, b);
+    return r;
+  }
+
+  // The layer's boxes other than nodes a and b.
+  std::vector<Obb> others(int32_t a, int32_t b) const {
+    std::vector<Obb> r;
+    for (int32_t i : layers_[s_.tree.nodes[a].level])
+      if (i != a && i != b) r.push_back(s_.box[i]);
+    return r;
+  }
+
+  // What nodes a and b give their layer now: their OBV less a's share with the layer's other
+  // boxes and b's with those and a. Many candidates share a chain pair (every pair whose
+  // ancestor is the root shares the level-1 one), so a round computes each once (`before_`).
+  double pair_value(int32_t a, int32_t b) const {
+    std::vector<Obb> rest = others(a, b);
+    std::vector<ShareQuery> q;
+    q.push_back({s_.box[a], boxes_meeting(s_.box[a], rest)});
+    rest.push_back(s_.box[a]);
+    q.push_back({s_.box[b], boxes_meeting(s_.box[b], rest)});
+    const std::vector<double> share = o_.share(q);
+    return s_.obv[a] + s_.obv[b] - share[0] - share[1];
+  }
+
+  double before(int32_t a, int32_t b) const {
+    const auto it = std::lower_bound(before_.begin(), before_.end(), std::pair(a, b),
+                                     [](const auto& x, const auto& k) { return x.first < k; });
+    return it->second;
+  }
+
+  // Fills the swap's chains' new faces, axes, boxes and OBV, and its gain (its pairs' values
+  // before must be in before_).
   void evaluate(Swap* s) const {
     const Tree& t = s_.tree;
-    const int32_t c = common_ancestor(t, s->u, s->v);
     const std::vector<int32_t>& fu = t.nodes[s->u].faces;
     const std::vector<int32_t>& fv = t.nodes[s->v].faces;
+    const std::vector<std::pair<int32_t, int32_t>> pairs = chains(*s);
     std::vector<Obb> boxes;
-    for (int32_t a = t.nodes[s->u].parent, b = t.nodes[s->v].parent; a != c;
-         a = t.nodes[a].parent, b = t.nodes[b].parent) {
+    for (const auto& [a, b] : pairs)
       for (const auto& [node, out, in] : {std::tuple(a, &fu, &fv), std::tuple(b, &fv, &fu)}) {
         Change& ch = s->changes.emplace_back();
         ch.node = node;
@@ -123,34 +162,27 @@ class Search {
         ch.box = tight_box(mesh_, ch.faces, ch.axes);
         boxes.push_back(ch.box);
       }
-    }
     const std::vector<double> obv = o_.estimate(boxes);
-    // Per chain level, the pair's shares before and after: a with the layer's other boxes, b
-    // with those and a.
+    // Per chain level, the new pair's shares: a with the layer's other boxes, b with those
+    // and a.
     std::vector<ShareQuery> q;
     for (size_t j = 0; j < s->changes.size(); j += 2) {
       Change& a = s->changes[j];
       Change& b = s->changes[j + 1];
       a.obv = obv[j];
       b.obv = obv[j + 1];
-      std::vector<Obb> others;
-      for (int32_t i : layers_[t.nodes[a.node].level])
-        if (i != a.node && i != b.node) others.push_back(s_.box[i]);
-      q.push_back({s_.box[a.node], boxes_meeting(s_.box[a.node], others)});
-      q.push_back({a.box, boxes_meeting(a.box, others)});
-      others.push_back(s_.box[a.node]);
-      q.push_back({s_.box[b.node], boxes_meeting(s_.box[b.node], others)});
-      others.back() = a.box;
-      q.push_back({b.box, boxes_meeting(b.box, others)});
+      std::vector<Obb> rest = others(a.node, b.node);
+      q.push_back({a.box, boxes_meeting(a.box, rest)});
+      rest.push_back(a.box);
+      q.push_back({b.box, boxes_meeting(b.box, rest)});
     }
     const std::vector<double> share = o_.share(q);
     double gain = 0;
     for (size_t j = 0; j < s->changes.size(); j += 2) {
       const Change& a = s->changes[j];
       const Change& b = s->changes[j + 1];
-      const double before = s_.obv[a.node] + s_.obv[b.node] - share[2 * j] - share[2 * j + 2];
-      const double after = a.obv + b.obv - share[2 * j + 1] - share[2 * j + 3];
-      gain += layer_weight(t.depth, t.nodes[a.node].level) * (after - before);
+      const double after = a.obv + b.obv - share[j] - share[j + 1];
+      gain += layer_weight(t.depth, t.nodes[a.node].level) * (after - before(a.node, b.node));
     }
     s->gain = gain;
   }
@@ -176,7 +208,16 @@ class Search {
   // One round at level k; false where it applied nothing (or ran out of time).
   bool round(int k, SubtreeSwapReport* r) {
     std::vector<Swap> cand = candidates(k);
+    before_.clear();
+    for (const Swap& s : cand)
+      for (const auto& ab : chains(s)) before_.emplace_back(ab, 0.0);
+    std::sort(before_.begin(), before_.end());
+    before_.erase(std::unique(before_.begin(), before_.end()), before_.end());
     std::atomic<bool> late{false};
+    tbb::parallel_for(size_t(0), before_.size(), [&](size_t i) {
+      if (late || (o_.out_of_time && o_.out_of_time())) return void(late = true);
+      before_[i].second = pair_value(before_[i].first.first, before_[i].first.second);
+    });
     tbb::parallel_for(size_t(0), cand.size(), [&](size_t i) {
       if (late || (o_.out_of_time && o_.out_of_time())) return void(late = true);
       evaluate(&cand[i]);
@@ -268,6 +309,7 @@ class Search {
   State s_;
   std::vector<std::vector<int32_t>> layers_;
   std::vector<char> changed_;
+  std::vector<std::pair<std::pair<int32_t, int32_t>, double>> before_;  // sorted chain pairs
 };
 
 }  // namespace
