@@ -229,8 +229,8 @@ BuildOptions build_options(const BuildFlags& f) {
     o.swapped = [](const SubtreeSwapReport& r) {
       std::fprintf(stderr,
                    "vobb: subtree swaps: %zu pairs scored, %zu swaps in %zu rounds, estimated e "
-                   "%.9g -> %.9g%s\n",
-                   r.candidates, r.swaps, r.rounds, r.e_before, r.e_after,
+                   "%.9g -> %.9g (%zu scores kept from an earlier round)%s\n",
+                   r.candidates, r.swaps, r.rounds, r.e_before, r.e_after, r.reused,
                    r.stopped ? "; time budget spent" : "");
     };
   return o;

@@ -7,6 +7,7 @@
 #include <atomic>
 #include <iterator>
 #include <limits>
+#include <map>
 #include <tuple>
 #include <utility>
 #include <vector>
@@ -39,6 +40,16 @@ struct Swap {
   int32_t u = 0, v = 0;
   double gain = 0;  // the change in the estimated e (negative lowers it)
   std::vector<Change> changes;
+};
+
+// A swap's score kept from an earlier round, with what it was computed from: the nodes whose
+// faces, boxes or parents it read (u, v and the chains), and per chain level the four boxes
+// whose shares it asked (the pair before and after), which decide which of the layer's other
+// boxes entered those shares.
+struct Score {
+  double gain = 0;
+  std::vector<int32_t> nodes;
+  std::vector<std::pair<int, std::array<Obb, 4>>> asked;  // (level, boxes)
 };
 
 // The tree with each node's axes, tight box and estimated OBV: what the search measures.
@@ -196,6 +207,7 @@ class Search {
     std::sort(t.nodes[q].children.begin(), t.nodes[q].children.end());
     t.nodes[s.u].parent = q;
     t.nodes[s.v].parent = p;
+    forget(s);
     for (const Change& c : s.changes) {
       t.nodes[c.node].faces = c.faces;
       s_.axes[c.node] = c.axes;
@@ -205,12 +217,52 @@ class Search {
     }
   }
 
-  // One round at level k; false where it applied nothing (or ran out of time).
-  bool round(int k, SubtreeSwapReport* r) {
-    std::vector<Swap> cand = candidates(k);
+  // Drops the kept scores that swap s changes: those that read a node it moves or changes, and
+  // those whose shares at a changed node's level asked a box that meets the node's box before
+  // or after (only then can the node enter or leave, or change within, such a share's list).
+  void forget(const Swap& s) {
+    std::vector<char> hit(s_.tree.nodes.size(), 0);
+    hit[s.u] = hit[s.v] = 1;
+    for (const Change& c : s.changes) hit[c.node] = 1;
+    for (auto it = scores_.begin(); it != scores_.end();) {
+      const Score& sc = it->second;
+      bool stale = false;
+      for (int32_t n : sc.nodes) stale = stale || hit[n];
+      for (const Change& c : s.changes) {
+        if (stale) break;
+        const int level = s_.tree.nodes[c.node].level;
+        for (const auto& [l, boxes] : sc.asked) {
+          if (l != level) continue;
+          for (const Obb& b : boxes)
+            stale = stale || !boxes_apart(b, s_.box[c.node]) || !boxes_apart(b, c.box);
+        }
+      }
+      it = stale ? scores_.erase(it) : std::next(it);
+    }
+  }
+
+  // The score of an evaluated swap, and what it read.
+  Score score_of(const Swap& s) const {
+    Score sc;
+    sc.gain = s.gain;
+    sc.nodes = {s.u, s.v};
+    for (size_t j = 0; j < s.changes.size(); j += 2) {
+      const Change& a = s.changes[j];
+      const Change& b = s.changes[j + 1];
+      sc.nodes.push_back(a.node);
+      sc.nodes.push_back(b.node);
+      sc.asked.push_back(
+          {s_.tree.nodes[a.node].level, {s_.box[a.node], s_.box[b.node], a.box, b.box}});
+    }
+    return sc;
+  }
+
+  // Evaluates the swaps at `todo` (the chain pairs' values before first), each once; false
+  // where it ran out of time.
+  bool evaluate_all(std::vector<Swap>* cand, const std::vector<size_t>& todo) {
     before_.clear();
-    for (const Swap& s : cand)
-      for (const auto& ab : chains(s)) before_.emplace_back(ab, 0.0);
+    for (size_t i : todo)
+      for (const auto& ab : chains((*cand)[i])) before_.emplace_back(ab, 0.0);
     std::sort(before_.begin(), before_.end());
     before_.erase(std::unique(before_.begin(), before_.end()), before_.end());
     std::atomic<bool> late{false};
@@ -218,18 +270,46 @@ class Search {
       if (late || (o_.out_of_time && o_.out_of_time())) return void(late = true);
       before_[i].second = pair_value(before_[i].first.first, before_[i].first.second);
     });
-    tbb::parallel_for(size_t(0), cand.size(), [&](size_t i) {
+    tbb::parallel_for(size_t(0), todo.size(), [&](size_t i) {
       if (late || (o_.out_of_time && o_.out_of_time())) return void(late = true);
-      evaluate(&cand[i]);
+      evaluate(&(*cand)[todo[i]]);
     });
-    if (late) return r->stopped = true, false;
+    return !late;
+  }
+
+  // One round at level k; false where it applied nothing (or ran out of time).
+  bool round(int k, SubtreeSwapReport* r) {
+    std::vector<Swap> cand = candidates(k);
+    // Scores kept from earlier rounds stand where nothing they read has changed since; the
+    // rest are scored now. A kept score that may be applied is scored again for its changes,
+    // from the same inputs, so to the same gain.
+    const double e0 = r->e_after;
+    std::vector<size_t> todo, again;
+    for (size_t i = 0; i < cand.size(); ++i) {
+      const auto it = o_.reuse_scores ? scores_.find({cand[i].u, cand[i].v}) : scores_.end();
+      if (it == scores_.end()) {
+        todo.push_back(i);
+      } else {
+        cand[i].gain = it->second.gain;
+        if (cand[i].gain <= -o_.min_drop * e0) again.push_back(i);
+      }
+    }
+    if (!evaluate_all(&cand, todo)) return r->stopped = true, false;
+    for (size_t i : todo) scores_[{cand[i].u, cand[i].v}] = score_of(cand[i]);
+    if (!evaluate_all(&cand, again)) return r->stopped = true, false;
     r->candidates += cand.size();
+    r->reused += cand.size() - todo.size();
     std::sort(cand.begin(), cand.end(), [](const Swap& a, const Swap& b) {
       return a.gain != b.gain ? a.gain < b.gain : std::pair(a.u, a.v) < std::pair(b.u, b.v);
     });
-    const double e0 = r->e_after;
+    if (o_.scored) {
+      std::vector<ScoredPair> list;
+      for (const Swap& s : cand) list.push_back({s.u, s.v, s.gain});
+      o_.scored(k, list);
+    }
     const State kept = s_;
     const std::vector<char> changed = changed_;
+    const std::map<std::pair<int32_t, int32_t>, Score> scores = scores_;
     std::vector<char> touched(s_.tree.nodes.size(), 0);
     size_t applied = 0;
     for (const Swap& s : cand) {
@@ -249,6 +329,7 @@ class Search {
     if (applied > 1 && e1 > e0 + cand[0].gain) {
       s_ = kept;
       changed_ = changed;
+      scores_ = scores;
       apply(cand[0]);
       e1 = e();
       applied = 1;
@@ -259,6 +340,7 @@ class Search {
     if (!(e1 < e0)) {
       s_ = kept;
       changed_ = changed;
+      scores_ = scores;
       ++r->undone;
       return false;
     }
@@ -310,6 +392,7 @@ class Search {
   std::vector<std::vector<int32_t>> layers_;
   std::vector<char> changed_;
   std::vector<std::pair<std::pair<int32_t, int32_t>, double>> before_;  // sorted chain pairs
+  std::map<std::pair<int32_t, int32_t>, Score> scores_;                 // by (u, v)
 };
 
 }  // namespace

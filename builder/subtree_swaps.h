@@ -14,7 +14,9 @@
 // Each round scores every candidate pair of a level at once and applies the best ones that
 // touch no node an applied swap touched, each lowering the estimated e by `min_drop` of it or
 // more; levels first_level..depth in turn, `passes` times, up to `rounds` rounds a level while
-// a round applies a swap.
+// a round applies a swap. A pair's score is kept for later rounds until a swap moves or changes
+// a node it read, or changes a box of its chains' layers that meets a box whose share it asked:
+// the estimators are functions of their queries, so a kept score is the score afresh.
 //
 // Contract:
 // - The tree stays valid (validate_tree) with the same ids, levels and root; only the nodes of
@@ -32,6 +34,7 @@
 
 #include <cstddef>
 #include <functional>
+#include <vector>
 
 #include "builder/variational_builder.h"
 #include "common/mesh.h"
@@ -39,19 +42,29 @@
 
 namespace vobb {
 
+struct ScoredPair {
+  int32_t u = 0, v = 0;  // node ids, u < v
+  double gain = 0;       // the change in the estimated e were they swapped (negative lowers it)
+};
+
 struct SubtreeSwapOptions {
   int first_level = 2;                // 1..depth
   int gap = 2;                        // the common ancestor at least this many levels up; >= 2
   int rounds = 4;                     // per level and pass
   int passes = 2;                     // over the levels
   double min_drop = 1e-4;             // of the estimated e, per swap
+  bool reuse_scores = true;           // false: every pair scored afresh each round (same tree)
   ObvEstimate estimate;               // required; called from several threads at once
   ShareEstimate share;                // required; likewise
   std::function<bool()> out_of_time;  // may be empty; called from several threads at once
+  // May be empty; called once a round, on the calling thread, with the round's level and every
+  // candidate pair's score, best first, before any swap is applied.
+  std::function<void(int, const std::vector<ScoredPair>&)> scored;
 };
 
 struct SubtreeSwapReport {
   size_t candidates = 0;             // pairs scored, over all rounds
+  size_t reused = 0;                 // of those, scores kept from an earlier round
   size_t swaps = 0;                  // applied
   size_t rounds = 0;                 // kept (each applied swaps and lowered e)
   size_t reverted = 0;               // rounds replaced by their best swap alone

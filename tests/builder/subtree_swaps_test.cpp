@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <string>
 #include <string_view>
+#include <tuple>
 
 #include "builder/exact_drop.h"
 #include "builder/obbtree_builder.h"
@@ -289,6 +290,42 @@ TEST(SubtreeSwaps, ARoundThatLeavesTheErrorNoLowerIsUndone) {
     EXPECT_EQ(r.swaps, 0u) << "gap " << gap;
     EXPECT_EQ(r.e_after, r.e_before) << "gap " << gap;
     EXPECT_EQ(tree_to_json(t), tree_to_json(start.tree)) << "gap " << gap;
+  }
+}
+
+// Scores kept across rounds are the scores afresh: every round's scores, to the last bit, and
+// so the same tree, as scoring every pair in every round; with the exact shares and with the
+// erring ones (whose rounds are replaced and undone, so the kept scores are restored with the
+// tree).
+TEST(SubtreeSwaps, KeptScoresAreTheScoresAfresh) {
+  const Mesh mesh = analytic::polygonal_torus().mesh;
+  const Solvers solvers(mesh);
+  const NoisyShares noisy(mesh, 0.1);
+  for (const bool erring : {false, true}) {
+    SubtreeSwapOptions o = solvers.options();
+    if (erring) o.share = [&noisy](const std::vector<ShareQuery>& q) { return noisy(q); };
+    auto run = [&](bool reuse, Tree* t, SubtreeSwapReport* r) {
+      std::vector<std::tuple<int, int32_t, int32_t, double>> log;
+      o.reuse_scores = reuse;
+      o.scored = [&log](int level, const std::vector<ScoredPair>& list) {
+        for (const ScoredPair& p : list) log.emplace_back(level, p.u, p.v, p.gain);
+      };
+      swap_subtrees(mesh, o, t, r);
+      return log;
+    };
+    Tree kept = baseline_torus(mesh), afresh = kept;
+    SubtreeSwapReport rk, ra;
+    const auto with = run(true, &kept, &rk);
+    const auto without = run(false, &afresh, &ra);
+    EXPECT_GT(rk.reused, 0u) << erring;
+    EXPECT_EQ(ra.reused, 0u) << erring;
+    EXPECT_EQ(with.size(), rk.candidates) << erring;
+    EXPECT_TRUE(with == without) << erring;
+    EXPECT_GT(rk.swaps, 0u) << erring;
+    EXPECT_EQ(tree_to_json(kept), tree_to_json(afresh)) << erring;
+    if (erring) {
+      EXPECT_GT(rk.undone, 0u);
+    }
   }
 }
 
