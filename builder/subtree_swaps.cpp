@@ -138,8 +138,9 @@ class Search {
   }
 
   // What nodes a and b give their layer now: their OBV less a's share with the layer's other
-  // boxes and b's with those and a. Many candidates share a chain pair (every pair whose
-  // ancestor is the root shares the level-1 one), so a round computes each once (`before_`).
+  // boxes and b's with those and a. Many candidates share a chain pair (in a binary tree, every
+  // pair whose ancestor is the root shares the level-1 one), so a round computes each once
+  // (`before_`).
   double pair_value(int32_t a, int32_t b) const {
     std::vector<Obb> rest = others(a, b);
     std::vector<ShareQuery> q;
@@ -282,7 +283,8 @@ class Search {
     std::vector<Swap> cand = candidates(k);
     // Scores kept from earlier rounds stand where nothing they read has changed since; the
     // rest are scored now. A kept score that may be applied is scored again for its changes,
-    // from the same inputs, so to the same gain.
+    // from the same inputs, so to the same gain (were a kept score stale, only a pair that
+    // now gains and was kept above the threshold could be missed).
     const double e0 = r->e_after;
     std::vector<size_t> todo, again;
     for (size_t i = 0; i < cand.size(); ++i) {

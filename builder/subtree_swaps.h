@@ -28,8 +28,9 @@
 //   undone and ends its level.
 // - Deterministic: the same tree, options and estimator values give the same tree on any
 //   number of threads.
-// - With out_of_time, asked before each round and before each pair is scored, it stops within
-//   the scoring under way and keeps the rounds finished.
+// - With out_of_time, asked before each round and before each pair (and each chain pair's
+//   value before a swap) is scored afresh, it stops within the scoring under way and keeps the
+//   rounds finished.
 #pragma once
 
 #include <cstddef>
