@@ -1026,6 +1026,38 @@ bool killed_by_its_hook(const std::string& command) {
          (WIFEXITED(status) && WEXITSTATUS(status) == 128 + SIGKILL);
 }
 
+// The swaps run after the search, whose checkpoint they do not change: a build with
+// --subtree-swaps killed once two levels are split, then started again with the same folder,
+// writes the same bytes as an uninterrupted one, and so does a third start, which finds the
+// search done and runs only the swaps.
+TEST(Cli, SubtreeSwapsAfterAResumedSearchGiveTheSameTree) {
+  const std::string mesh = test::temp_path("swaps_resume_torus.off");
+  test::write_off(analytic::polygonal_torus().mesh, mesh);
+  const std::string dir = test::temp_path("swaps_ckpt");
+  const std::string whole = test::temp_path("swaps_whole.json"),
+                    resumed = test::temp_path("swaps_resumed.json");
+  std::system(("rm -rf " + dir).c_str());
+  const std::string args = " --depth 4 --backend poly --subtree-swaps";
+  const CliRun first = vobb_cli("build " + mesh + " -o " + whole + args);
+  ASSERT_EQ(first.code, 0) << first.err;
+  const size_t at = first.err.find("subtree swaps: ");
+  ASSERT_NE(at, std::string::npos) << first.err;
+  ASSERT_GT(std::stoul(first.err.substr(first.err.find("scored, ", at) + 8)), 0u) << first.err;
+  EXPECT_TRUE(killed_by_its_hook("VOBB_TEST_KILL_AT_SPLIT_LEVELS=2 " + std::string(VOBB_CLI) +
+                                 " build " + mesh + " -o " + resumed + args + " --checkpoint " +
+                                 dir))
+      << "the build was not killed at its level-2 checkpoint";
+  EXPECT_FALSE(test::exists(resumed)) << "the killed build wrote its tree";
+  for (int start : {2, 3}) {
+    const CliRun r = vobb_cli("build " + mesh + " -o " + resumed + args + " --checkpoint " + dir);
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(slurp(resumed), slurp(whole)) << "start " << start;
+    std::remove(resumed.c_str());
+  }
+  std::system(("rm -rf " + dir).c_str());
+  for (const std::string& p : {mesh, whole}) std::remove(p.c_str());
+}
+
 // A variational build killed (SIGKILL) once its checkpoint holds two split levels, then started
 // again with the same folder, writes the same bytes as an uninterrupted build; a build with
 // other options refuses that folder with exit 2.
