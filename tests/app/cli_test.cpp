@@ -1028,8 +1028,8 @@ bool killed_by_its_hook(const std::string& command) {
 
 // The swaps run after the search, whose checkpoint they do not change: a build with
 // --subtree-swaps killed once two levels are split, then started again with the same folder,
-// writes the same bytes as an uninterrupted one, and so does a third start, which finds the
-// search done and runs only the swaps.
+// writes the same bytes as an uninterrupted one, and so does a third start, which resumes from
+// the search's last saved state.
 TEST(Cli, SubtreeSwapsAfterAResumedSearchGiveTheSameTree) {
   const std::string mesh = test::temp_path("swaps_resume_torus.off");
   test::write_off(analytic::polygonal_torus().mesh, mesh);
