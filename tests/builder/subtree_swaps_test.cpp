@@ -171,7 +171,7 @@ TEST(SubtreeSwaps, TheGapBoundsTheCandidates) {
 }
 
 // A share estimator that errs: the polyhedral share times 1 + a·u, u in [-1, 1] drawn from a
-// hash of the query's bytes. It is a function of the query alone, as ShareEstimate requires, but
+// hash of the query's values. It is a function of the query alone, as ShareEstimate requires, but
 // no longer additive: a box's share with a layer, asked as the scoring asks it (against all the
 // layer's other boxes) and as e asks it (against those before it), no longer agree. That is the
 // disagreement the step's two guards exist for.
@@ -242,6 +242,7 @@ struct OneMoreRound {
     tree = start;
     swap_subtrees(mesh, o, &tree, &report);
   }
+  OneMoreRound(const OneMoreRound&) = delete;  // o.share points at this one's noisy
   NoisyShares noisy;
   SubtreeSwapOptions o;
   Tree start, tree;
