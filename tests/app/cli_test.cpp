@@ -964,6 +964,14 @@ TEST(Cli, PolyBackendEstimatesAndBuilds) {
   for (const std::string& p : {mesh, boxes, tree, torus_path}) std::remove(p.c_str());
 }
 
+// The swaps applied, from the build's line "vobb: subtree swaps: N pairs scored, S swaps ...";
+// 0 where there is no such line.
+size_t swaps_reported(const std::string& err) {
+  const size_t at = err.find("subtree swaps: ");
+  if (at == std::string::npos) return 0;
+  return std::stoul(err.substr(err.find("scored, ", at) + 8));
+}
+
 // --subtree-swaps after the search: it says what it did, and on this torus it swaps, so the tree
 // certifies with an exact e strictly lower than without it (each round kept lowers the
 // estimated e by 1e-4 of it, far above the polyhedral solver's round-off).
@@ -976,9 +984,7 @@ TEST(Cli, SubtreeSwapsLowerTheCertifiedError) {
   ASSERT_EQ(r.code, 0) << r.err;
   r = vobb_cli("build " + mesh + " -o " + swapped + " --depth 4 --backend poly --subtree-swaps");
   ASSERT_EQ(r.code, 0) << r.err;
-  const size_t at = r.err.find("subtree swaps: ");
-  ASSERT_NE(at, std::string::npos) << r.err;
-  const size_t swaps = std::stoul(r.err.substr(r.err.find("scored, ", at) + 8));
+  const size_t swaps = swaps_reported(r.err);
   // e's enclosure from certify's filter holds the exact value: the swapped tree's upper end
   // below the plain tree's lower end proves the drop.
   auto e_of = [&](const std::string& tree) {
@@ -1040,9 +1046,7 @@ TEST(Cli, SubtreeSwapsAfterAResumedSearchGiveTheSameTree) {
   const std::string args = " --depth 4 --backend poly --subtree-swaps";
   const CliRun first = vobb_cli("build " + mesh + " -o " + whole + args);
   ASSERT_EQ(first.code, 0) << first.err;
-  const size_t at = first.err.find("subtree swaps: ");
-  ASSERT_NE(at, std::string::npos) << first.err;
-  ASSERT_GT(std::stoul(first.err.substr(first.err.find("scored, ", at) + 8)), 0u) << first.err;
+  ASSERT_GT(swaps_reported(first.err), 0u) << first.err;
   EXPECT_TRUE(killed_by_its_hook("VOBB_TEST_KILL_AT_SPLIT_LEVELS=2 " + std::string(VOBB_CLI) +
                                  " build " + mesh + " -o " + resumed + args + " --checkpoint " +
                                  dir))
