@@ -174,7 +174,8 @@ void add_build_flags(CLI::App* cmd, BuildFlags* f, bool compare) {
                "resumes and gives the same tree")
       ->check(kPath);
   cmd->add_option("--time-budget", o.time_budget,
-                  "Seconds; then the search stops and the rest gets the baseline split")
+                  "Seconds, for the search and then --subtree-swaps; the search stops and the "
+                  "nodes not yet split get the baseline split, the swaps keep the rounds done")
       ->check(kFinite)
       ->check(CLI::Range(1e-3, 1e9));
   cmd->add_flag("--quiet", f->quiet, compare ? "No progress on stderr" : "No progress line");
@@ -228,10 +229,11 @@ BuildOptions build_options(const BuildFlags& f) {
   if (!f.quiet)
     o.swapped = [](const SubtreeSwapReport& r) {
       std::fprintf(stderr,
-                   "vobb: subtree swaps: %zu pairs scored, %zu swaps in %zu rounds, estimated e "
-                   "%.9g -> %.9g (%zu scores kept from an earlier round)%s\n",
-                   r.candidates, r.swaps, r.rounds, r.e_before, r.e_after, r.reused,
-                   r.stopped ? "; time budget spent" : "");
+                   "vobb: subtree swaps: %zu pairs scored, %zu swaps in %zu rounds kept (%zu "
+                   "rounds replaced by their best swap, %zu undone), estimated e %.9g -> %.9g "
+                   "(%zu scores kept from an earlier round, %zu of them scored again)%s\n",
+                   r.candidates, r.swaps, r.rounds, r.reverted, r.undone, r.e_before, r.e_after,
+                   r.reused, r.rescored, r.stopped ? "; time budget spent" : "");
     };
   return o;
 }

@@ -60,8 +60,8 @@ inline int refuse(const Status& s) {
 }
 
 // An output that names one of the run's input files (the same file by any path: "./x", a
-// link) would replace it: `build dino.off -o dino.off` turned the mesh into a tree. Refused
-// before anything runs. An output that does not exist yet cannot be an input.
+// link) would replace it (`build dino.off -o dino.off` would turn the mesh into a tree), so it
+// is refused before anything runs. An output that does not exist yet cannot be an input.
 inline Status check_output_is_not_input(const std::string& option, const std::string& output,
                                         const std::vector<std::string>& inputs) {
   if (output.empty()) return Status::ok();
@@ -202,8 +202,8 @@ inline const CLI::Validator kFinite(
     },
     "FINITE");
 
-// A file or folder name given to an option: not empty ('-o ""' named nothing, and a build ran
-// to its end before the write failed).
+// A file or folder name given to an option: not empty ('-o ""' names nothing; refused before
+// the run, not when its output is written).
 inline const CLI::Validator kPath(
     [](std::string& s) -> std::string { return s.empty() ? "an empty name" : ""; }, "PATH");
 

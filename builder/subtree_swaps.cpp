@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "common/obb.h"
+#include "common/status.h"
 
 namespace vobb {
 namespace {
@@ -96,14 +97,14 @@ class Search {
     return sum;
   }
 
-  // Pairs of level k that may trade places.
-  std::vector<Swap> candidates(int k) const {
+  // Pairs of level k that may trade places; false where it ran out of time.
+  bool candidates(int k, std::vector<Swap>* out) const {
     const Tree& t = s_.tree;
     std::vector<int32_t> at;
     for (const TreeNode& n : t.nodes)
       if (n.level == k) at.push_back(n.id);
-    std::vector<Swap> out;
-    for (size_t i = 0; i < at.size(); ++i)
+    for (size_t i = 0; i < at.size(); ++i) {
+      if (o_.out_of_time && o_.out_of_time()) return false;
       for (size_t j = i + 1; j < at.size(); ++j) {
         const int32_t u = at[i], v = at[j];
         if (t.nodes[u].parent == t.nodes[v].parent) continue;
@@ -112,9 +113,10 @@ class Search {
         Swap s;
         s.u = u;
         s.v = v;
-        out.push_back(std::move(s));
+        out->push_back(std::move(s));
       }
-    return out;
+    }
+    return true;
   }
 
   // The chain pairs (a on u's side, b on v's) between the swap's nodes and their common
@@ -154,6 +156,8 @@ class Search {
   double before(int32_t a, int32_t b) const {
     const auto it = std::lower_bound(before_.begin(), before_.end(), std::pair(a, b),
                                      [](const auto& x, const auto& k) { return x.first < k; });
+    VOBB_ASSERT(it != before_.end() && it->first == std::pair(a, b),
+                "a chain pair's value before a swap was not computed");
     return it->second;
   }
 
@@ -238,8 +242,20 @@ class Search {
             stale = stale || !boxes_apart(b, s_.box[c.node]) || !boxes_apart(b, c.box);
         }
       }
-      it = stale ? scores_.erase(it) : std::next(it);
+      if (!stale) {
+        ++it;
+        continue;
+      }
+      forgotten_.emplace_back(it->first, std::move(it->second));
+      it = scores_.erase(it);
     }
+  }
+
+  // The kept scores as they were before the round's first swap: forget() is the only change
+  // to them once a round applies swaps.
+  void remember() {
+    for (auto& [key, sc] : forgotten_) scores_.emplace(key, std::move(sc));
+    forgotten_.clear();
   }
 
   // The score of an evaluated swap, and what it read.
@@ -280,7 +296,8 @@ class Search {
 
   // One round at level k; false where it applied nothing (or ran out of time).
   bool round(int k, SubtreeSwapReport* r) {
-    std::vector<Swap> cand = candidates(k);
+    std::vector<Swap> cand;
+    if (!candidates(k, &cand)) return r->stopped = true, false;
     // Scores kept from earlier rounds stand where nothing they read has changed since; the
     // rest are scored now. A kept score that may be applied is scored again for its changes,
     // from the same inputs, so to the same gain (were a kept score stale, only a pair that
@@ -301,6 +318,7 @@ class Search {
     if (!evaluate_all(&cand, again)) return r->stopped = true, false;
     r->candidates += cand.size();
     r->reused += cand.size() - todo.size();
+    r->rescored += again.size();
     std::sort(cand.begin(), cand.end(), [](const Swap& a, const Swap& b) {
       return a.gain != b.gain ? a.gain < b.gain : std::pair(a.u, a.v) < std::pair(b.u, b.v);
     });
@@ -311,7 +329,7 @@ class Search {
     }
     const State kept = s_;
     const std::vector<char> changed = changed_;
-    const std::map<std::pair<int32_t, int32_t>, Score> scores = scores_;
+    forgotten_.clear();
     std::vector<char> touched(s_.tree.nodes.size(), 0);
     size_t applied = 0;
     for (const Swap& s : cand) {
@@ -331,7 +349,7 @@ class Search {
     if (applied > 1 && e1 > e0 + cand[0].gain) {
       s_ = kept;
       changed_ = changed;
-      scores_ = scores;
+      remember();
       apply(cand[0]);
       e1 = e();
       applied = 1;
@@ -342,7 +360,7 @@ class Search {
     if (!(e1 < e0)) {
       s_ = kept;
       changed_ = changed;
-      scores_ = scores;
+      remember();
       ++r->undone;
       return false;
     }
@@ -393,14 +411,19 @@ class Search {
   State s_;
   std::vector<std::vector<int32_t>> layers_;
   std::vector<char> changed_;
-  std::vector<std::pair<std::pair<int32_t, int32_t>, double>> before_;  // sorted chain pairs
-  std::map<std::pair<int32_t, int32_t>, Score> scores_;                 // by (u, v)
+  std::vector<std::pair<std::pair<int32_t, int32_t>, double>> before_;    // sorted chain pairs
+  std::map<std::pair<int32_t, int32_t>, Score> scores_;                   // by (u, v)
+  std::vector<std::pair<std::pair<int32_t, int32_t>, Score>> forgotten_;  // this round's
 };
 
 }  // namespace
 
 void swap_subtrees(const Mesh& mesh, const SubtreeSwapOptions& options, Tree* tree,
                    SubtreeSwapReport* report) {
+  VOBB_ASSERT(options.estimate && options.share, "swap_subtrees needs estimate and share");
+  VOBB_ASSERT(options.first_level >= 1 && options.gap >= 2 && options.rounds >= 0 &&
+                  options.passes >= 0 && options.min_drop >= 0,
+              "swap_subtrees: an option out of range");
   SubtreeSwapReport r;
   Search search(mesh, options, std::move(*tree));
   search.run(&r);

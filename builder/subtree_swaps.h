@@ -28,9 +28,9 @@
 //   undone and ends its level.
 // - Deterministic: the same tree, options and estimator values give the same tree on any
 //   number of threads.
-// - With out_of_time, asked before each round and before each pair (and each chain pair's
-//   value before a swap) is scored afresh, it stops within the scoring under way and keeps the
-//   rounds finished.
+// - With out_of_time, asked before each round, between rows of the candidates' list, and
+//   before each pair (and each chain pair's value before a swap) is scored afresh, it stops
+//   within the scoring under way and keeps the rounds finished.
 #pragma once
 
 #include <cstddef>
@@ -49,11 +49,11 @@ struct ScoredPair {
 };
 
 struct SubtreeSwapOptions {
-  int first_level = 2;                // 1..depth
+  int first_level = 2;                // >= 1; beyond the tree's depth there is nothing to do
   int gap = 2;                        // the common ancestor at least this many levels up; >= 2
-  int rounds = 4;                     // per level and pass
-  int passes = 2;                     // over the levels
-  double min_drop = 1e-4;             // of the estimated e, per swap
+  int rounds = 4;                     // per level and pass; >= 0
+  int passes = 2;                     // over the levels; >= 0
+  double min_drop = 1e-4;             // of the estimated e, per swap; >= 0
   bool reuse_scores = true;           // false: every pair scored afresh each round (same tree)
   ObvEstimate estimate;               // required; called from several threads at once
   ShareEstimate share;                // required; likewise
@@ -66,6 +66,7 @@ struct SubtreeSwapOptions {
 struct SubtreeSwapReport {
   size_t candidates = 0;             // pairs scored, over all rounds
   size_t reused = 0;                 // of those, scores kept from an earlier round
+  size_t rescored = 0;               // of those, scored again before a swap could apply them
   size_t swaps = 0;                  // applied
   size_t rounds = 0;                 // kept (each applied swaps and lowered e)
   size_t reverted = 0;               // rounds replaced by their best swap alone
@@ -75,7 +76,7 @@ struct SubtreeSwapReport {
 };
 
 // Preconditions: the tree fits the mesh (check_tree_fits), its boxes have orthonormal axes, and
-// the options are in range.
+// the options are in range with estimate and share set (asserted).
 void swap_subtrees(const Mesh& mesh, const SubtreeSwapOptions& options, Tree* tree,
                    SubtreeSwapReport* report = nullptr);
 

@@ -71,7 +71,7 @@ struct VariationalOptions {
   int arity = 2;              // >= 2
   int lloyd_iterations = 4;   // most partition + update rounds per node (and per adjustment)
   bool optimise_axes = true;  // ablation: false keeps the groups' covariance axes
-  bool adjust = false;        // the adjustment step (see above: measured to hurt, so off)
+  bool adjust = false;        // the adjustment step (see above; off: docs/BENCHMARKS.md)
   bool merge = true;          // ablation: the bottom-up merging sweeps
   int max_sweeps = 3;
   // Under kOmv, the last step: each box of the top levels turned, its faces fixed, where that
@@ -102,8 +102,8 @@ struct VariationalOptions {
   std::function<void(const VariationalProgress&)> progress;
   std::function<bool()> out_of_time;  // may be empty: no budget
   // Under a budget, about how many seconds of estimates go in one estimator call (> 0): the
-  // budget is asked this often at the least. 0.25 s keeps a batch of 33 boxes one call at the
-  // usual m even on llvmpipe's GL (about 5 ms a box), where chunks of 50 ms cost 15 %.
+  // budget is asked this often at the least (the default's measured cost: docs/history/
+  // benchmarks-early.md, "The time budget, asked before every estimator call").
   double budget_check_seconds = 0.25;
   // Called after each level and each sweep with the state to save; may be empty.
   std::function<void(const VariationalState&)> checkpoint;

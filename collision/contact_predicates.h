@@ -1,4 +1,4 @@
-// Collider–triangle and collider–box tests of the collision experiment (paper §5, issue 7).
+// Collider–triangle and collider–box tests of the collision experiment (paper §5).
 //
 // A collider is a sphere or a box, given in the model's frame (the mesh's own coordinates).
 // Two kinds of test:

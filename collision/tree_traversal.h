@@ -1,5 +1,5 @@
 // One vobb tree prepared for collision queries: the traversal whose tests the collision
-// experiment counts (paper §5, issue 7).
+// experiment counts (paper §5).
 //
 // A query walks the tree from the root. Each visited node costs one collider–box test
 // (`may_touch_box`, conservative); a node that may touch is opened, and at a leaf each face

@@ -44,9 +44,9 @@ constexpr double kMaxCoordinate = 0x1p240;
 constexpr double kMinExtent = 0x1p-240;
 
 // check_solidity stops counting self-intersecting pairs at this many: a mesh of crossing
-// sheets can hold n^2 / 2 of them (16,000 faces: 64 million, 15 s to count), and knowing that
-// there are a million says as much about the mesh as the exact number. The search up to it takes
-// about a quarter of a second on this project's machine (docs/BENCHMARKS.md).
+// sheets can hold n^2 / 2 of them, and knowing that there are a million says as much about the
+// mesh as the exact number (the cost of the count with and without the stop:
+// docs/history/benchmarks-early.md, "Crossing sheets").
 constexpr size_t kSelfIntersectionsCounted = 1'000'000;
 
 struct DefectCount {

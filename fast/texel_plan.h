@@ -161,9 +161,8 @@ inline bool texel_hit(const LocalTriangle& t, const Texel& x, bool far_count, do
 // (The estimated fraction lies in [0, 1] because the reference evaluation is a consistent ray
 // cast: its edge tests are exact, LocalTriangle.) This is a guarantee, not an estimate, and it
 // does not fall with m where the surface crosses the box: every texel whose ray crosses the
-// surface within the box counts, and their share of the 6 m^2 stays about the same (dino's
-// leaf boxes: median bound 0.80 of the box volume at m = 4, 0.68 at m = 256; `vobb-bench-plan
-// data/real/dino.off --m M`). The observed
+// surface within the box counts, and their share of the 6 m^2 stays about the same (measured:
+// docs/BENCHMARKS.md, "The cubemap's a-priori bound against m"). The observed
 // error falls as m^-2, since the per-texel errors cancel (DESIGN §4); validate/ measures it.
 // "Exact OBV" is that of the box as stored (its doubles taken exactly) and the mesh. The plan
 // holds the faces in box-normalized coordinates rounded to double (BoxFrame::local_error,

@@ -1,4 +1,4 @@
-// The discretization study (issue 6, DESIGN §6): cubemap estimates against exact OBV over seeded
+// The discretization study (DESIGN §6): cubemap estimates against exact OBV over seeded
 // box corpora on real meshes, for every m and both backends; error statistics per m, the
 // fitted convergence rate, time per evaluation; a stated error bound B(m) fitted on one corpus
 // and checked on a held-out one; the Richardson a-posteriori estimate from m and 2m and how

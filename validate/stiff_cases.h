@@ -1,4 +1,4 @@
-// Stiff and extreme cases of the cubemap estimator (issue 6, DESIGN §6). Each case is named and
+// Stiff and extreme cases of the cubemap estimator (DESIGN §6). Each case is named and
 // states its expected behaviour before it runs:
 //  - "finite, within R(m)": every estimate (CPU twin and GL, at each m) is finite and within
 //    the rigorous per-box bound R(m) of EstimatorSet::rigorous_bound;

@@ -1,4 +1,4 @@
-// The upper bound sum OBV >= OMV (issue 6, DESIGN §1, §6) on the layers of real trees: trees of
+// The upper bound sum OBV >= OMV (DESIGN §1, §6) on the layers of real trees: trees of
 // the OBB-Tree baseline and of the variational builder (CPU twin estimator) are built in
 // process and certified exactly (exact/certify.h); per layer the exact sum of OBV and OMV are
 // compared as rationals, with the gap (the overlap term). Then, per layer and m, whether the

@@ -1,4 +1,4 @@
-// The validation suite (issue 6, DESIGN §6), run as `vobb validate [--suite quick|full]
+// The validation suite (DESIGN §6), run as `vobb validate [--suite quick|full]
 // [--out DIR]`: the discretization study (discretization_study.h) with its stated bound B(m)
 // and the Richardson estimate, error against run time for every solver, the upper bound
 // sum OBV >= OMV on the layers of both builders' trees (upper_bound_study.h), and the stiff

@@ -51,8 +51,8 @@ Rational tree_error(const std::vector<Rational>& layer_omv);
 // ---- building ------------------------------------------------------------------------------
 enum class Method { kVariational, kObbTree };
 // The OBV estimator of the variational search. kAuto: the GL estimator on a GPU (an EGL device,
-// with the GL component enabled) from m = kAutoGlFromM, where it was measured faster; else the
-// CPU twin, which gives the same texels in double. kPoly: the polyhedral solver (no m).
+// with the GL component enabled) from m = kAutoGlFromM (the crossover: docs/BENCHMARKS.md); else
+// the CPU twin, which gives the same texels in double. kPoly: the polyhedral solver (no m).
 enum class Backend { kAuto, kCpu, kGl, kPoly };
 inline constexpr int kAutoGlFromM = 128;
 
@@ -82,7 +82,9 @@ struct BuildOptions {
   // OBV (collision/query_objective.h), and no OBV estimator is made.
   std::vector<collision::Collider> queries;
   std::string checkpoint;  // a folder; empty: none. A build started again with it resumes.
-  double time_budget = 0;  // seconds; 0: none. Then the nodes not yet split get the baseline split
+  // Seconds, 0: none; for the search and then the subtree swaps. The search's nodes not yet
+  // split get the baseline split; the swaps keep the rounds they finished.
+  double time_budget = 0;
   std::function<void(const VariationalProgress&)> progress;
   // One line each; may be empty. note: what the run chose or found (the renderer, a resumed
   // state); warning: what it could not do and went on without (a checkpoint not saved).

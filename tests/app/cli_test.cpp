@@ -342,8 +342,8 @@ TEST(CliBadInput, StandardOutputWithNoReaderEndsWithExitThree) {
   std::remove(mesh.c_str());
 }
 
-// The baseline has no search: a checkpoint or a time budget asked of it is refused, not
-// silently ignored (no checkpoint folder appeared, exit 0).
+// The baseline has no search: a checkpoint, a time budget or subtree swaps asked of it are
+// refused, not silently ignored (no checkpoint folder appeared, exit 0).
 TEST(CliBadInput, VariationalOnlyOptionsAreRefusedForTheBaseline) {
   const std::string mesh = write_cube("only_cube.off", 1);
   const std::string tree = test::temp_path("only_tree.json");
@@ -969,12 +969,14 @@ TEST(Cli, PolyBackendEstimatesAndBuilds) {
 size_t swaps_reported(const std::string& err) {
   const size_t at = err.find("subtree swaps: ");
   if (at == std::string::npos) return 0;
-  return std::stoul(err.substr(err.find("scored, ", at) + 8));
+  const size_t n = err.find("scored, ", at);
+  EXPECT_NE(n, std::string::npos) << "no count of swaps in: " << err;
+  return n == std::string::npos ? 0 : std::stoul(err.substr(n + 8));
 }
 
 // --subtree-swaps after the search: it says what it did, and on this torus it swaps, so the tree
 // certifies with an exact e strictly lower than without it (each round kept lowers the
-// estimated e by 1e-4 of it, far above the polyhedral solver's round-off).
+// estimated e by min_drop, 1e-4, of it, far above the polyhedral solver's round-off).
 TEST(Cli, SubtreeSwapsLowerTheCertifiedError) {
   const std::string mesh = test::temp_path("swaps_torus.off");
   test::write_off(analytic::polygonal_torus().mesh, mesh);
@@ -994,13 +996,19 @@ TEST(Cli, SubtreeSwapsLowerTheCertifiedError) {
   };
   ASSERT_GT(swaps, 0u) << r.err;
   EXPECT_LT(e_of(swapped)[1], e_of(plain)[0]);
-  // A search for colliders minimises grown OBV, not e: the swaps are refused with it.
+  // A search for colliders minimises grown OBV or recorded queries, not e: the swaps are
+  // refused with either.
   std::remove(swapped.c_str());
-  r = vobb_cli("build " + mesh + " -o " + swapped + " --subtree-swaps --collider-margin 0.1");
-  EXPECT_EQ(r.code, 2);
-  EXPECT_EQ(line_count(r.err), 1u) << r.err;
-  EXPECT_NE(r.err.find("--subtree-swaps"), std::string::npos) << r.err;
-  EXPECT_FALSE(test::exists(swapped));
+  const std::string queries = test::temp_path("swaps_queries.json");
+  { std::ofstream(queries) << "{}"; }  // refused before the file is read
+  for (const std::string& flag : {std::string("--collider-margin 0.1"), "--queries " + queries}) {
+    r = vobb_cli("build " + mesh + " -o " + swapped + " --subtree-swaps " + flag);
+    EXPECT_EQ(r.code, 2) << flag;
+    EXPECT_EQ(line_count(r.err), 1u) << r.err;
+    EXPECT_NE(r.err.find("--subtree-swaps lowers e"), std::string::npos) << r.err;
+    EXPECT_FALSE(test::exists(swapped)) << flag;
+  }
+  std::remove(queries.c_str());
   for (const std::string& p : {mesh, plain, swapped}) std::remove(p.c_str());
 }
 
@@ -1052,9 +1060,12 @@ TEST(Cli, SubtreeSwapsAfterAResumedSearchGiveTheSameTree) {
                                  dir))
       << "the build was not killed at its level-2 checkpoint";
   EXPECT_FALSE(test::exists(resumed)) << "the killed build wrote its tree";
+  EXPECT_NE(slurp(dir + "/state.json").find("\"split_levels\":2"), std::string::npos);
   for (int start : {2, 3}) {
     const CliRun r = vobb_cli("build " + mesh + " -o " + resumed + args + " --checkpoint " + dir);
     ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.err.find("resuming from"), std::string::npos) << "start " << start << ": " << r.err;
+    EXPECT_EQ(swaps_reported(r.err), swaps_reported(first.err)) << "start " << start;
     EXPECT_EQ(slurp(resumed), slurp(whole)) << "start " << start;
     std::remove(resumed.c_str());
   }

@@ -73,41 +73,6 @@ TEST(TreeIo, RoundTripIsBitExactAndDeterministic) {
   std::remove(path.c_str());
 }
 
-TEST(TreeIo, LayersFollowTheDesignDefinition) {
-  Tree t = small_tree();
-  EXPECT_EQ(layer(t, 0), std::vector<int32_t>({0}));
-  EXPECT_EQ(layer(t, 1), std::vector<int32_t>({1, 2}));
-}
-
-// A tree fits the mesh it indexes: its triangle count, and its SHA-256 where it records one.
-TEST(Tree, FitsOnlyTheMeshItIndexes) {
-  const Mesh octahedron = analytic::octahedron().mesh;
-  Tree t = small_tree();
-  t.mesh_sha256 = mesh_sha256(octahedron);
-  EXPECT_TRUE(check_tree_fits(octahedron, t, "t.json"));
-  // Another mesh of the same triangle count: the recorded SHA-256 tells them apart.
-  Mesh moved = octahedron;
-  for (Vec3& v : moved.vertices) v += Vec3(1, 0, 0);
-  Status s = check_tree_fits(moved, t, "t.json");
-  EXPECT_EQ(s.message(), "t.json: built for another mesh (sha256 differs)");
-  // A caller's hash of the mesh is used as given: the moved mesh's own hash is refused, the
-  // octahedron's is accepted whatever mesh comes with it.
-  EXPECT_FALSE(check_tree_fits(octahedron, t, "t.json", mesh_sha256(moved)));
-  EXPECT_TRUE(check_tree_fits(moved, t, "t.json", t.mesh_sha256));
-  // Without a recorded SHA-256 the mesh is taken as the tree's where its count agrees.
-  t.mesh_sha256.clear();
-  EXPECT_TRUE(check_tree_fits(moved, t, "t.json"));
-  // Another count is refused, recorded SHA-256 or not.
-  const Mesh cube = analytic::cube().mesh;  // 12 triangles
-  s = check_tree_fits(cube, t, "t.json");
-  EXPECT_EQ(s.message(), "t.json: tree indexes 8 triangles but the mesh has 12");
-  // A broken structure is refused before the mesh is looked at.
-  t.nodes[1].faces = {0, 1, 2};
-  s = check_tree_fits(octahedron, t, "t.json");
-  EXPECT_FALSE(s);
-  EXPECT_EQ(s.message().rfind("t.json: ", 0), 0u) << s.message();
-}
-
 TEST(TreeIo, UnknownKeysIgnoredAndInnerFacesFilledIn) {
   std::string j = tree_to_json(small_tree());
   // Drop the root's faces and add a key nobody knows.

@@ -8,10 +8,12 @@
 #include <string>
 #include <vector>
 
+#include "builder/subtree_swaps.h"
 #include "common/sha256.h"
 #include "data/analytic_meshes.h"
 #include "fast/cpu_estimator.h"
 #include "fast/poly_overlap.h"
+#include "fast/poly_solver.h"
 #include "test_common.h"
 
 namespace vobb {
@@ -65,6 +67,37 @@ TEST(BuildTree, IsTheBuilderWithTheChosenEstimator) {
   direct_obv.mesh_sha256 = mesh_sha256(mesh);
   EXPECT_EQ(tree_to_json(via_face_obv), tree_to_json(direct_obv));
   EXPECT_NE(tree_to_json(via_face_obv), tree_to_json(via_face));  // the objective reached it
+}
+
+// With subtree_swaps, build_tree's tree is its tree without them, then swap_subtrees scored by
+// the polyhedral solver (whatever the search's backend), bit for bit; `swapped` reports the
+// step's counts, and on this torus it swaps.
+TEST(BuildTree, SubtreeSwapsAreTheStepAfterTheSearch) {
+  const Mesh mesh = analytic::polygonal_torus().mesh;
+  BuildOptions o = small_build();
+  o.depth = 4;
+  Tree plain, swapped;
+  ASSERT_TRUE(build_tree(mesh, o, &plain).is_ok());
+  o.subtree_swaps = true;
+  SubtreeSwapReport seen;
+  bool called = false;
+  o.swapped = [&](const SubtreeSwapReport& r) { seen = r, called = true; };
+  ASSERT_TRUE(build_tree(mesh, o, &swapped).is_ok());
+  ASSERT_TRUE(called);
+  EXPECT_GT(seen.swaps, 0u);
+
+  const PolyObvSolver obv(mesh);
+  const PolyOverlapSolver shares(mesh);
+  SubtreeSwapOptions so;
+  so.estimate = [&](const std::vector<Obb>& b) { return obv.estimate(b); };
+  so.share = [&](const std::vector<ShareQuery>& q) { return shares.estimate(q); };
+  Tree direct = plain;
+  SubtreeSwapReport r;
+  swap_subtrees(mesh, so, &direct, &r);
+  EXPECT_EQ(tree_to_json(swapped), tree_to_json(direct));
+  EXPECT_EQ(seen.swaps, r.swaps);
+  EXPECT_EQ(seen.e_after, r.e_after);
+  EXPECT_EQ(swapped.mesh_sha256, mesh_sha256(mesh));
 }
 
 // With a collider margin the default objective is the sum (a collider in a shared region tests
@@ -122,6 +155,11 @@ TEST(BuildTree, RefusesOptionsThatContradictEachOther) {
        "--objective"},
       {[](BuildOptions* o) { o->queries.resize(1), o->objective = Objective::kOmv; }, "--queries"},
       {[](BuildOptions* o) { o->queries.resize(1), o->objective = Objective::kObv; }, "--queries"},
+      {[](BuildOptions* o) { o->method = Method::kObbTree, o->subtree_swaps = true; },
+       "--subtree-swaps"},
+      {[](BuildOptions* o) { o->subtree_swaps = true, o->collider_margin = 0.1; },
+       "--subtree-swaps"},
+      {[](BuildOptions* o) { o->subtree_swaps = true, o->queries.resize(1); }, "--subtree-swaps"},
       {[](BuildOptions* o) { o->depth = 31; }, "--depth"},
       {[](BuildOptions* o) { o->arity = 1; }, "--arity"},
   };

@@ -1,4 +1,4 @@
-// The collision experiment of the paper's §5 (issue 7): colliders against a model, counting
+// The collision experiment of the paper's §5: colliders against a model, counting
 // the collider–box tests that each tree costs.
 //
 // Scene (dynamic mode): the model spins about the vertical axis through its root box's centre,

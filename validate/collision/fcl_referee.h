@@ -1,4 +1,4 @@
-// FCL 0.7 as an outside referee of the collision counts (issue 7, item 3).
+// FCL 0.7 as an outside referee of the collision counts.
 //
 // A query pose replays through FCL's own mesh–shape traversal (MeshShapeCollisionTraversalNodeOBB
 // with libccd's GJK solver), and FCL's own statistics counters (num_bv_tests, num_leaf_tests)
