@@ -148,8 +148,8 @@ void add_build_flags(CLI::App* cmd, BuildFlags* f, bool compare) {
            "--collider-margin", o.collider_margin,
            "Variational: minimise the OBV of each box grown by this length on every side (world "
            "units), "
-           "for colliders of about this radius; 0 is the paper's objective, and at most the mesh's "
-           "bounding-box diagonal. The stored boxes stay tight")
+           "for colliders of about this radius; 0: no margin (the objective is then --objective's "
+           "default), at most the mesh's bounding-box diagonal. The stored boxes stay tight")
         ->capture_default_str()
         ->check(kFinite);
     cmd->add_option(

@@ -24,7 +24,7 @@ class ObvCommand final : public Command {
     c->add_option("MESH", mesh_, "Solid mesh")->required();
     c->add_option("--boxes", boxes_path_, "Box file {\"boxes\":[{center, axes, half_extents}]}")
         ->required();
-    c->add_option("--m", ms_, "Cubemap resolutions, e.g. 8,16,32")
+    c->add_option("--m", ms_, "Cubemap resolutions, comma-separated (default 8,16,32)")
         ->delimiter(',')
         ->check(CLI::Range(1, 4096));
     c->add_option("--backend", backend_,
