@@ -8,7 +8,7 @@
 
 #include "common/sha256.h"
 #include "common/text_util.h"
-#include "data/analytic_meshes.h"
+#include "octahedron_trees.h"
 #include "test_common.h"
 
 namespace vobb {
@@ -16,28 +16,10 @@ namespace {
 
 // A two-level tree over the octahedron: root, two leaves of four faces each.
 Tree small_tree() {
-  const Mesh m = analytic::octahedron().mesh;
-  const std::array<Vec3, 3> frame = {Vec3(0.6, 0.8, 0), Vec3(-0.8, 0.6, 0), Vec3(0, 0, 1)};
-  Tree t;
-  t.method = "test";
-  t.arity = 2;
-  t.depth = 1;
-  t.mesh_triangles = m.faces.size();
+  Tree t = test::octahedron_tree(1, {{-1, 0, {1, 2}, {0, 1, 2, 3, 4, 5, 6, 7}},
+                                     {0, 1, {}, {0, 1, 2, 3}},
+                                     {0, 1, {}, {4, 5, 6, 7}}});
   t.mesh_sha256 = "abc";
-  TreeNode root;
-  root.faces = {0, 1, 2, 3, 4, 5, 6, 7};
-  root.children = {1, 2};
-  root.box = fit_obb(m, root.faces, frame);
-  TreeNode a, b;
-  a.id = 1;
-  b.id = 2;
-  a.parent = b.parent = 0;
-  a.level = b.level = 1;
-  a.faces = {0, 1, 2, 3};
-  b.faces = {4, 5, 6, 7};
-  a.box = fit_obb(m, a.faces, frame);
-  b.box = fit_obb(m, b.faces, frame);
-  t.nodes = {root, a, b};
   return t;
 }
 

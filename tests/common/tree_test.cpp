@@ -6,44 +6,24 @@
 
 #include "common/sha256.h"
 #include "data/analytic_meshes.h"
+#include "octahedron_trees.h"
 
 namespace vobb {
 namespace {
 
-// An unbalanced tree of depth 3 over the octahedron's 8 faces, its boxes fitted on one frame:
+// An unbalanced tree of depth 3 over the octahedron's 8 faces:
 //   0 ─┬─ 1 ─┬─ 3 ─┬─ 5 {0}
 //      │     │     └─ 6 {1}
 //      │     └─ 4 {2, 3}
 //      └─ 2 {4, 5, 6, 7}
 Tree unbalanced_tree() {
-  const Mesh m = analytic::octahedron().mesh;
-  const std::array<Vec3, 3> frame = {Vec3(0.6, 0.8, 0), Vec3(-0.8, 0.6, 0), Vec3(0, 0, 1)};
-  Tree t;
-  t.method = "test";
-  t.arity = 2;
-  t.depth = 3;
-  t.mesh_triangles = m.faces.size();
-  const struct {
-    int32_t parent, level;
-    std::vector<int32_t> children, faces;
-  } spec[] = {{-1, 0, {1, 2}, {0, 1, 2, 3, 4, 5, 6, 7}},
-              {0, 1, {3, 4}, {0, 1, 2, 3}},
-              {0, 1, {}, {4, 5, 6, 7}},
-              {1, 2, {5, 6}, {0, 1}},
-              {1, 2, {}, {2, 3}},
-              {3, 3, {}, {0}},
-              {3, 3, {}, {1}}};
-  for (const auto& s : spec) {
-    TreeNode n;
-    n.id = static_cast<int32_t>(t.nodes.size());
-    n.parent = s.parent;
-    n.level = s.level;
-    n.children = s.children;
-    n.faces = s.faces;
-    n.box = fit_obb(m, n.faces, frame);
-    t.nodes.push_back(n);
-  }
-  return t;
+  return test::octahedron_tree(3, {{-1, 0, {1, 2}, {0, 1, 2, 3, 4, 5, 6, 7}},
+                                   {0, 1, {3, 4}, {0, 1, 2, 3}},
+                                   {0, 1, {}, {4, 5, 6, 7}},
+                                   {1, 2, {5, 6}, {0, 1}},
+                                   {1, 2, {}, {2, 3}},
+                                   {3, 3, {}, {0}},
+                                   {3, 3, {}, {1}}});
 }
 
 TEST(Tree, TheUnbalancedTreeIsValid) {
