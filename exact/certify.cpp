@@ -52,6 +52,16 @@ bool same_enclosure(const MpInterval& a, const MpInterval& b) {
   return a.lo_rational() == b.lo_rational() && a.hi_rational() == b.hi_rational();
 }
 
+// Whether a layer's enclosure of its sum of OBV is the one certify gives it, `boxes_sum` being
+// the sum of its boxes' enclosures in id order: that sum, or on a rational path (nef, clip) the
+// enclosure of its exact sum of OBV, which that sum must then hold.
+bool sum_obv_fits(const LayerCertificate& l, const MpInterval& boxes_sum) {
+  if (l.omv_path == "nef" || l.omv_path == "clip")
+    return l.rational && boxes_sum.contains(l.sum_obv) &&
+           same_enclosure(l.sum_obv_enclosure, MpInterval(l.sum_obv));
+  return same_enclosure(l.sum_obv_enclosure, boxes_sum);
+}
+
 MpInterval sum_of(const std::vector<MpInterval>& xs) {
   MpInterval s(0);
   for (const MpInterval& x : xs) s += x;  // in order: the same enclosure on every run
@@ -194,8 +204,7 @@ std::vector<char> resume_layers(CertifyRun& run, Certificate& cert) {
           overlap_count(run.clip.earlier_neighbours(layer_boxes(run, lc.level)));
       if (lc.boxes != ids[lc.level].size() || lc.overlapping_boxes != overlapping ||
           lc.omv_path != layer_path(options.path, overlapping) ||
-          !same_enclosure(lc.sum_obv_enclosure, layer_sum_obv(run, lc.level)) ||
-          (run.all_rational && !lc.rational)) {
+          !sum_obv_fits(lc, layer_sum_obv(run, lc.level)) || (run.all_rational && !lc.rational)) {
         ++again;
         continue;
       }
@@ -801,12 +810,9 @@ Status parse_obv(const nlohmann::json& jo, const Tree& tree, const std::string& 
 
 // A layer's values (of layers.json, read from `file`; `at` names the layer) into *out, after its
 // level: only fields the writer puts there, its box count the tree's, its overlap count up to
-// it, its enclosures, its sum of OBV's enclosure the sum of `obv` over its boxes, its nearest
-// doubles, how each was obtained, its counts, and its rationals where it says it has them (the
-// sum of OBV inside its enclosure). A field missing or of another type throws nlohmann's
-// exception.
-Status parse_layer_values(const nlohmann::json& jl, const Tree& tree,
-                          const std::vector<Enclosed>& obv, const std::string& file,
+// it, its enclosures, its nearest doubles, how each was obtained, its counts, and its rationals
+// where it says it has them. A field missing or of another type throws nlohmann's exception.
+Status parse_layer_values(const nlohmann::json& jl, const Tree& tree, const std::string& file,
                           const std::string& at, LayerCertificate* out) {
   auto bad = [&](const std::string& why) { return damaged(file, why); };
   LayerCertificate& l = *out;
@@ -852,11 +858,6 @@ Status parse_layer_values(const nlohmann::json& jl, const Tree& tree,
       !parse_interval(jl.at("sum_obv_enclosure"), &l.sum_obv_enclosure) ||
       !parse_interval(jl.at("overlap_enclosure"), &l.overlap_enclosure))
     return bad(at + "an enclosure is not one");
-  MpInterval sum(0);
-  for (int32_t id : ids) sum += obv[id].value;
-  if (sum.lo_rational() != l.sum_obv_enclosure.lo_rational() ||
-      sum.hi_rational() != l.sum_obv_enclosure.hi_rational())
-    return bad(at + "sum of OBV is not the sum of its boxes' OBV");
   for (const char* key : {"omv_nearest", "sum_obv_nearest", "overlap_nearest"})
     if (!jl.at(key).is_number()) return bad(at + key + " is not a number");
   l.omv_nearest = jl["omv_nearest"].get<double>();
@@ -879,8 +880,6 @@ Status parse_layer_values(const nlohmann::json& jl, const Tree& tree,
   if (l.rational) {
     if (!parse_rational(jl.at("omv"), &l.omv) || !parse_rational(jl.at("sum_obv"), &l.sum_obv))
       return bad(at + "OMV or sum of OBV is not a rational");
-    if (!l.sum_obv_enclosure.contains(l.sum_obv))
-      return bad(at + "sum of OBV lies outside its enclosure");
   } else if (jl.contains("omv") || jl.contains("sum_obv")) {
     return bad(at + "rationals in a layer that says it has none");
   }
@@ -889,7 +888,8 @@ Status parse_layer_values(const nlohmann::json& jl, const Tree& tree,
 
 // A layer's path into *out (its values read): "none" only where no boxes overlap, "both" with
 // clipping's OMV and whether the paths agree (checked against the two OMV), or "nef", "clip" or
-// "filtered"; a filtered layer's rationals agree when its enclosure holds its OMV.
+// "filtered", which hold no second path's OMV; a filtered layer's rationals agree when its
+// enclosure holds its OMV.
 Status parse_layer_path(const nlohmann::json& jl, const std::string& file, const std::string& at,
                         LayerCertificate* out) {
   auto bad = [&](const std::string& why) { return damaged(file, why); };
@@ -908,14 +908,15 @@ Status parse_layer_path(const nlohmann::json& jl, const std::string& file, const
   } else if (l.omv_path != "nef" && l.omv_path != "clip" && l.omv_path != "filtered") {
     return bad(at + "unknown path '" + l.omv_path.substr(0, 20) + "'");
   }
+  if (l.omv_path != "both" && (jl.contains("paths_agree") || jl.contains("omv_clip")))
+    return bad(at + "a second path's OMV on a layer of path " + l.omv_path);
   if (l.omv_path == "filtered" && l.rational) l.paths_agree = l.omv_enclosure.contains(l.omv);
   return Status::ok();
 }
 
-// Whether what a layer (read as `l` from `jl`) says follows from its own values, as certify
-// makes them: its OMV's enclosure from its path, its bound, its nearest doubles, and a second
-// path's OMV only on path both.
-Status check_layer_follows(const nlohmann::json& jl, const std::string& file, const std::string& at,
+// Whether what a layer (read as `l`) says follows from its own values, as certify
+// makes them: its OMV's enclosure from its path, its bound and its nearest doubles.
+Status check_layer_follows(const std::string& file, const std::string& at,
                            const LayerCertificate& l) {
   auto bad = [&](const std::string& why) { return damaged(file, why); };
   if (l.omv_path == "none" &&
@@ -948,14 +949,14 @@ Status check_layer_follows(const nlohmann::json& jl, const std::string& file, co
           l.overlap_enclosure, [&] { return l.overlap(); }, l.overlap_nearest,
           l.overlap_rounded_by))
     return bad(at + "a double is not its value rounded");
-  if (l.omv_path != "both" && (jl.contains("paths_agree") || jl.contains("omv_clip")))
-    return bad(at + "a second path's OMV on a layer of path " + l.omv_path);
   return Status::ok();
 }
 
 // One layer of layers.json (read from `file`) into *out: an object, its level in 0..depth and
-// not yet `seen` (then marked), its values and path, what it says following from them, and its
-// seconds a time. A field missing or of another type throws nlohmann's exception.
+// not yet `seen` (then marked), its values and path, its sum of OBV's enclosure the one its
+// boxes' `obv` give (sum_obv_fits) and holding its rational sum, what it says following from
+// them, and its seconds a time. A
+// field missing or of another type throws nlohmann's exception.
 Status parse_layer(const nlohmann::json& jl, const Tree& tree, const std::vector<Enclosed>& obv,
                    const std::string& file, std::vector<char>* seen, LayerCertificate* out) {
   auto bad = [&](const std::string& why) { return damaged(file, why); };
@@ -968,11 +969,16 @@ Status parse_layer(const nlohmann::json& jl, const Tree& tree, const std::vector
   const std::string at = "layer " + std::to_string(l.level) + ": ";
   if ((*seen)[l.level]) return bad(at + "given twice");
   (*seen)[l.level] = 1;
-  Status s = parse_layer_values(jl, tree, obv, file, at, &l);
+  Status s = parse_layer_values(jl, tree, file, at, &l);
   if (!s) return s;
   s = parse_layer_path(jl, file, at, &l);
   if (!s) return s;
-  s = check_layer_follows(jl, file, at, l);
+  MpInterval boxes_sum(0);
+  for (int32_t id : layer(tree, l.level)) boxes_sum += obv[id].value;
+  if (!sum_obv_fits(l, boxes_sum)) return bad(at + "sum of OBV is not the sum of its boxes' OBV");
+  if (l.rational && !l.sum_obv_enclosure.contains(l.sum_obv))
+    return bad(at + "sum of OBV lies outside its enclosure");
+  s = check_layer_follows(file, at, l);
   if (!s) return s;
   const nlohmann::json& seconds = jl.at("seconds");
   if (!seconds.is_number() || !(seconds.get<double>() >= 0))

@@ -322,6 +322,47 @@ TEST_F(CertifyTorus, ResumingFromAnyCheckpointGivesTheSameCertificate) {
   std::system(("rm -rf " + dir).c_str());
 }
 
+// On a rational path (clip, nef) a layer's sum of OBV is enclosed from its exact rational, not
+// summed from its boxes' enclosures: a state saved there loads (the files' checks accept it) and
+// resumes every saved layer without computing it again, to the same certificate.
+TEST_F(CertifyTorus, RationalPathsResumeTheirSavedLayers) {
+  for (const OmvPath path : {OmvPath::kClip, OmvPath::kNef}) {
+    CertifyOptions co;
+    co.path = path;
+    CertifyState last;
+    co.checkpoint = [&](const CertifyState& st) { last = st; };
+    const Certificate full = certify(m, t, co);
+    ASSERT_EQ(last.layers.size(), 5u);
+    size_t rational_path_layers = 0;
+    for (const LayerCertificate& l : full.layers)
+      rational_path_layers += l.omv_path == "clip" || l.omv_path == "nef";
+    ASSERT_GT(rational_path_layers, 0u);  // layers whose boxes overlap
+    const std::string dir = test::temp_path("certify_rational_state");
+    std::system(("rm -rf " + dir + " && mkdir " + dir).c_str());
+    ASSERT_TRUE(CertifyCheckpoint(dir, "fingerprint").save(last));
+    CertifyState back;
+    bool found = false;
+    const Status read = CertifyCheckpoint(dir, "fingerprint").load(t, &back, &found);
+    ASSERT_TRUE(read) << read.message();
+    ASSERT_TRUE(found);
+    CertifyOptions r;
+    r.path = path;
+    r.resume = &back;
+    int layer_lines = 0;
+    r.progress = [&](const std::string& line) { layer_lines += line.rfind("layer ", 0) == 0; };
+    const Certificate c = certify(m, t, r);
+    EXPECT_EQ(layer_lines, 0) << "saved layers computed again";
+    ASSERT_EQ(c.layers.size(), full.layers.size());
+    for (size_t i = 0; i < c.layers.size(); ++i) {
+      EXPECT_EQ(c.layers[i].omv, full.layers[i].omv) << "layer " << i;
+      EXPECT_EQ(c.layers[i].sum_obv, full.layers[i].sum_obv) << "layer " << i;
+    }
+    EXPECT_EQ(c.weighted_error, full.weighted_error);
+    EXPECT_TRUE(c.ok());
+    std::system(("rm -rf " + dir).c_str());
+  }
+}
+
 void write_text(const std::string& path, const std::string& text) {
   std::ofstream(path, std::ios::binary) << text;
 }
