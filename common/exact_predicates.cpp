@@ -10,15 +10,18 @@
 namespace vobb {
 namespace {
 
-constexpr double kEps = std::numeric_limits<double>::epsilon() / 2;  // unit round-off 2^-53
-// Static error bounds for the filtered determinants, as derived by Shewchuk (1997) for the
-// same evaluation order: the floating result is off by at most bound * permanent.
-constexpr double kOrient2dBound = (3.0 + 16.0 * kEps) * kEps;
-constexpr double kOrient3dBound = (7.0 + 56.0 * kEps) * kEps;
-// Shewchuk's bounds assume no underflow. A product that underflows is off by at most 2^-1075
-// in absolute terms (subtractions of subnormals are exact); in orient3d such an error in a
-// minor is then multiplied by |u|. Adding 2^-1020 (|u|_1 + 1), itself never subnormal, covers
-// that with a factor of 2^50 to spare; it only sends determinants near 1e-307 to GMP.
+// Static error bounds for the filtered determinants, in units of eta = 2^-52, which bounds one
+// operation's relative error in every rounding mode (the callers include the polyhedral
+// solver, which runs under upward rounding): the floating result's sign is decided where it
+// exceeds bound * permanent (docs/derivations.md, "Orientation filters in any rounding mode").
+constexpr double kEta = std::numeric_limits<double>::epsilon();  // 2^-52
+constexpr double kOrient2dBound = 4 * kEta;
+constexpr double kOrient3dBound = 8 * kEta;
+// The relative bounds assume no underflow. A product that underflows is off by at most 2^-1074
+// in absolute terms in any rounding mode (subtractions of subnormals are exact); in orient3d
+// such an error in a minor is then multiplied by |u|. Adding 2^-1020 (|u|_1 + 1), itself never
+// subnormal, covers that with a factor of 2^50 to spare; it only sends determinants near
+// 1e-307 to GMP.
 const double kUnderflowSlack = std::ldexp(1.0, -1020);
 
 int sign_of(const Rational& q) { return sgn(q); }

@@ -1,8 +1,9 @@
 // Exact geometric predicates on double inputs, and exact rational helpers.
 //
 // Every input double is an exact rational; these functions decide signs of polynomials in
-// those rationals without error. A floating-point filter with a static error bound answers the
-// easy cases; the rest fall back to GMP rationals. Preconditions: all inputs finite.
+// those rationals without error, in any floating-point rounding mode. A floating-point filter
+// with a static error bound answers the easy cases; the rest fall back to GMP rationals.
+// Preconditions: all inputs finite.
 // This is the only exactness `common/` needs (solidity, volume, containment); the CGAL-based
 // solver lives in `exact/`.
 #pragma once
