@@ -8,7 +8,9 @@
 
 #include "app/cli_support.h"
 #include "app/command.h"
+#include "common/exact_predicates.h"
 #include "common/io/mesh_report.h"
+#include "common/obb.h"
 #include "common/tree_io.h"
 #include "vobb/vobb.h"
 
@@ -85,7 +87,7 @@ class ObvCommand final : public Command {
     for (size_t i = 0; i < n; ++i) {
       nlohmann::ordered_json jb;
       jb["index"] = i;
-      jb["box_volume"] = volume(boxes[i]);
+      jb["box_volume"] = to_double_nearest(exact_volume(boxes[i]));
       if (r.unresolved[i]) jb["unresolved"] = true;
       if (!r.poly.empty()) {
         const PolyObv& p = r.poly[i];
@@ -110,8 +112,8 @@ class ObvCommand final : public Command {
         e["seconds"] = run.seconds[i];
         est.push_back(e);
         if (!json_)
-          print_row(i, run, want_exact ? &exact[i] : nullptr, r.poly.empty() ? nullptr : &r.poly[i],
-                    want_poly);
+          print_row(i, run, want_exact ? &r.exact[i] : nullptr,
+                    r.poly.empty() ? nullptr : &r.poly[i], want_poly);
       }
       if (!json_ && r.runs.empty())
         std::printf("%5zu %8s %5s %24.17g %24s %12s %12s %10.6f\n", i, "exact", "-", exact[i], "-",
@@ -131,12 +133,15 @@ class ObvCommand final : public Command {
     }
   }
 
-  void print_row(size_t i, const ObvRun& run, const double* exact, const PolyObv* poly,
+  // One row of the table; `exact` the box's exact OBV, whose nearest double is printed and from
+  // which the relative error is computed exactly before it is rounded.
+  void print_row(size_t i, const ObvRun& run, const Rational* exact, const PolyObv* poly,
                  bool want_poly) const {
     char rel[32] = "-", ex[40] = "-", mm[16] = "-", rb[24] = "", iv[64] = "";
     if (exact && *exact != 0)
-      std::snprintf(rel, sizeof rel, "%.3e", std::abs(run.obv[i] - *exact) / *exact);
-    if (exact) std::snprintf(ex, sizeof ex, "%.17g", *exact);
+      std::snprintf(rel, sizeof rel, "%.3e",
+                    to_double_nearest(abs(Rational(run.obv[i]) - *exact) / *exact));
+    if (exact) std::snprintf(ex, sizeof ex, "%.17g", to_double_nearest(*exact));
     if (run.m > 0) std::snprintf(mm, sizeof mm, "%d", run.m);
     if (r_bound_ && run.m > 0) std::snprintf(rb, sizeof rb, " %12.3e", run.r_bound[i]);
     if (r_bound_ && run.m == 0) std::snprintf(rb, sizeof rb, " %12s", "-");

@@ -625,8 +625,10 @@ std::vector<Cell<NT>> shared_cells(const Obb& box, const std::vector<Obb>& earli
   return shared;
 }
 
-// A double box holding the exact cell whose vertices these are: NumberBounds' bounds, grown by
-// 1e-9 of their magnitude (for double, whose vertices are rounded; far beyond that rounding).
+// A double box around the cell whose vertices these are: NumberBounds' bounds, which hold the
+// exact cell for exact and interval vertices, grown by 1e-9 of their magnitude. For double
+// vertices, which are rounded, that margin is far beyond their usual rounding but no proof
+// where a cut meets a face at a grazing angle: the double path is an estimate.
 template <class NT>
 Aabb reach_of(const Cell<NT>& cell) {
   Aabb b = cell.bounds();

@@ -182,6 +182,8 @@ ExactBoxFrame::ExactBoxFrame(const Obb& box) {
   det = std::move(f.det);
 }
 
+Rational exact_volume(const Obb& box) { return 8 * abs(ExactBoxFrame(box).det); }
+
 void ExactBoxFrame::corner(int index, Rational out[3]) const {
   for (int i = 0; i < 3; ++i) {
     out[i] = c[i];

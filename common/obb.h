@@ -80,6 +80,9 @@ struct ExactBoxFrame {
   Rational det;
 };
 
+// The certified solid's volume, 8 |det[u0 u1 u2]|, exactly (volume() is its double estimate).
+Rational exact_volume(const Obb& box);
+
 // Exact point-in-box test against the certified solid (boundary counts as inside).
 // Build once per box, query per point. A box with zero half extents is the closed
 // parallelepiped all the same (DESIGN §1): a rectangle, a segment or its centre point.

@@ -879,9 +879,9 @@ TEST_F(CliOnCube, VariationalTreeCertifies) {
 // range_bound), and it still holds against the exact value. The round-off, relative to
 // max(E, vol - E) >= vol / 2: range_bound's volume U is at most vol (1 + 32 eps)(1 + 12 eps),
 // so U - E exceeds vol - E by 44 eps vol, 88 eps of the maximum; the reported box volume is
-// off by at most 5 eps (volume()'s 5 products), 10 eps of it; and the final factor 1 + 4 eps:
-// under 102 eps in all, taken as 128 eps. The certified bound (from the polyhedral solver's
-// interval) holds too, and is far below R(m).
+// the exact one rounded to nearest, off by at most eps / 2 of it, eps of the maximum; and the
+// final factor 1 + 4 eps: under 94 eps in all, taken as 128 eps. The certified bound (from the
+// polyhedral solver's interval) holds too, and is far below R(m).
 TEST(Cli, ObvBoundIsNeverAboveTheBoxVolume) {
   const std::string mesh = write_cube("range_cube.off", 1);
   Obb b;
@@ -897,7 +897,8 @@ TEST(Cli, ObvBoundIsNeverAboveTheBoxVolume) {
   const auto& box = doc["boxes"][0];
   const double vol = box["box_volume"].get<double>(), exact = box["exact"].get<double>();
   const Rational q(box["exact_rational"].get<std::string>());
-  EXPECT_DOUBLE_EQ(vol, 0.216);
+  const Rational h(0.3);                             // the stored half extent, exactly
+  EXPECT_EQ(vol, to_double_nearest(8 * h * h * h));  // the certified solid's, rounded once
   ASSERT_EQ(box["estimates"].size(), 5u);
   int cubemap = 0;
   for (const auto& e : box["estimates"]) {

@@ -76,8 +76,7 @@ TEST(BoxExport, BoxesReadBackAsOutwardSolids) {
       // Evaluating the bound takes fewer than 32 roundings; (1 + 64 u) covers them.
       const double bound =
           (1 + 64 * kU) * (area * delta + 2 * (3 * p * delta * delta + delta * delta * delta));
-      const ExactBoxFrame frame(b);
-      const Rational exact = 8 * abs(frame.det);
+      const Rational exact = exact_volume(b);
       const Rational diff = abs(r.volume - exact);
       EXPECT_LE(diff, Rational(bound))
           << "off by " << to_double_nearest(diff) << ", bound " << bound;

@@ -20,12 +20,6 @@ Obb make_box(const Vec3& half, const std::array<Vec3, 3>& axes) {
   return b;
 }
 
-// The box's exact volume, 8 |det[u0 u1 u2]| with u_k = h_k a_k, in rationals.
-Rational exact_volume(const Obb& box) {
-  const ExactBoxFrame f(box);
-  return Rational(8) * Rational(abs(f.det));
-}
-
 // range_bound must hold against the exact range [0, V*] of the OBV, compared in rationals: for
 // estimates below, inside and above the range, it is at least the distance from the estimate
 // to both ends. Boxes: axis-aligned, and turned with axes off orthonormal by a few 1e-6 (where

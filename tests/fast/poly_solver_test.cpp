@@ -160,7 +160,7 @@ TEST(PolySolver, PlaneCutBoxIsHalfOutside) {
       Vec3 c = mid;
       c[face] = bounds.hi[face];
       const Obb b = rotated_box(c, Vec3(0.3, 0.2, 0.25), angle, Vec3(0.2, 1, 0.5));
-      const Rational half_volume = abs(ExactBoxFrame(b).det) * 4;
+      const Rational half_volume = exact_volume(b) / 2;
       const PolyObv r = poly.evaluate(b);
       SCOPED_TRACE("face " + std::to_string(face) + " angle " + std::to_string(angle));
       EXPECT_TRUE(encloses(r, half_volume));
