@@ -914,8 +914,8 @@ Status parse_layer_path(const nlohmann::json& jl, const std::string& file, const
   return Status::ok();
 }
 
-// Whether what a layer (read as `l`) says follows from its own values, as certify
-// makes them: its OMV's enclosure from its path, its bound and its nearest doubles.
+// Whether what a layer (read as `l`) says follows from its own values, as certify makes them:
+// its OMV's enclosure from its path, its bound and its nearest doubles.
 Status check_layer_follows(const std::string& file, const std::string& at,
                            const LayerCertificate& l) {
   auto bad = [&](const std::string& why) { return damaged(file, why); };
@@ -955,8 +955,7 @@ Status check_layer_follows(const std::string& file, const std::string& at,
 // One layer of layers.json (read from `file`) into *out: an object, its level in 0..depth and
 // not yet `seen` (then marked), its values and path, its sum of OBV's enclosure the one its
 // boxes' `obv` give (sum_obv_fits) and holding its rational sum, what it says following from
-// them, and its seconds a time. A
-// field missing or of another type throws nlohmann's exception.
+// them, and its seconds a time. A field missing or of another type throws nlohmann's exception.
 Status parse_layer(const nlohmann::json& jl, const Tree& tree, const std::vector<Enclosed>& obv,
                    const std::string& file, std::vector<char>* seen, LayerCertificate* out) {
   auto bad = [&](const std::string& why) { return damaged(file, why); };

@@ -110,27 +110,28 @@ TEST(OrientInAnyRounding, NearDegeneratePointsMatchTheRationals) {
     }
     std::mt19937_64 rng(17);
     std::uniform_real_distribution<double> u(-2, 2), t(-1, 2);
-    std::uniform_int_distribution<int> nudge(-4, 4);
+    std::uniform_int_distribution<int> nudge(-1, 1);
     for (int trial = 0; trial < 100000; ++trial) {
-      Vec3 p[4];
+      Vec3 p[5];
       for (auto& q : p) q = Vec3(u(rng), u(rng), u(rng));
-      // c on the line ab (rounded), d on the plane abc (rounded), each moved a few ulps.
+      // p2 on the line p0 p1 and p4 on the plane p0 p1 p3, as rounded, each then moved by an
+      // ulp (or toward 0) in every coordinate.
       const double s = t(rng), w = t(rng);
       p[2] = p[0] + s * (p[1] - p[0]);
-      p[3] = p[0] + s * (p[1] - p[0]) + w * (p[2] - p[0] + Vec3(u(rng), u(rng), u(rng)));
+      p[4] = p[0] + s * (p[1] - p[0]) + w * (p[3] - p[0]);
       for (int k = 0; k < 3; ++k) {
         p[2][k] = std::nextafter(p[2][k], nudge(rng) * 1e300);
-        p[3][k] = std::nextafter(p[3][k], nudge(rng) * 1e300);
+        p[4][k] = std::nextafter(p[4][k], nudge(rng) * 1e300);
       }
       int got2, got3;
       {
         const Rounding r(mode);
         got2 = orient2d(p[0], p[1], p[2], 0, 1);
-        got3 = orient3d(p[0], p[1], p[2], p[3]);
+        got3 = orient3d(p[0], p[1], p[3], p[4]);
       }
       ASSERT_EQ(got2, reference_orient2d(p[0], p[1], p[2], 0, 1))
           << "mode " << mode << ", " << trial;
-      ASSERT_EQ(got3, reference_orient3d(p[0], p[1], p[2], p[3]))
+      ASSERT_EQ(got3, reference_orient3d(p[0], p[1], p[3], p[4]))
           << "mode " << mode << ", " << trial;
     }
   }
