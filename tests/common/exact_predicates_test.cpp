@@ -97,7 +97,9 @@ struct Rounding {
 // filters hold in every rounding mode. Nearly collinear and nearly coplanar points, whose
 // double determinants are mostly round-off, against the rationals, in each mode; and a case
 // found by a review, whose determinant computed under upward rounding is 8.9e-16 with the exact
-// value -2.5e-17 (a filter derived for round to nearest took that sign as decided).
+// value -2.5e-17 (a filter derived for round to nearest took that sign as decided). Triples
+// shaped like it (a near the origin, c on the line from a through b, beyond a) find such cases
+// too: with the round-to-nearest bound the sweep fails within its first thousand.
 TEST(OrientInAnyRounding, NearDegeneratePointsMatchTheRationals) {
   const Vec3 a(-0.0002834642645193493, -0.0003402336428779418, 0);
   const Vec3 b(1.5372483323999604, -1.1801000423521457, 0);
@@ -131,6 +133,13 @@ TEST(OrientInAnyRounding, NearDegeneratePointsMatchTheRationals) {
       }
       ASSERT_EQ(got2, reference_orient2d(p[0], p[1], p[2], 0, 1))
           << "mode " << mode << ", " << trial;
+      // As the review's case: a near the origin, c on the line from a through b, beyond a.
+      const Vec3 a2 = 1e-3 * Vec3(u(rng), u(rng), 0), c2 = a2 - 0.5 * (t(rng) + 1) * (p[1] - a2);
+      {
+        const Rounding r(mode);
+        got2 = orient2d(a2, p[1], c2, 0, 1);
+      }
+      ASSERT_EQ(got2, reference_orient2d(a2, p[1], c2, 0, 1)) << "mode " << mode << ", " << trial;
       ASSERT_EQ(got3, reference_orient3d(p[0], p[1], p[3], p[4]))
           << "mode " << mode << ", " << trial;
     }
