@@ -127,11 +127,16 @@ std::vector<Obb> layer_boxes(const CertifyRun& run, int level) {
   return boxes;
 }
 
-// The enclosure of a layer's sum of OBV, summed in the order of its node ids.
-MpInterval layer_sum_obv(const CertifyRun& run, int level) {
+// The enclosure of a layer's sum of OBV from its boxes' enclosures, summed in the order of its
+// node ids `ids`: the one certify writes and a checkpoint's loader checks.
+MpInterval layer_sum_obv(const std::vector<int32_t>& ids, const std::vector<Enclosed>& obv) {
   std::vector<MpInterval> xs;
-  for (int32_t id : run.ids[level]) xs.push_back(run.obv[id].value);
+  for (int32_t id : ids) xs.push_back(obv[id].value);
   return sum_of(xs);
+}
+
+MpInterval layer_sum_obv(const CertifyRun& run, int level) {
+  return layer_sum_obv(run.ids[level], run.obv);
 }
 
 // The boxes that may meet another box of the layer, by bounds: box j with an earlier
@@ -972,9 +977,8 @@ Status parse_layer(const nlohmann::json& jl, const Tree& tree, const std::vector
   if (!s) return s;
   s = parse_layer_path(jl, file, at, &l);
   if (!s) return s;
-  MpInterval boxes_sum(0);
-  for (int32_t id : layer(tree, l.level)) boxes_sum += obv[id].value;
-  if (!sum_obv_fits(l, boxes_sum)) return bad(at + "sum of OBV is not the sum of its boxes' OBV");
+  if (!sum_obv_fits(l, layer_sum_obv(layer(tree, l.level), obv)))
+    return bad(at + "sum of OBV is not the sum of its boxes' OBV");
   if (l.rational && !l.sum_obv_enclosure.contains(l.sum_obv))
     return bad(at + "sum of OBV lies outside its enclosure");
   s = check_layer_follows(file, at, l);
