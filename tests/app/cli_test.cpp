@@ -749,12 +749,13 @@ TEST_F(CliOnCube, ExportWritesEachBoxOfTheLayer) {
         // Local coordinates of the corner, each +-1. The file prints doubles exactly (shortest
         // round trip), so the error is that of computing the corner (3 sums of terms up to
         // |c| + sum h) and of projecting it back (3 products, 2 sums): under 16 roundings of
-        // that size, taken as 64 eps for margin, relative to the half extent.
+        // at most eps / 2 of that size, 8 eps of it; the quotient by the half extent adds one
+        // rounding of eps / 2 relative to the result, 1: within 16 eps of the size over h.
         const Vec3 d = corners[8 * b + k] - box.center;
         const double size = box.center.norm() + box.half.sum();
         for (int a = 0; a < 3; ++a)
           EXPECT_NEAR(std::abs(d.dot(box.axes[a])) / box.half[a], 1.0,
-                      64 * std::numeric_limits<double>::epsilon() * size / box.half[a])
+                      16 * std::numeric_limits<double>::epsilon() * size / box.half[a])
               << b << " " << k;
       }
     }

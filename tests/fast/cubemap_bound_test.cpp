@@ -62,9 +62,14 @@ TEST(RangeBound, CoversTheDistanceToBothEndsOfTheExactRange) {
 // And it is tight where the estimate is the range's middle: about half the box's volume.
 TEST(RangeBound, IsHalfTheVolumeForAnEstimateInTheMiddle) {
   const Obb box = make_box(Vec3(1, 2, 3), {Vec3::UnitX(), Vec3::UnitY(), Vec3::UnitZ()});
-  // 48 / 2 = 24, raised only by the derived 32 eps of U and 4 eps of the difference (well under
-  // 1e-13 relative).
-  EXPECT_NEAR(range_bound(box, 24), 24, 24 * 1e-13);
+  // V* = 48, so the range's half is 24. range_bound raises U = 48 by 32 eps of itself, which is
+  // 64 eps of U - 24 = 24, then the difference by 4 eps; one rounding of the result (the rest
+  // are exact for these powers of two and 3) adds at most one eps more. Compared as rationals.
+  constexpr double eps = std::numeric_limits<double>::epsilon();
+  const Rational bound(range_bound(box, 24));
+  EXPECT_GE(bound, Rational(24));
+  EXPECT_LE(bound,
+            Rational(24) * Rational(1 + 64 * eps) * Rational(1 + 4 * eps) * Rational(1 + eps));
 }
 
 }  // namespace

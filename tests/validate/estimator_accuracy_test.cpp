@@ -12,6 +12,7 @@
 #include "common/io/mesh_report.h"
 #include "data/analytic_meshes.h"
 #include "exact/outer_volume.h"
+#include "fast/cubemap_bound.h"
 #include "fast/estimator_test_util.h"
 #include "fast/gl_estimator.h"
 #include "fast/gl_test_util.h"
@@ -53,16 +54,20 @@ TEST(EstimatorAccuracy, RealMeshesMatchThePrototypeAndConvergeWithM) {
     uint64_t seed = 100;
     for (BoxSize size : {BoxSize::kLeaf, BoxSize::kMid, BoxSize::kRoot}) {
       const std::vector<Obb> boxes = validate::box_corpus(lm.mesh, size, 30, seed++);
+      std::vector<Rational> obv;
       std::vector<double> truth;
-      for (const Obb& b : boxes) truth.push_back(to_double_nearest(exact.obv(b)));
+      for (const Obb& b : boxes) {
+        obv.push_back(exact.obv(b));
+        truth.push_back(to_double_nearest(obv.back()));
+      }
       for (int m : kResolutions) {
         const std::vector<double> est = gl->estimate(boxes, m);
         for (size_t i = 0; i < boxes.size(); ++i) {
           ASSERT_TRUE(std::isfinite(est[i]));
-          // Rigorous for every box: the texels the surface crosses, plus float deviation.
-          const BoxPlan plan = gl->planner().plan(boxes[i], m);
-          EXPECT_LE(std::abs(est[i] - truth[i]),
-                    resolution_bound(plan, m) + gl_deviation_bound(plan, m))
+          // The GL backend's rigorous bound (fast/cubemap_bound.h) holds for every box, against
+          // the exact rational.
+          EXPECT_LE(abs(Rational(est[i]) - obv[i]),
+                    Rational(cubemap_bound(gl->planner(), true, boxes[i], m)))
               << name << " " << validate::to_string(size) << " box " << i << " m " << m;
           if (truth[i] > 0) rel[size][m].push_back(std::abs(est[i] - truth[i]) / truth[i]);
         }
