@@ -103,7 +103,7 @@ StatedBound fit_stated_bound(const DiscretizationResult& r, double alpha) {
     std::vector<double> u;
     for (const StudyEval& e : r.evals) {
       const StudySample& s = r.samples[e.sample];
-      if (e.m != m || s.held_out) continue;
+      if (e.m != m || s.held_out || e.backend != Backend::kCpu) continue;
       u.push_back(std::isfinite(e.estimate) ? e.abs_error(s) / s.box_volume
                                             : std::numeric_limits<double>::infinity());
     }
@@ -120,6 +120,7 @@ StatedBound fit_stated_bound(const DiscretizationResult& r, double alpha) {
   for (const auto& [m, q] : b.fitted_quantiles) b.c = std::max(b.c, q * std::pow(double(m), b.p));
   std::vector<std::pair<size_t, size_t>> per_m(ms.size());  // (n, violations)
   for (const StudyEval& e : r.evals) {
+    if (e.backend != Backend::kCpu) continue;
     const StudySample& s = r.samples[e.sample];
     const bool violates = !(e.abs_error(s) <= b.per_volume(e.m) * s.box_volume);  // NaN violates
     if (s.held_out) {
@@ -273,7 +274,7 @@ void add_estimates(const DiscretizationConfig& config, const MeshUnderStudy& mu,
         e.seconds = secs[k];
         if (r->samples[first + i].index < config.detail_boxes_per_size) {
           const EstimatorSet::Bounds bd = est.bounds(boxes[i], m);
-          e.rigorous = bd.rigorous();
+          e.rigorous = backend == Backend::kCpu ? bd.cpu_rigorous() : bd.rigorous();
           e.deviation = bd.deviation + bd.roundoff;
         }
         r->evals.push_back(e);
@@ -289,7 +290,9 @@ void study_mesh(const DiscretizationConfig& config, size_t mi, const NamedMesh& 
                 StudyTotals* totals, DiscretizationResult* r) {
   const Mesh& mesh = *nm.mesh;
   EstimatorSet est(mesh, config.want_gl, config.perturb);
-  if (config.want_gl && !totals->gl_tried) {
+  if (!config.want_gl) {
+    r->gl_note = "GL not requested";
+  } else if (!totals->gl_tried) {
     totals->gl_tried = true;
     r->gl_note = est.has_gl() ? "GL renderer: " + est.renderer()
                               : "GL estimator unavailable: " + est.gl_status();

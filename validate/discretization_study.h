@@ -73,8 +73,9 @@ struct StudyEval {
   int m = 0;
   double estimate = 0;
   double seconds = 0;  // per evaluation
-  // On the detail subsample only (NaN elsewhere): EstimatorSet::rigorous_bound, and
-  // gl_deviation_bound + round-off, the allowed |GL - CPU|.
+  // On the detail subsample only (NaN elsewhere): the backend's rigorous bound R(m)
+  // (CubemapBounds::cpu_rigorous for the CPU twin, rigorous for GL), and gl_deviation_bound +
+  // round-off, the allowed |GL - CPU|.
   double rigorous = NAN;
   double deviation = NAN;
   bool has_rigorous() const { return !std::isnan(rigorous); }
@@ -166,7 +167,9 @@ DiscretizationResult run_discretization_study(const DiscretizationConfig& config
 ErrorStats error_stats(const DiscretizationResult& r,
                        const std::function<bool(const StudyEval&)>& keep);
 
-// Fits B(m) on the fit corpus's evaluations and counts violations on both corpora.
+// Fits B(m) on the fit corpus's CPU-twin evaluations and counts violations on both corpora's,
+// one estimate per box and m: GL's estimates of the same boxes lie within its float bound of
+// the twin's (a check of its own), and counted too they would count those boxes twice.
 StatedBound fit_stated_bound(const DiscretizationResult& r, double alpha);
 
 double quantile(std::vector<double> v, double q);  // linear interpolation; v non-empty

@@ -1,7 +1,8 @@
 // Stiff and extreme cases of the cubemap estimator (DESIGN §6). Each case is named and
 // states its expected behaviour before it runs:
 //  - "finite, within R(m)": every estimate (CPU twin and GL, at each m) is finite and within
-//    the rigorous per-box bound R(m) of EstimatorSet::rigorous_bound;
+//    its backend's rigorous per-box bound R(m) (EstimatorSet::bound); the outcome says on how
+//    many estimates the error is above B(m) vol(O);
 //  - "finite, within R(m) and B(m)": also within the stated statistical bound B(m) vol(O)
 //    (for boxes of the kind B(m) was fitted on: real meshes, moved or scaled);
 // and, on every case that estimates, the polyhedral solver's certified interval

@@ -10,7 +10,7 @@
 namespace vobb::validate {
 bool UpperBoundResult::all_exact_hold() const {
   for (const LayerBoundRow& l : layers)
-    if (!l.exact_holds) return false;
+    if (!l.exact_holds || !l.paths_agree) return false;
   for (const TreeCheck& t : trees)
     if (!t.containment_ok) return false;
   return true;
@@ -68,6 +68,7 @@ UpperBoundResult run_upper_bound_study(const UpperBoundConfig& config, const Sta
         row.omv = lc.omv;
         row.sum_obv = lc.sum_obv;
         row.exact_holds = lc.upper_bound_holds();  // sum_obv >= omv, rationals
+        row.paths_agree = lc.paths_agree;
         row.gap = to_double_nearest(lc.overlap());
         row.gap_relative = lc.omv > 0 ? to_double_nearest(Rational(lc.overlap() / lc.omv)) : 0.0;
         row.omv_path = lc.omv_path;

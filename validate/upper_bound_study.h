@@ -34,6 +34,7 @@ struct LayerBoundRow {
   size_t boxes = 0, overlapping_boxes = 0;
   Rational omv, sum_obv;
   bool exact_holds = false;  // sum_obv >= omv, as rationals
+  bool paths_agree = false;  // the OMV's second path agrees with it (exact::LayerCertificate)
   double gap = 0;            // sum_obv - omv, nearest double
   double gap_relative = 0;   // gap / omv
   std::string omv_path;

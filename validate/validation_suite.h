@@ -7,17 +7,20 @@
 // embeds the plots and tables. Every file appears atomically (temp + rename).
 //
 // quick: a few boxes per (mesh, size) on dino, elephant (fit) and knot1, armadillo (held out),
-// trees of depth 4 on elephant; for CI, well under 5 minutes on 2 cores.
+// trees of depth 3 on elephant; for CI, well under 5 minutes on 2 cores.
 // full: more boxes, more held-out meshes, trees of depth 8 on dino, elephant and knot1.
 //
 // The checks, each of which fails the run (exit 1 from the command line):
-//  - every estimate finite and within its rigorous per-box bound R(m);
-//  - GL within its derived float bound of the CPU twin, box by box;
+//  - every estimate finite and within its rigorous per-box bound R(m) (a backstop against
+//    gross errors: R(m) stays near the box's volume at every m);
+//  - GL within its derived float bound of the CPU twin, box by box; GL ran, unless the run
+//    was asked for the CPU twin alone;
 //  - the median relative error converges at a fitted rate of at most -1.5 (see suite.cpp);
 //  - the median relative error at m = 32 per box size within 2x the DESIGN §4 prototype;
 //  - the held-out violation rate of B(m) at most its stated level alpha = 5 %;
-//  - Nef and clipping equal as rationals on the boxes both ran;
-//  - sum OBV >= OMV exactly on every layer of every tree, and every tree conservative;
+//  - Nef and clipping equal as rationals on the boxes both ran (at least one);
+//  - sum OBV >= OMV exactly on every layer of every tree, the OMV's two paths agreeing, and
+//    every tree conservative;
 //  - every stiff case as expected.
 #pragma once
 
