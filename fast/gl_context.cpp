@@ -74,11 +74,14 @@ EGLContext make_context(EGLDisplay display, std::string* why) {
 
 }  // namespace
 
+bool GlContext::switched_off() {
+  const char* gl_env = std::getenv("VOBB_GL");
+  return gl_env != nullptr && std::strcmp(gl_env, "off") == 0;
+}
+
 Status GlContext::create(std::unique_ptr<GlContext>* out, bool device_only) {
   out->reset();
-  const char* gl_env = std::getenv("VOBB_GL");
-  if (gl_env != nullptr && std::strcmp(gl_env, "off") == 0)
-    return Status::error("no OpenGL context: disabled by VOBB_GL=off");
+  if (switched_off()) return Status::error("no OpenGL context: disabled by VOBB_GL=off");
   const char* only = std::getenv("VOBB_EGL_PLATFORM");
   const bool try_device = only == nullptr || std::strcmp(only, "device") == 0;
   const bool try_surfaceless =

@@ -23,6 +23,8 @@ class GlContext {
   // On failure `out` stays empty and the Status says why, in one line. `device_only` skips
   // the surfaceless (software) platform: for callers that only want GL on a GPU.
   static Status create(std::unique_ptr<GlContext>* out, bool device_only = false);
+  // Whether VOBB_GL=off is set: every create() then refuses.
+  static bool switched_off();
   ~GlContext();
   GlContext(const GlContext&) = delete;
   GlContext& operator=(const GlContext&) = delete;

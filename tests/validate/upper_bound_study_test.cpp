@@ -48,6 +48,7 @@ TEST(UpperBoundStudy, EveryLayerOfBothTreesIsCertifiedExactly) {
     EXPECT_EQ(l.builder, i <= kDepth ? "obbtree" : "variational");
     EXPECT_EQ(l.level, static_cast<int>(i % (kDepth + 1)));
     EXPECT_TRUE(l.exact_holds);
+    EXPECT_TRUE(l.paths_agree);
     EXPECT_TRUE(l.sum_obv >= l.omv);
     EXPECT_TRUE(l.omv > 0);
     EXPECT_EQ(l.gap, to_double_nearest(Rational(l.sum_obv - l.omv)));
@@ -65,6 +66,10 @@ TEST(UpperBoundStudy, EveryLayerOfBothTreesIsCertifiedExactly) {
     for (const auto& e : l.estimated) EXPECT_EQ(e.allowance, 0.0);  // c = 0
   }
   EXPECT_TRUE(r.all_exact_hold());
+  // A layer whose OMV paths disagree fails the study, though sum OBV >= OMV still holds there.
+  UpperBoundResult split = r;
+  split.layers.back().paths_agree = false;
+  EXPECT_FALSE(split.all_exact_hold());
 }
 
 // Every estimate 0: below OMV, and without an allowance the study must say so; with B = vol(O)

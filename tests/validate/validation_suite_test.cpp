@@ -81,16 +81,24 @@ TEST(ValidationSuite, QuickSuitePassesAndWritesItsFiles) {
 // m = 256 are about 1e-6 vol(O) (DESIGN §4: m^-2 from about 1e-4 at m = 32), so the bias
 // dominates from m = 32 on: the median relative error stops falling (fitted slope near 0, far
 // above -1.5) and at m = 32 it is about 1e-3 vol(O) / OBV, above twice the prototype's
-// medians (at most 9e-4). The suite must fail, and name those checks.
+// medians (at most 9e-4). The suite must fail, and name those checks. GL is asked for but
+// cannot start (no EGL platform may be tried): that fails a check of its own, instead of the
+// GL checks passing by their absence.
 TEST(ValidationSuite, QuickSuiteFailsWhenTheEstimatorIsBroken) {
   if (!have_quick_meshes()) VOBB_SKIP_WITHOUT_REAL_MESHES("real meshes absent");
   const std::string out = test::temp_path("validate_broken");
   validate::SuiteOptions o = quick_options(out);
   o.perturb = [](double estimate, const Obb& box, int) { return estimate + 1e-3 * volume(box); };
   validate::SuiteReport report;
+  ASSERT_EQ(setenv("VOBB_EGL_PLATFORM", "none", 1), 0);
   const Status s = validate::run_validation_suite(o, &report);
+  unsetenv("VOBB_EGL_PLATFORM");
   ASSERT_TRUE(s) << s.message();
   EXPECT_FALSE(report.ok());
+  const validate::SuiteCheck* gl = find_check(report, "GL estimator ran");
+  ASSERT_NE(gl, nullptr);
+  EXPECT_FALSE(gl->passed);
+  EXPECT_NE(gl->detail.find("no EGL platform"), std::string::npos) << gl->detail;
   const validate::SuiteCheck* rate = find_check(report, "convergence rate of the median (cpu)");
   ASSERT_NE(rate, nullptr);
   EXPECT_FALSE(rate->passed) << rate->detail;
