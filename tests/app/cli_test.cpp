@@ -820,7 +820,11 @@ TEST_F(CliOnCube, ObvEstimatesWithinTheirCertifiedBounds) {
       EXPECT_NE(r.out.find(key), std::string::npos) << key << r.out;
     // The exact OBV as a rational too, whose nearest double is "exact"; the interval holds it,
     // and every estimate lies within its certified bound of it (compared as rationals).
+    // The root box holds the unit cube, so its exact OBV is its exact volume less 1.
     const nlohmann::json doc = nlohmann::json::parse(r.out);
+    ASSERT_EQ(doc["boxes"].size(), 1u);
+    EXPECT_EQ(Rational(doc["boxes"][0]["exact_rational"].get<std::string>()),
+              exact_volume(t.nodes[0].box) - 1);
     for (const auto& box : doc["boxes"]) {
       const Rational q(box["exact_rational"].get<std::string>());
       EXPECT_EQ(to_double_nearest(q), box["exact"].get<double>());
