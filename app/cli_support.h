@@ -126,6 +126,8 @@ inline Status check_outputs_differ(const std::string& option, const std::string&
 // An output that cannot be written is refused before the run, not after hours of it. Paths
 // are resolved as write_file_atomic resolves them (common/atomic_file.h): a folder is no
 // output; a device or pipe, also through a link (/dev/stdout), is written in place and passes
+// (a named pipe is not opened here: a reader would see the probe's close as the end of the
+// stream; one that no process reads when the run writes ends the run with could_not_finish)
 // (a full disk shows only when writing: the run then ends with could_not_finish); otherwise,
 // following a link, the folder that will hold the file must exist and take a new file (a
 // probe is made there and removed), and the file's name must fit the folder's file system.

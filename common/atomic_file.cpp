@@ -57,8 +57,17 @@ Status write_file_atomic(const std::string& path, const std::string& content) {
   struct stat st;
   if (::stat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode)) {
     if (S_ISDIR(st.st_mode)) return fail("is a directory");
-    const int fd = ::open(path.c_str(), O_WRONLY | O_CLOEXEC);
-    if (fd < 0) return fail(std::strerror(errno));
+    // A named pipe that no process reads would block the open forever: opened without
+    // blocking, it fails at once (ENXIO), and is then written with blocking as any output.
+    const int fd = ::open(path.c_str(), O_WRONLY | O_CLOEXEC | O_NONBLOCK);
+    if (fd < 0)
+      return fail(errno == ENXIO ? "a named pipe that no process reads" : std::strerror(errno));
+    const int flags = ::fcntl(fd, F_GETFL);
+    if (flags < 0 || ::fcntl(fd, F_SETFL, flags & ~O_NONBLOCK) != 0) {
+      const std::string why = std::strerror(errno);
+      ::close(fd);
+      return fail(why);
+    }
     const bool ok = write_all(fd, content);
     const std::string why = std::strerror(errno);
     if (::close(fd) != 0 && ok) return fail(std::strerror(errno));

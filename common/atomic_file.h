@@ -3,7 +3,8 @@
 // half of it; a crash leaves at most a stray ".vobb-<pid>-<n>.tmp" file in the target's folder.
 // A symbolic link is followed (its target is replaced, the link kept). A target that exists
 // and is not a regular file (a device such as /dev/null, a pipe) is written to in place, since
-// it must not be replaced; a folder is refused.
+// it must not be replaced; a folder is refused, and so is a named pipe that no process reads
+// (its open would block forever).
 #pragma once
 
 #include <string>

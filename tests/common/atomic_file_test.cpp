@@ -100,6 +100,22 @@ TEST(WriteFileAtomic, WritesIntoAPipeInPlace) {
   std::filesystem::remove(fifo);
 }
 
+// A named pipe that no process reads: the open would block forever; it is refused at once
+// instead, in one line, and the pipe stays.
+TEST(WriteFileAtomic, RefusesANamedPipeThatNoProcessReads) {
+  const std::string fifo = test::temp_path("atomic_fifo_unread");
+  std::filesystem::remove(fifo);
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  const Status s = write_file_atomic(fifo, "nobody listens");
+  EXPECT_FALSE(s);
+  EXPECT_NE(s.message().find("a named pipe that no process reads"), std::string::npos)
+      << s.message();
+  struct stat st;
+  ASSERT_EQ(::stat(fifo.c_str(), &st), 0);
+  EXPECT_TRUE(S_ISFIFO(st.st_mode));
+  std::filesystem::remove(fifo);
+}
+
 // An anonymous pipe reached through its link in /proc, as `-o /dev/stdout` reaches the pipe
 // of `vobb build ... | cat`: the link resolves to "pipe:[N]", in no folder a file could be
 // made in, so it must be opened as given and written in place.
