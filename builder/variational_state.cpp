@@ -53,7 +53,7 @@ Status read_variational_state(const std::string& path, const std::string& finger
   if (path_absent(path)) return Status::ok();
   *found = true;
   std::string text;
-  const Status read = read_regular_file(path, path, "checkpoint file", &text);
+  const Status read = read_regular_file(path, path, "checkpoint file", &text, true);
   if (!read) return read;
   auto bad = [&](const std::string& why) {
     return Status::error(path + ": damaged checkpoint: " + why);

@@ -76,7 +76,7 @@ Status read_query_stream(const std::string& path, QueryStream* stream) {
     return Status::error(display + ": larger than " + std::to_string(kMaxQueryFileBytes >> 30) +
                          " GiB; record fewer queries (--record-every)");
   std::string text;
-  if (Status s = read_regular_file(path, display, "query file", &text); !s) return s;
+  if (Status s = read_regular_file(path, display, "query file", &text, true); !s) return s;
   auto fail = [&](const std::string& why) { return Status::error(display + ": " + why); };
   // The deepest values are at depth 2 (file, colliders, a collider); 4 leaves room.
   Json j;

@@ -2,6 +2,7 @@
 
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <cctype>
 #include <cerrno>
 #include <charconv>
@@ -32,16 +33,22 @@ bool path_absent(const std::string& path) {
 }
 
 Status read_regular_file(const std::string& path, const std::string& display,
-                         const std::string& what, std::string* content) {
+                         const std::string& what, std::string* content, bool text) {
   uint64_t size = 0;
   const Status regular = check_regular_file(path, display, what, &size);
   if (!regular) return regular;
   std::ifstream in(path, std::ios::binary);
   if (!in) return Status::error(display + ": cannot open: " + std::strerror(errno));
-  content->resize(static_cast<size_t>(size));
-  in.read(content->data(), static_cast<std::streamsize>(content->size()));
-  if (static_cast<size_t>(in.gcount()) != content->size())
-    return Status::error(display + ": read error");
+  auto read_to = [&](size_t from, size_t to) {
+    content->resize(to);
+    in.read(content->data() + from, static_cast<std::streamsize>(to - from));
+    return static_cast<size_t>(in.gcount()) == to - from;
+  };
+  const size_t probe = text ? static_cast<size_t>(std::min<uint64_t>(size, kTextProbeBytes)) : 0;
+  if (!read_to(0, probe)) return Status::error(display + ": read error");
+  if (content->find('\0') != std::string::npos)
+    return Status::error(display + ": binary data in a text format");
+  if (!read_to(probe, static_cast<size_t>(size))) return Status::error(display + ": read error");
   return Status::ok();
 }
 

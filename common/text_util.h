@@ -27,9 +27,13 @@ Status check_regular_file(const std::string& path, const std::string& display,
 bool path_absent(const std::string& path);
 
 // Reads the whole of `path` into `content`, after check_regular_file; a short read is
-// "<display>: read error".
+// "<display>: read error". `text`: the file must be text, so its first kTextProbeBytes are read
+// first, and a NUL byte among them refuses it ("<display>: binary data in a text format")
+// before the rest is read: a large binary file is not read whole to be refused. `content`
+// then holds those first bytes, for the caller to say what the file looks like.
+inline constexpr size_t kTextProbeBytes = 1 << 16;
 Status read_regular_file(const std::string& path, const std::string& display,
-                         const std::string& what, std::string* content);
+                         const std::string& what, std::string* content, bool text = false);
 
 // Appends the shortest decimal form that reads back as the same double (std::to_chars).
 void append_double(std::string* s, double v);

@@ -174,7 +174,7 @@ Status parse_tree(const std::string& text, const std::string& display, Tree* tre
 
 Status read_tree(const std::string& path, Tree* tree) {
   std::string text;
-  Status s = read_regular_file(path, basename_of(path), "tree file", &text);
+  Status s = read_regular_file(path, basename_of(path), "tree file", &text, true);
   if (!s) return s;
   return parse_tree(text, basename_of(path), tree);
 }
@@ -193,7 +193,7 @@ Status write_boxes(const std::vector<Obb>& boxes, const std::string& path) {
 
 Status read_boxes(const std::string& path, std::vector<Obb>* boxes) {
   std::string text;
-  Status s = read_regular_file(path, basename_of(path), "box file", &text);
+  Status s = read_regular_file(path, basename_of(path), "box file", &text, true);
   if (!s) return s;
   const std::string display = basename_of(path);
   // A box file's deepest values are at depth 4 (file, boxes, box, axes, a row); 8 leaves room.

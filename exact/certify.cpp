@@ -699,7 +699,7 @@ nlohmann::json layer_to_json(const LayerCertificate& l) {
 Status read_checkpoint_file(const std::string& path, const char* format,
                             const std::set<std::string>& known, const std::string* fingerprint,
                             nlohmann::json* j, std::string* text) {
-  const Status read = read_regular_file(path, path, "checkpoint file", text);
+  const Status read = read_regular_file(path, path, "checkpoint file", text, true);
   if (!read) return read;
   auto bad = [&](const std::string& why) {
     return Status::error(path + ": damaged certify checkpoint: " + why);

@@ -6,6 +6,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstring>
+#include <fstream>
 #include <limits>
 #include <string_view>
 #include <unordered_map>
@@ -641,21 +642,28 @@ Status read_ply(const Reader& r, LoadedMesh* out) {
 
 // ---- STL --------------------------------------------------------------------------------
 
+// What is wrong with a binary STL of `size` bytes whose header declares `n` triangles ("" when
+// its layout fits). Whole 50-byte records beyond the declared count would be dropped without a
+// word (a count that undercounts shows up as a hole). Fewer bytes than one record cannot hold
+// a triangle: some writers pad the file, and those bytes are ignored.
+std::string stl_binary_layout_defect(uint64_t size, uint32_t n) {
+  if (size < 84 + 50ull * n)
+    return "truncated: binary STL promises " + std::to_string(n) + " triangles but holds " +
+           std::to_string((size - 84) / 50);
+  const uint64_t extra = (size - 84 - 50ull * n) / 50;
+  if (extra > 0)
+    return "binary STL holds " + std::to_string(extra) + " more triangle records after the " +
+           std::to_string(n) + " its header declares";
+  return "";
+}
+
 Status read_stl_binary(const Reader& r, LoadedMesh* out) {
   const std::string_view d = r.text();
   if (d.size() < 84) return r.fail("truncated: binary STL shorter than its 84-byte header");
   uint32_t n;
   std::memcpy(&n, d.data() + 80, 4);
-  if (d.size() < 84 + 50ull * n)
-    return r.fail("truncated: binary STL promises " + std::to_string(n) + " triangles but holds " +
-                  std::to_string((d.size() - 84) / 50));
-  // Whole 50-byte records beyond the declared count would be dropped without a word (a count
-  // that undercounts shows up as a hole). Fewer bytes than one record cannot hold a triangle:
-  // some writers pad the file, and those bytes are ignored.
-  const uint64_t extra = (d.size() - 84 - 50ull * n) / 50;
-  if (extra > 0)
-    return r.fail("binary STL holds " + std::to_string(extra) +
-                  " more triangle records after the " + std::to_string(n) + " its header declares");
+  if (const std::string defect = stl_binary_layout_defect(d.size(), n); !defect.empty())
+    return r.fail(defect);
   Mesh& m = out->mesh;
   m.vertices.reserve(3ull * n);
   for (uint32_t i = 0; i < n; ++i) {
@@ -886,9 +894,6 @@ Status load_mesh(const std::string& path, LoadedMesh* out) {
     if (!s) return s;
   } else {
     std::string content;
-    Status s = read_regular_file(path, display, "mesh file", &content);
-    if (!s) return s;
-    if (content.empty()) return Status::error(display + ": empty file");
     // A file saved under another format's extension fails in that format's terms ("binary
     // STL promises 808263735 triangles"); the message also says what it looks like.
     auto hinted = [&](const Status& failed) {
@@ -897,7 +902,27 @@ Status load_mesh(const std::string& path, LoadedMesh* out) {
       return Status::error(failed.message() + " (the file looks like " + upper(looks) + ", not " +
                            upper(ext) + "; is the extension right?)");
     };
-    if (content.find('\0') != std::string::npos && ext != "ply" && ext != "stl")
+    // A binary STL that is no ASCII one is refused by its size and declared count before it
+    // is read whole, as a text format with binary bytes in its first kTextProbeBytes is.
+    if (ext == "stl") {
+      uint64_t size = 0;
+      if (Status st = check_regular_file(path, display, "mesh file", &size); !st) return st;
+      std::ifstream in(path, std::ios::binary);
+      content.resize(static_cast<size_t>(std::min<uint64_t>(size, kTextProbeBytes)));
+      in.read(content.data(), static_cast<std::streamsize>(content.size()));
+      if (size >= 84 && static_cast<size_t>(in.gcount()) == content.size() &&
+          content.compare(0, 5, "solid") != 0) {
+        uint32_t n;
+        std::memcpy(&n, content.data() + 80, 4);
+        if (const std::string defect = stl_binary_layout_defect(size, n); !defect.empty())
+          return hinted(Status::error(display + ": " + defect));
+      }
+    }
+    const bool text_format = ext != "ply" && ext != "stl";
+    Status s = read_regular_file(path, display, "mesh file", &content, text_format);
+    if (!s) return content.find('\0') == std::string::npos ? s : hinted(s);  // binary at the start
+    if (content.empty()) return Status::error(display + ": empty file");
+    if (content.find('\0') != std::string::npos && text_format)
       return hinted(Status::error(display + ": binary data in a text format"));
     // Lines that end in CR alone (classic Mac OS) would read as one long line.
     if (ext != "stl" && content.find('\n') == std::string::npos &&

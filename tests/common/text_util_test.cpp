@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <random>
@@ -93,6 +94,29 @@ TEST(TextUtil, OnlyRegularFilesAreRead) {
     EXPECT_FALSE(read_regular_file(c.path, "x", "mesh", &content)) << c.path;
   }
   std::remove(fifo.c_str());
+  std::remove(file.c_str());
+}
+
+// A file that must be text is refused on a NUL byte among its first kTextProbeBytes, before
+// the rest is read: a sparse gigabyte of zeros comes back as its first bytes only. A NUL
+// further in is the caller's to find (the file is read whole).
+TEST(TextUtil, BinaryTextFileIsRefusedFromItsFirstBytes) {
+  const std::string file = test::temp_path("tu_sparse.json");
+  { std::ofstream f(file, std::ios::binary); }
+  std::filesystem::resize_file(file, uint64_t{1} << 30);
+  std::string content;
+  Status s = read_regular_file(file, "tu_sparse.json", "tree file", &content, true);
+  EXPECT_FALSE(s);
+  EXPECT_EQ(s.message(), "tu_sparse.json: binary data in a text format");
+  EXPECT_EQ(content.size(), kTextProbeBytes);
+  std::string late(kTextProbeBytes, ' ');
+  late += '\0';
+  {
+    std::ofstream f(file, std::ios::binary | std::ios::trunc);
+    f << late;
+  }
+  ASSERT_TRUE(read_regular_file(file, "x", "tree file", &content, true));
+  EXPECT_EQ(content, late);
   std::remove(file.c_str());
 }
 

@@ -4,6 +4,7 @@
 #include <sys/stat.h>
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <random>
 
@@ -131,6 +132,25 @@ TEST(MeshIo, AsciiStlWithSeveralSolidsReadsThemAll) {
 // A file saved under another format's extension: refused in one line that says what the file
 // looks like. Every native format written by save_mesh, read under every other extension
 // whose parser refuses it (binary STL has no magic, so it is never named).
+// A binary STL whose size does not fit its declared count, or a text format that starts with
+// binary bytes, is refused by what its first bytes say (that only those are read is
+// TextUtil.BinaryTextFileIsRefusedFromItsFirstBytes's to show).
+TEST(MeshIo, LargeBinaryFilesAreRefusedFromTheirFirstBytes) {
+  for (const char* ext : {"stl", "off", "obj"}) {
+    const std::string path = test::temp_path(std::string("sparse.") + ext);
+    { std::ofstream f(path, std::ios::binary); }
+    std::filesystem::resize_file(path, uint64_t{1} << 30);
+    LoadedMesh lm;
+    const Status s = load_mesh(path, &lm);
+    std::remove(path.c_str());
+    EXPECT_FALSE(s) << ext;
+    const std::string says = std::string(ext) == "stl"
+                                 ? "binary STL holds 21474834 more triangle records after the 0"
+                                 : "binary data in a text format";
+    EXPECT_NE(s.message().find(says), std::string::npos) << ext << ": " << s.message();
+  }
+}
+
 TEST(MeshIo, WrongExtensionIsNamed) {
   const Mesh m = analytic::tetrahedron().mesh;
   const struct {
