@@ -4,6 +4,7 @@
 
 #include <cstdio>
 #include <exception>
+#include <iostream>
 #include <new>
 #include <optional>
 #include <string>
@@ -42,14 +43,21 @@ int run_command_line(int argc, char** argv, std::vector<std::unique_ptr<Command>
   // A usage error of a known command points to that command's help.
   std::string command;
   if (!named_command(argc, argv, app, &command)) return kExitBadInput;
+  // Help and the version go to standard output through CLI11 (std::cout): one that cannot
+  // be written is no success either.
+  auto said = [](int rc) {
+    if (std::cout.flush()) return rc;
+    std::fprintf(stderr, "vobb: cannot write standard output\n");
+    return kExitCouldNotFinish;
+  };
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
-    return app.exit(e);
+    return said(app.exit(e));
   } catch (const CLI::CallForAllHelp& e) {
-    return app.exit(e);
+    return said(app.exit(e));
   } catch (const CLI::CallForVersion& e) {
-    return app.exit(e);
+    return said(app.exit(e));
   } catch (const CLI::ParseError& e) {
     std::string what = e.what();
     for (char& c : what)

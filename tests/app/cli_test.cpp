@@ -650,6 +650,13 @@ TEST(CliBadInput, UnwritableStandardOutputIsExitThree) {
     EXPECT_NE(r.err.find("vobb info: cannot write standard output"), std::string::npos) << r.err;
   }
   EXPECT_EQ(vobb_cli("info " + mesh + " >/dev/null").code, 0);
+  // Help and the version too.
+  for (const char* args : {"--help", "build --help", "--version"}) {
+    const CliRun r = vobb_cli(std::string(args) + " >/dev/full");
+    EXPECT_EQ(r.code, 3) << args << ": " << r.err;
+    EXPECT_EQ(r.err, "vobb: cannot write standard output\n") << args;
+    EXPECT_EQ(vobb_cli(std::string(args) + " >/dev/null").code, 0) << args;
+  }
 }
 
 // A unit cube written by hand (8 vertices, 12 faces) and its depth-3 baseline tree, shared by
