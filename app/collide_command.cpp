@@ -63,7 +63,8 @@ CLI::App* add_collide_command(CLI::App& app, CollideFlags* f) {
       ->capture_default_str()
       ->check(vobb::app::kFinite)
       ->check(CLI::Range(0.01, 10.0));
-  c->add_flag("--static", f->static_mode, "No dynamics: poses sampled on and near the surface");
+  c->add_flag("--static", f->static_mode, "No dynamics: poses sampled on and near the surface")
+      ->excludes(c->get_option("--seconds"));
   c->add_flag("--no-fcl", f->no_fcl, "Skip the FCL replay");
   c->add_flag("--json", f->json, "Print JSON (DESIGN §7)");
   c->add_option("-o,--output", f->output,

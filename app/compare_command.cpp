@@ -88,7 +88,8 @@ class CompareCommand final : public Command {
     cmd_->add_option("--figure-up", figure_up_,
                      "The mesh's up axis in the figure: x, y, z, -x, -y or -z")
         ->capture_default_str()
-        ->check(CLI::IsMember({"x", "y", "z", "-x", "-y", "-z"}));
+        ->check(CLI::IsMember({"x", "y", "z", "-x", "-y", "-z"}))
+        ->needs(cmd_->get_option("--figure"));
     return cmd_;
   }
 
@@ -105,6 +106,12 @@ class CompareCommand final : public Command {
                                          compare_checkpoint_files());
     if (s) s = check_outputs_differ("--tree", tree_, "--figure", figure_);
     if (s) s = check_output_is_writable("--tree", tree_);
+    // A file the figure makes is named .png; a device or pipe (/dev/stdout) takes it as it is.
+    std::error_code ec;
+    const auto st = std::filesystem::status(figure_, ec);
+    if (s && !figure_.empty() && extension_of(figure_) != "png" &&
+        !(std::filesystem::exists(st) && !std::filesystem::is_regular_file(st)))
+      s = Status::error("--figure " + figure_ + ": the figure is a PNG; name a .png file");
     return s;
   }
 

@@ -26,9 +26,9 @@ class ObvCommand final : public Command {
     c->add_option("MESH", mesh_, "Solid mesh")->required();
     c->add_option("--boxes", boxes_path_, "Box file {\"boxes\":[{center, axes, half_extents}]}")
         ->required();
-    c->add_option("--m", ms_, "Cubemap resolutions, comma-separated (default 8,16,32)")
-        ->delimiter(',')
-        ->check(CLI::Range(1, 4096));
+    m_option_ = c->add_option("--m", ms_, "Cubemap resolutions, comma-separated (default 8,16,32)")
+                    ->delimiter(',')
+                    ->check(CLI::Range(1, 4096));
     c->add_option("--backend", backend_,
                   "gl (EGL: a GPU, else llvmpipe), cpu (the double-precision twin), poly (the "
                   "polyhedral solver: "
@@ -46,6 +46,17 @@ class ObvCommand final : public Command {
   }
 
   int run() override {
+    // Flags that would change nothing for the backend asked for are refused, not ignored.
+    const bool cubemap =
+        backend_ == "auto" || backend_ == "gl" || backend_ == "cpu" || backend_ == "all";
+    if (m_option_->count() > 0 && !cubemap)
+      return refuse(Status::error("--m: the " + backend_ +
+                                  " backend has no resolution; it is for gl, cpu, auto and all"));
+    if (r_bound_ && !cubemap)
+      return refuse(Status::error("--r-bound: the " + backend_ +
+                                  " backend has no R(m); it is for gl, cpu, auto and all"));
+    if (rational_ && backend_ != "exact" && backend_ != "all")
+      return refuse(Status::error("--rational: the exact values come with --backend exact or all"));
     LoadedMesh mesh;
     Status s = load_input_solid(mesh_, &mesh);
     if (!s) return refuse(s);
@@ -151,6 +162,7 @@ class ObvCommand final : public Command {
                 run.obv[i], ex, rel, run.bound[i], run.seconds[i], rb, iv);
   }
 
+  CLI::Option* m_option_ = nullptr;
   std::string mesh_, boxes_path_, backend_ = "auto";
   std::vector<int> ms_ = {8, 16, 32};
   bool r_bound_ = false, json_ = false, rational_ = false;

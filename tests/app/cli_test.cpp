@@ -808,6 +808,38 @@ TEST_F(CliOnCube, CertifyPassesFailsAndRefuses) {
   std::remove(tet.c_str());
 }
 
+// Flags that would change nothing for what was asked are refused in one line, exit 2, not
+// ignored.
+TEST_F(CliOnCube, FlagsThatWouldChangeNothingAreRefused) {
+  Tree t;
+  ASSERT_TRUE(read_tree(tree_, &t));
+  const std::string boxes = test::temp_path("refused_flags_boxes.json");
+  ASSERT_TRUE(write_boxes({t.nodes[0].box}, boxes));
+  const std::string obv = "obv " + mesh_ + " --boxes " + boxes;
+  struct Case {
+    std::string args, says;
+  };
+  for (const Case& c :
+       {Case{obv + " --backend poly --m 8", "--m: the poly backend has no resolution"},
+        Case{obv + " --backend exact --m 8", "--m: the exact backend has no resolution"},
+        Case{obv + " --backend poly --r-bound", "--r-bound: the poly backend has no R(m)"},
+        Case{obv + " --backend cpu --rational", "--rational: the exact values come with"},
+        Case{"compare " + mesh_ + " --depth 1 --figure-up z", "--figure-up requires --figure"},
+        Case{"compare " + mesh_ + " --depth 1 --figure " + test::temp_path("fig.jpg"),
+             "the figure is a PNG; name a .png file"},
+        Case{"collide " + mesh_ + " " + tree_ + " --static --seconds 5",
+             "--seconds excludes --static"}}) {
+    const CliRun r = vobb_cli(c.args);
+    EXPECT_EQ(r.code, 2) << c.args << ": " << r.err;
+    EXPECT_EQ(line_count(r.err), 1u) << r.err;
+    EXPECT_NE(r.err.find(c.says), std::string::npos) << c.args << ": " << r.err;
+  }
+  // The same flags where they do something run.
+  EXPECT_EQ(vobb_cli(obv + " --backend cpu --m 8 --r-bound").code, 0);
+  EXPECT_EQ(vobb_cli(obv + " --backend exact --rational").code, 0);
+  std::remove(boxes.c_str());
+}
+
 TEST_F(CliOnCube, ObvEstimatesWithinTheirCertifiedBounds) {
   const std::string& mesh = mesh_;
   const std::string& tree = tree_;
@@ -846,7 +878,7 @@ TEST_F(CliOnCube, ObvEstimatesWithinTheirCertifiedBounds) {
     }
     // The rationals only when asked for (they run to thousands of digits); in text, one line
     // per box after the table, the same value.
-    r = vobb_cli("obv " + mesh + " --boxes " + boxes + " --m 4 --backend exact --json");
+    r = vobb_cli("obv " + mesh + " --boxes " + boxes + " --backend exact --json");
     ASSERT_EQ(r.code, 0) << r.err;
     EXPECT_FALSE(nlohmann::json::parse(r.out)["boxes"][0].contains("exact_rational")) << r.out;
     r = vobb_cli("obv " + mesh + " --boxes " + boxes + " --backend exact --rational");
