@@ -7,6 +7,7 @@
 #include <optional>
 
 #include "common/box_frame_clip.h"
+#include "common/text_util.h"
 #include "fast/interval.h"
 
 namespace vobb {
@@ -113,7 +114,7 @@ PolyObv PolyObvSolver::evaluate_as(const Obb& box) const {
     return exact_result(exact(box), 0,
                         R.inf() > 0 ? "coordinates beyond the intervals' safe range"
                                     : "a nearly flat box: its volume's enclosure holds 0 (volume " +
-                                          std::to_string(vol) + ")");
+                                          format_double(vol) + ")");
   }
   ExactBox exact_box(mesh_, box);
   const ExactVertexSigns decide{&exact_box};
@@ -156,7 +157,7 @@ PolyObv PolyObvSolver::evaluate_as(const Obb& box) const {
   if (!CGAL::is_finite(obv) || !(obv.sup() - obv.inf() <= kMaxRelativeWidth * vol))
     return exact_result(exact(box), visited,
                         "an ill-conditioned box: the interval is wider than " +
-                            std::to_string(kMaxRelativeWidth) + " of its volume");
+                            format_double(kMaxRelativeWidth) + " of its volume");
   PolyObv r;
   // The exact OBV lies in [0, vol(B)] too; vol(B)'s double is not an enclosure, so only 0 clips.
   r.lo = std::max(obv.inf(), 0.0);

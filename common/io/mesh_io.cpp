@@ -115,17 +115,18 @@ class Reader {
   std::string_view text() const { return text_; }
 
   // Appends the polygon as a triangle fan, after range-checking its indices. Errors name
-  // the line, or for binary data (line 0) the face record.
-  Status add_polygon(const std::vector<long long>& idx, size_t line, size_t record,
-                     LoadedMesh* out) const {
+  // the line, or for binary data (line 0) the face record, and an index as the file counts
+  // (`base`: 1 for OBJ's).
+  Status add_polygon(const std::vector<long long>& idx, size_t line, size_t record, LoadedMesh* out,
+                     int base = 0) const {
     auto err = [&](const std::string& why) {
       return line ? fail_at(line, why) : fail("face " + std::to_string(record) + ": " + why);
     };
     const long long nv = static_cast<long long>(out->mesh.vertices.size());
     for (long long i : idx)
       if (i < 0 || i >= nv)
-        return err("vertex index " + std::to_string(i) + " out of range (" + std::to_string(nv) +
-                   " vertices)");
+        return err("vertex index " + std::to_string(i + base) + " out of range (" +
+                   std::to_string(nv) + " vertices)");
     if (idx.size() < 3) return err("face with fewer than 3 vertices");
     if (idx.size() > 3) ++out->polygons_split;
     for (size_t k = 1; k + 1 < idx.size(); ++k)
@@ -292,7 +293,7 @@ Status read_obj(const Reader& r, LoadedMesh* out) {
   }
   if (m.vertices.empty() && faces.empty()) return r.fail("empty file: no vertices or faces");
   for (const PendingFace& f : faces) {
-    Status s = r.add_polygon(f.idx, f.line, 0, out);
+    Status s = r.add_polygon(f.idx, f.line, 0, out, 1);
     if (!s) return s;
   }
   return Status::ok();

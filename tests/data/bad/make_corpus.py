@@ -50,6 +50,7 @@ files["repeated_index.obj"] = "".join(f"v {x} {y} {z}\n" for x, y, z in V) + \
     "".join(f"f {a+1} {b+1} {c+1}\n" for a, b, c in F) + "f 1 1 2\n"
 files["index_out_of_range.off"] = off(V, F[:-1] + [(4, 5, 99)])
 files["zero_index.obj"] = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n"
+files["index_out_of_range.obj"] = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 9\n"
 files["not_a_number.obj"] = "v 0 0 0\nv 1 zero 0\nv 0 1 0\nf 1 2 3\n"
 files["huge_count.off"] = "OFF\n1000000000000000 12 0\n0 0 0\n"
 files["negative_count.off"] = "OFF\n-8 12 0\n"
