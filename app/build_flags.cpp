@@ -105,12 +105,15 @@ void add_build_flags(CLI::App* cmd, BuildFlags* f, bool compare) {
         ->check(CLI::IsMember({"variational", "obbtree"}));
   cmd->add_option("--depth", o.depth, "Deepest level; the root is level 0")
       ->capture_default_str()
+      ->transform(kCount)
       ->check(CLI::Range(0, 30));
   cmd->add_option("--arity", o.arity, "Most children per node")
       ->capture_default_str()
+      ->transform(kCount)
       ->check(CLI::Range(2, 64));
   cmd->add_option("--m", o.m, "Cubemap resolution of the OBV estimator (variational)")
       ->capture_default_str()
+      ->transform(kCount)
       ->check(CLI::Range(1, 4096));
   const std::string backend_help =
       "OBV estimator: auto (GL on a GPU from --m " + std::to_string(kAutoGlFromM) +
@@ -121,6 +124,7 @@ void add_build_flags(CLI::App* cmd, BuildFlags* f, bool compare) {
       ->check(CLI::IsMember({"auto", "gl", "cpu", "poly"}));
   cmd->add_option("--lloyd", o.lloyd, "Most Lloyd iterations per node (variational)")
       ->capture_default_str()
+      ->transform(kCount)
       ->check(CLI::Range(0, 1000));
   cmd->add_option("--seed", o.seed, "Seed of the orientation search's random starts")
       ->capture_default_str()
@@ -142,6 +146,7 @@ void add_build_flags(CLI::App* cmd, BuildFlags* f, bool compare) {
       ->check(CLI::IsMember({"obv", "omv"}));
   cmd->add_option("--sweeps", o.sweeps, "Most bottom-up merging sweeps")
       ->capture_default_str()
+      ->transform(kCount)
       ->check(CLI::Range(0, 100));
   if (!compare) {
     cmd->add_option(
@@ -180,6 +185,7 @@ void add_build_flags(CLI::App* cmd, BuildFlags* f, bool compare) {
       ->check(CLI::Range(1e-3, 1e9));
   cmd->add_flag("--quiet", f->quiet, compare ? "No progress on stderr" : "No progress line");
   cmd->add_option("--threads", f->threads, compare ? kCompareThreadsHelp : kThreadsHelp)
+      ->transform(kCount)
       ->check(CLI::Range(1, 4096));
 }
 

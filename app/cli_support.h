@@ -209,6 +209,19 @@ inline const CLI::Validator kFinite(
 inline const CLI::Validator kPath(
     [](std::string& s) -> std::string { return s.empty() ? "an empty name" : ""; }, "PATH");
 
+// A count: decimal digits only (CLI11 would read "0x10" as 16, and "08" as a failed octal),
+// leading zeros dropped; a range check follows it.
+inline const CLI::Validator kCount(
+    [](std::string& s) -> std::string {
+      const bool digits =
+          !s.empty() &&
+          std::all_of(s.begin(), s.end(), [](unsigned char c) { return std::isdigit(c) != 0; });
+      if (!digits) return "'" + s + "' is not a whole number in decimal digits";
+      s.erase(0, std::min(s.find_first_not_of('0'), s.size() - 1));
+      return s.size() <= 10 ? "" : "'" + s + "' is out of range";
+    },
+    "COUNT");
+
 // A seed: decimal digits only, at most 2^64 - 1.
 inline const CLI::Validator kSeed(
     [](std::string& s) -> std::string {

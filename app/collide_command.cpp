@@ -47,6 +47,7 @@ CLI::App* add_collide_command(CLI::App& app, CollideFlags* f) {
                 "Falling colliders (at most 10^6, all held in memory) or, with --static, poses (at "
                 "most 10^7)")
       ->capture_default_str()
+      ->transform(kCount)
       ->check(CLI::Range(1, 10000000));
   c->add_option("--seconds", f->seconds, "Simulated seconds (dynamic mode)")
       ->capture_default_str()
@@ -79,6 +80,7 @@ CLI::App* add_collide_command(CLI::App& app, CollideFlags* f) {
   c->add_option("--record-every", f->record_every,
                 "Record every K-th query only (with --record-queries)")
       ->capture_default_str()
+      ->transform(kCount)
       ->check(CLI::Range(1, 1000000000))
       ->needs(record);
   return c;

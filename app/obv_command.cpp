@@ -28,6 +28,7 @@ class ObvCommand final : public Command {
         ->required();
     m_option_ = c->add_option("--m", ms_, "Cubemap resolutions, comma-separated (default 8,16,32)")
                     ->delimiter(',')
+                    ->transform(kCount)
                     ->check(CLI::Range(1, 4096));
     c->add_option("--backend", backend_,
                   "gl (EGL: a GPU, else llvmpipe), cpu (the double-precision twin), poly (the "

@@ -639,6 +639,25 @@ TEST(CliBadInput, CrossingSheetsAreRefusedWithALowerBound) {
   std::remove(mesh.c_str());
 }
 
+// Counts are decimal digits: not hex (CLI11 would take 0x10 as 16), not trailing junk, and
+// a leading zero is no octal; each refusal names the value.
+TEST(CliBadInput, CountsAreDecimalDigits) {
+  for (const char* value : {"0x10", "8x", "-1", "''"}) {
+    const CliRun r = vobb_cli(std::string("build x.off -o t.json --depth ") + value);
+    EXPECT_EQ(r.code, 2) << value;
+    EXPECT_NE(r.err.find("is not a whole number in decimal digits"), std::string::npos)
+        << value << ": " << r.err;
+  }
+  const std::string mesh = write_cube("leading_zero_cube.off", 1);
+  const std::string tree = test::temp_path("leading_zero_tree.json");
+  EXPECT_EQ(vobb_cli("build " + mesh + " -o " + tree + " --method obbtree --depth 02").code, 0);
+  Tree t;
+  ASSERT_TRUE(read_tree(tree, &t));
+  EXPECT_EQ(t.depth, 2);
+  std::remove(tree.c_str());
+  std::remove(mesh.c_str());
+}
+
 // A report that cannot be written (standard output on a full device) ends with exit 3 and one
 // line, not with exit 0 and nothing written.
 TEST(CliBadInput, UnwritableStandardOutputIsExitThree) {
