@@ -11,7 +11,7 @@ set xtics (4,8,16,32,64,128,256)
 set format y '10^{%L}'
 set key outside right top
 set datafile missing 'nan'
-B(x) = 0.27041401529959935*x**-2.0024717269963745
+B(x) = 0.27036104623737162*x**-2.0020409795687368
 plot 'evaluations.csv' using (strcol(2) eq 'fit' ? $6*(1+0.03*($4-5)) : NaN):($10 > 0 ? $10 : NaN) with points pt 7 ps 0.4 lc rgb '#1f77b4' title 'fit corpus', \
  '' using (strcol(2) eq 'held_out' ? $6*(1.12+0.03*($4-5)) : NaN):($10 > 0 ? $10 : NaN) with points pt 6 ps 0.5 lc rgb '#ff7f0e' title 'held-out corpus', \
  B(x) with lines lw 2 lc rgb 'black' title 'B(m)', \
