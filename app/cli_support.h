@@ -125,10 +125,10 @@ inline Status check_outputs_differ(const std::string& option, const std::string&
 
 // An output that cannot be written is refused before the run, not after hours of it. Paths
 // are resolved as write_file_atomic resolves them (common/atomic_file.h): a folder is no
-// output; a device or pipe, also through a link (/dev/stdout), is written in place and passes
-// (a named pipe is not opened here: a reader would see the probe's close as the end of the
-// stream; one that no process reads when the run writes ends the run with could_not_finish)
-// (a full disk shows only when writing: the run then ends with could_not_finish); otherwise,
+// output; a device or pipe, also through a link (/dev/stdout), is written in place and passes.
+// A named pipe is not opened here, since its reader would take the probe's close for the end
+// of the stream; one that no process opens for reading within a few seconds of the write, like
+// a full disk, shows only when writing, and the run then ends with could_not_finish. Otherwise,
 // following a link, the folder that will hold the file must exist and take a new file (a
 // probe is made there and removed), and the file's name must fit the folder's file system.
 inline Status check_output_is_writable(const std::string& option, const std::string& output) {
@@ -213,9 +213,9 @@ inline const CLI::Validator kPath(
 // leading zeros dropped; a range check follows it.
 inline const CLI::Validator kCount(
     [](std::string& s) -> std::string {
-      const bool digits =
-          !s.empty() &&
-          std::all_of(s.begin(), s.end(), [](unsigned char c) { return std::isdigit(c) != 0; });
+      const bool digits = !s.empty() && std::all_of(s.begin(), s.end(), [](unsigned char c) {
+        return std::isdigit(c) != 0;
+      });
       if (!digits) return "'" + s + "' is not a whole number in decimal digits";
       s.erase(0, std::min(s.find_first_not_of('0'), s.size() - 1));
       return s.size() <= 10 ? "" : "'" + s + "' is out of range";

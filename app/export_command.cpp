@@ -18,7 +18,7 @@ class ExportCommand final : public Command {
   CLI::App* add(CLI::App& app) override {
     CLI::App* c = app.add_subcommand("export", "Write the boxes of one layer as OBJ or PLY");
     c->add_option("TREE", tree_path_, "Tree file")->required();
-    c->add_option("--level", level_, "Layer to export")->required();
+    c->add_option("--level", level_, "Layer to export")->required()->transform(kCount);
     c->add_option("-o,--output", out_, "boxes.obj or boxes.ply")->required()->check(kPath);
     return c;
   }

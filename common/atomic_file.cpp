@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <thread>
 
 namespace vobb {
 
@@ -57,11 +58,23 @@ Status write_file_atomic(const std::string& path, const std::string& content) {
   struct stat st;
   if (::stat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode)) {
     if (S_ISDIR(st.st_mode)) return fail("is a directory");
-    // A named pipe that no process reads would block the open forever: opened without
-    // blocking, it fails at once (ENXIO), and is then written with blocking as any output.
-    const int fd = ::open(path.c_str(), O_WRONLY | O_CLOEXEC | O_NONBLOCK);
+    // A named pipe that no process reads would block the open forever. It is opened without
+    // blocking, which fails (ENXIO) while no reader has it open; a reader started beside the
+    // run gets kPipeReaderWaitSeconds to open it. Once open it is written with blocking.
+    int fd = -1;
+    const auto start = std::chrono::steady_clock::now();
+    for (;;) {
+      fd = ::open(path.c_str(), O_WRONLY | O_CLOEXEC | O_NONBLOCK);
+      if (fd >= 0 || errno != ENXIO || !S_ISFIFO(st.st_mode) ||
+          std::chrono::steady_clock::now() - start > std::chrono::seconds(kPipeReaderWaitSeconds))
+        break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
     if (fd < 0)
-      return fail(errno == ENXIO ? "a named pipe that no process reads" : std::strerror(errno));
+      return fail(errno == ENXIO && S_ISFIFO(st.st_mode)
+                      ? "a named pipe that no process opened for reading within " +
+                            std::to_string(kPipeReaderWaitSeconds) + " s"
+                      : std::strerror(errno));
     const int flags = ::fcntl(fd, F_GETFL);
     if (flags < 0 || ::fcntl(fd, F_SETFL, flags & ~O_NONBLOCK) != 0) {
       const std::string why = std::strerror(errno);

@@ -3,8 +3,8 @@
 // half of it; a crash leaves at most a stray ".vobb-<pid>-<n>.tmp" file in the target's folder.
 // A symbolic link is followed (its target is replaced, the link kept). A target that exists
 // and is not a regular file (a device such as /dev/null, a pipe) is written to in place, since
-// it must not be replaced; a folder is refused, and so is a named pipe that no process reads
-// (its open would block forever).
+// it must not be replaced; a folder is refused, and so is a named pipe that no process opens
+// for reading within kPipeReaderWaitSeconds (its open would otherwise block forever).
 #pragma once
 
 #include <string>
@@ -13,6 +13,7 @@
 
 namespace vobb {
 
+inline constexpr int kPipeReaderWaitSeconds = 5;
 Status write_file_atomic(const std::string& path, const std::string& content);
 
 // The file a write to `path` replaces: `path` itself, or, where `path` is a symbolic link, the

@@ -154,10 +154,13 @@ PolyObv PolyObvSolver::evaluate_as(const Obb& box) const {
     return exact_result(exact(box), visited, "coordinates beyond the intervals' safe range");
   const Interval obv = box_clip::obv_from_sum6(sum, R);
   const double vol = volume(box);
-  if (!CGAL::is_finite(obv) || !(obv.sup() - obv.inf() <= kMaxRelativeWidth * vol))
-    return exact_result(exact(box), visited,
-                        "an ill-conditioned box: the interval is wider than " +
-                            format_double(kMaxRelativeWidth) + " of its volume");
+  if (!CGAL::is_finite(obv) || !(obv.sup() - obv.inf() <= kMaxRelativeWidth * vol)) {
+    PolyObv r = exact_result(exact(box), visited,
+                             "an ill-conditioned box: the interval is wider than " +
+                                 format_double(kMaxRelativeWidth) + " of its volume");
+    r.rejected_width = CGAL::is_finite(obv) ? obv.sup() - obv.inf() : INFINITY;
+    return r;
+  }
   PolyObv r;
   // The exact OBV lies in [0, vol(B)] too; vol(B)'s double is not an enclosure, so only 0 clips.
   r.lo = std::max(obv.inf(), 0.0);

@@ -43,6 +43,7 @@ struct PolyObv {
   int32_t exact_faces = 0;  // faces with such a sign at a clipped point: the face in rationals
   bool exact_box = false;   // the whole box in rationals; `why` says what the intervals lacked
   std::string why;
+  double rejected_width = 0;  // sent to rationals for its width: the width it had (else 0)
 };
 
 // The interval's width, relative to the box's volume, above which a box is evaluated in

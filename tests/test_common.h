@@ -169,4 +169,29 @@ inline void write_off(const Mesh& m, const std::string& path) {
   for (const Face& t : m.faces) f << "3 " << t[0] << " " << t[1] << " " << t[2] << "\n";
 }
 
+// Sets (or, with nullptr, unsets) an environment variable for the scope, and puts back what
+// was there before.
+class ScopedEnv {
+ public:
+  ScopedEnv(const char* name, const char* value) : name_(name) {
+    if (const char* old = std::getenv(name)) old_ = old, had_ = true;
+    if (value != nullptr)
+      ::setenv(name, value, 1);
+    else
+      ::unsetenv(name);
+  }
+  ~ScopedEnv() {
+    if (had_)
+      ::setenv(name_.c_str(), old_.c_str(), 1);
+    else
+      ::unsetenv(name_.c_str());
+  }
+  ScopedEnv(const ScopedEnv&) = delete;
+  ScopedEnv& operator=(const ScopedEnv&) = delete;
+
+ private:
+  std::string name_, old_;
+  bool had_ = false;
+};
+
 }  // namespace vobb::test

@@ -14,7 +14,7 @@
 //  - every estimate finite and within its rigorous per-box bound R(m) (a backstop against
 //    gross errors: R(m) stays near the box's volume at every m);
 //  - GL within its derived float bound of the CPU twin, box by box; GL ran, unless the run
-//    was asked for the CPU twin alone;
+//    was asked for the CPU twin alone (want_gl false) or GL is switched off (VOBB_GL=off);
 //  - the median relative error converges at a fitted rate of at most -1.5 (see suite.cpp);
 //  - the median relative error at m = 32 per box size within 2x the DESIGN §4 prototype;
 //  - the held-out violation rate of B(m) at most its stated level alpha = 5 %;

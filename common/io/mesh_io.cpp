@@ -911,8 +911,10 @@ Status load_mesh(const std::string& path, LoadedMesh* out) {
       std::ifstream in(path, std::ios::binary);
       content.resize(static_cast<size_t>(std::min<uint64_t>(size, kTextProbeBytes)));
       in.read(content.data(), static_cast<std::streamsize>(content.size()));
+      // An ASCII STL starts with "solid", as a binary one's 80-byte header may; a NUL among
+      // the first 84 bytes (the header and the count) is no ASCII one's (some pad their end).
       if (size >= 84 && static_cast<size_t>(in.gcount()) == content.size() &&
-          content.compare(0, 5, "solid") != 0) {
+          (content.compare(0, 5, "solid") != 0 || content.find('\0') < 84)) {
         uint32_t n;
         std::memcpy(&n, content.data() + 80, 4);
         if (const std::string defect = stl_binary_layout_defect(size, n); !defect.empty())

@@ -642,12 +642,14 @@ TEST(CliBadInput, CrossingSheetsAreRefusedWithALowerBound) {
 // Counts are decimal digits: not hex (CLI11 would take 0x10 as 16), not trailing junk, and
 // a leading zero is no octal; each refusal names the value.
 TEST(CliBadInput, CountsAreDecimalDigits) {
-  for (const char* value : {"0x10", "8x", "-1", "''"}) {
-    const CliRun r = vobb_cli(std::string("build x.off -o t.json --depth ") + value);
-    EXPECT_EQ(r.code, 2) << value;
-    EXPECT_NE(r.err.find("is not a whole number in decimal digits"), std::string::npos)
-        << value << ": " << r.err;
-  }
+  for (const char* value : {"0x10", "8x", "-1", "''"})
+    for (const std::string& args : {std::string("build x.off -o t.json --depth "),
+                                    std::string("export t.json -o b.obj --level ")}) {
+      const CliRun r = vobb_cli(args + value);
+      EXPECT_EQ(r.code, 2) << args << value;
+      EXPECT_NE(r.err.find("is not a whole number in decimal digits"), std::string::npos)
+          << args << value << ": " << r.err;
+    }
   const std::string mesh = write_cube("leading_zero_cube.off", 1);
   const std::string tree = test::temp_path("leading_zero_tree.json");
   EXPECT_EQ(vobb_cli("build " + mesh + " -o " + tree + " --method obbtree --depth 02").code, 0);

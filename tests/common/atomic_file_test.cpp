@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "test_common.h"
@@ -100,16 +101,29 @@ TEST(WriteFileAtomic, WritesIntoAPipeInPlace) {
   std::filesystem::remove(fifo);
 }
 
-// A named pipe that no process reads: the open would block forever; it is refused at once
-// instead, in one line, and the pipe stays.
+// A named pipe that no process reads: the open would block forever; it is refused after
+// kPipeReaderWaitSeconds instead, in one line, and the pipe stays. A reader that opens it a
+// moment after the write began gets the content.
 TEST(WriteFileAtomic, RefusesANamedPipeThatNoProcessReads) {
   const std::string fifo = test::temp_path("atomic_fifo_unread");
   std::filesystem::remove(fifo);
   ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  const auto t0 = std::chrono::steady_clock::now();
   const Status s = write_file_atomic(fifo, "nobody listens");
+  EXPECT_GE(std::chrono::steady_clock::now() - t0, std::chrono::seconds(kPipeReaderWaitSeconds));
   EXPECT_FALSE(s);
-  EXPECT_NE(s.message().find("a named pipe that no process reads"), std::string::npos)
+  EXPECT_NE(s.message().find("a named pipe that no process opened for reading within 5 s"),
+            std::string::npos)
       << s.message();
+  std::string got;
+  std::thread late_reader([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    std::ifstream in(fifo);
+    std::getline(in, got);
+  });
+  EXPECT_TRUE(write_file_atomic(fifo, "a late reader\n"));
+  late_reader.join();
+  EXPECT_EQ(got, "a late reader");
   struct stat st;
   ASSERT_EQ(::stat(fifo.c_str(), &st), 0);
   EXPECT_TRUE(S_ISFIFO(st.st_mode));
