@@ -122,7 +122,9 @@ class CertifyCommand final : public Command {
                   "layer); a run started again with the same folder resumes it and prints the same "
                   "certificate")
         ->check(kPath);
-    c->add_option("--threads", threads_, kThreadsHelp)->transform(kCount)->check(CLI::Range(1, 4096));
+    c->add_option("--threads", threads_, kThreadsHelp)
+        ->transform(kCount)
+        ->check(CLI::Range(1, 4096));
     return c;
   }
 
