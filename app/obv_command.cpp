@@ -47,23 +47,6 @@ class ObvCommand final : public Command {
   }
 
   int run() override {
-    // Flags that would change nothing for the backend asked for are refused, not ignored.
-    const bool cubemap =
-        backend_ == "auto" || backend_ == "gl" || backend_ == "cpu" || backend_ == "all";
-    if (m_option_->count() > 0 && !cubemap)
-      return refuse(Status::error("--m: the " + backend_ +
-                                  " backend has no resolution; it is for gl, cpu, auto and all"));
-    if (r_bound_ && !cubemap)
-      return refuse(Status::error("--r-bound: the " + backend_ +
-                                  " backend has no R(m); it is for gl, cpu, auto and all"));
-    if (rational_ && backend_ != "exact" && backend_ != "all")
-      return refuse(Status::error("--rational: the exact values come with --backend exact or all"));
-    LoadedMesh mesh;
-    Status s = load_input_solid(mesh_, &mesh);
-    if (!s) return refuse(s);
-    std::vector<Obb> boxes;
-    s = read_boxes(boxes_path_, &boxes);
-    if (!s) return refuse(s);
     EstimateOptions o;
     const bool all = backend_ == "all";
     o.exact = backend_ == "exact" || all;
@@ -74,6 +57,22 @@ class ObvCommand final : public Command {
     o.gl_fallback = backend_ != "gl";
     o.ms = ms_;
     o.r_bound = r_bound_;
+    // Flags that would change nothing for the backends asked for are refused, not ignored.
+    const bool cubemap = o.cpu || o.gl;
+    if (m_option_->count() > 0 && !cubemap)
+      return refuse(Status::error("--m: the " + backend_ +
+                                  " backend has no resolution; it is for gl, cpu, auto and all"));
+    if (r_bound_ && !cubemap)
+      return refuse(Status::error("--r-bound: the " + backend_ +
+                                  " backend has no R(m); it is for gl, cpu, auto and all"));
+    if (rational_ && !o.exact)
+      return refuse(Status::error("--rational: the exact values come with --backend exact or all"));
+    LoadedMesh mesh;
+    Status s = load_input_solid(mesh_, &mesh);
+    if (!s) return refuse(s);
+    std::vector<Obb> boxes;
+    s = read_boxes(boxes_path_, &boxes);
+    if (!s) return refuse(s);
     o.note = [](const std::string& line) {
       std::fprintf(stderr, "vobb: %s\n", one_line(line).c_str());
     };

@@ -103,7 +103,7 @@ StatedBound fit_stated_bound(const DiscretizationResult& r, double alpha) {
     std::vector<double> u;
     for (const StudyEval& e : r.evals) {
       const StudySample& s = r.samples[e.sample];
-      if (e.m != m || s.held_out || e.backend != Backend::kCpu) continue;
+      if (e.m != m || s.held_out || !counts_toward_bound(e)) continue;
       u.push_back(std::isfinite(e.estimate) ? e.abs_error(s) / s.box_volume
                                             : std::numeric_limits<double>::infinity());
     }
@@ -120,7 +120,7 @@ StatedBound fit_stated_bound(const DiscretizationResult& r, double alpha) {
   for (const auto& [m, q] : b.fitted_quantiles) b.c = std::max(b.c, q * std::pow(double(m), b.p));
   std::vector<std::pair<size_t, size_t>> per_m(ms.size());  // (n, violations)
   for (const StudyEval& e : r.evals) {
-    if (e.backend != Backend::kCpu) continue;
+    if (!counts_toward_bound(e)) continue;
     const StudySample& s = r.samples[e.sample];
     const bool violates = !(e.abs_error(s) <= b.per_volume(e.m) * s.box_volume);  // NaN violates
     if (s.held_out) {

@@ -167,9 +167,13 @@ DiscretizationResult run_discretization_study(const DiscretizationConfig& config
 ErrorStats error_stats(const DiscretizationResult& r,
                        const std::function<bool(const StudyEval&)>& keep);
 
-// Fits B(m) on the fit corpus's CPU-twin evaluations and counts violations on both corpora's,
-// one estimate per box and m: GL's estimates of the same boxes lie within its float bound of
-// the twin's (a check of its own), and counted too they would count those boxes twice.
+// Whether an evaluation counts toward B(m): the CPU twin's, one estimate per box and m. GL's
+// estimates of the same boxes lie within its float bound of the twin's (a check of its own),
+// and counted too they would count those boxes twice.
+inline bool counts_toward_bound(const StudyEval& e) { return e.backend == Backend::kCpu; }
+
+// Fits B(m) on the fit corpus's evaluations that count toward it, and counts violations on
+// both corpora's.
 StatedBound fit_stated_bound(const DiscretizationResult& r, double alpha);
 
 double quantile(std::vector<double> v, double q);  // linear interpolation; v non-empty
