@@ -26,10 +26,9 @@ class ObvCommand final : public Command {
     c->add_option("MESH", mesh_, "Solid mesh")->required();
     c->add_option("--boxes", boxes_path_, "Box file {\"boxes\":[{center, axes, half_extents}]}")
         ->required();
-    m_option_ = c->add_option("--m", ms_, "Cubemap resolutions, comma-separated (default 8,16,32)")
-                    ->delimiter(',')
-                    ->transform(kCount)
-                    ->check(CLI::Range(1, 4096));
+    m_option_ = c->add_option("--m", ms_text_, "Cubemap resolutions in [1, 4096], comma-separated")
+                    ->capture_default_str()
+                    ->check(count_list(1, 4096));
     c->add_option("--backend", backend_,
                   "gl (EGL: a GPU, else llvmpipe), cpu (the double-precision twin), poly (the "
                   "polyhedral solver: "
@@ -55,7 +54,7 @@ class ObvCommand final : public Command {
     // A GL context only where GL is asked for; auto and all fall back to the CPU twin.
     o.gl = backend_ == "gl" || backend_ == "auto" || all;
     o.gl_fallback = backend_ != "gl";
-    o.ms = ms_;
+    o.ms = split_counts(ms_text_);
     o.r_bound = r_bound_;
     // Flags that would change nothing for the backends asked for are refused, not ignored.
     const bool cubemap = o.cpu || o.gl;
@@ -164,7 +163,7 @@ class ObvCommand final : public Command {
 
   CLI::Option* m_option_ = nullptr;
   std::string mesh_, boxes_path_, backend_ = "auto";
-  std::vector<int> ms_ = {8, 16, 32};
+  std::string ms_text_ = "8,16,32";
   bool r_bound_ = false, json_ = false, rational_ = false;
 };
 

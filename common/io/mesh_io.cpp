@@ -171,6 +171,13 @@ Status read_off(const Reader& r, LoadedMesh* out) {
     first = 0;
   }
   if (t.size() - first < 2) return r.fail_at(lines.number(), "expected vertex and face counts");
+  // The counts' line holds the vertex, face and edge counts and nothing else: data after them
+  // is a file written without its line breaks, which OFF needs (a face's colour is told from
+  // its indices by where the line ends).
+  if (t.size() - first > 3)
+    return r.fail_at(lines.number(), std::to_string(t.size() - first - 3) +
+                                         " values after the vertex, face and edge counts; OFF "
+                                         "gives the counts, each vertex and each face a line");
   long long nv, nf;
   if (!parse_int(t[first], &nv) || !parse_int(t[first + 1], &nf) || nv < 0 || nf < 0)
     return r.fail_at(lines.number(), "bad vertex or face count");
@@ -185,6 +192,10 @@ Status read_off(const Reader& r, LoadedMesh* out) {
                                          " bytes follow");
   Mesh& m = out->mesh;
   m.vertices.reserve(nv);
+  // Every vertex line has as many values as the first: a normal or colour is on all of them
+  // or on none, and a line with more means two vertices on one line, which would shift every
+  // record after it.
+  size_t values = 0, values_line = 0;
   for (long long i = 0; i < nv; ++i) {
     if (!lines.next_tokens(&t, true))
       return r.fail("truncated: " + std::to_string(i) + " of " + std::to_string(nv) + " vertices");
@@ -199,6 +210,15 @@ Status read_off(const Reader& r, LoadedMesh* out) {
     if (const size_t k = first_word(t, 3); k < t.size())
       return r.fail_at(lines.number(), "unexpected '" + std::string(t[k].substr(0, 32)) +
                                            "' after the vertex's coordinates");
+    if (i == 0) {
+      values = t.size();
+      values_line = lines.number();
+    } else if (t.size() != values) {
+      return r.fail_at(lines.number(), "vertex line has " + std::to_string(t.size()) +
+                                           " values where line " + std::to_string(values_line) +
+                                           " has " + std::to_string(values) +
+                                           "; OFF gives each vertex a line of its own");
+    }
     m.vertices.push_back(p);
   }
   std::vector<long long> idx;

@@ -100,6 +100,8 @@ files["records_beyond_count.ply"] = (
 # Words where OFF allows only numbers (a colour after a face's indices, a normal or colour
 # after a vertex's coordinates), and more values after the indices than a colour holds.
 files["junk_after_face_indices.off"] = off(V, F).replace("3 0 4 6\n", "3 0 4 6 abc\n", 1)
+files["one_line.off"] = " ".join(off(V, F).split()) + "\n"
+files["two_vertices_on_a_line.off"] = off(V, F).replace("\n1 0 0\n0 1 0\n", "\n1 0 0 0 1 0\n", 1)
 files["junk_after_vertex.off"] = off(V, F).replace("\n1 0 0\n", "\n1 0 0 zz\n", 1)
 files["long_face_line.off"] = off(V, F).replace("3 0 4 6\n", "3 0 4 6 1 2 3 4 5\n", 1)
 # ASCII PLY and OBJ records with more than they should hold: a word after a vertex, a face
