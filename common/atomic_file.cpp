@@ -172,9 +172,18 @@ Status check_folder_takes_files(const std::string& what, const std::string& dir)
 }
 
 Status make_checkpoint_folder(const std::string& what, const std::string& folder) {
+  namespace fs = std::filesystem;
   std::error_code ec;
-  std::filesystem::create_directories(folder, ec);
-  if (ec) return Status::error(folder + ": cannot make the checkpoint folder: " + ec.message());
+  // The folder is made, its parent is not: a mistyped parent is refused as `-o` refuses it,
+  // not made into a chain of folders.
+  fs::path own = fs::path(folder).lexically_normal();
+  if (!own.has_filename()) own = own.parent_path();  // "ck/" names ck
+  fs::path parent = own.parent_path();
+  if (parent.empty()) parent = ".";
+  if (!fs::is_directory(folder, ec) && !fs::is_directory(parent, ec))
+    return Status::error(what + ": no such folder " + parent.string());
+  fs::create_directory(folder, ec);
+  if (ec) return Status::error(what + ": cannot make the checkpoint folder: " + ec.message());
   // A folder such as /sys/kernel exists and takes no file.
   if (Status s = check_folder_takes_files(what, folder); !s) return s;
   remove_stray_temporaries(

@@ -38,7 +38,7 @@ size_t remove_stray_temporaries(const std::string& folder);
 // begins the error line (the option and its value).
 Status check_folder_takes_files(const std::string& what, const std::string& dir);
 
-// Makes a checkpoint folder (and its parents) if it is not there, checks that it takes files
+// Makes a checkpoint folder if it is not there (its parent must exist), checks that it takes files
 // (refused now, not warned about at every save of a run that could never resume), and clears
 // it of the temporary files of runs killed mid-write. `what` begins the error line.
 Status make_checkpoint_folder(const std::string& what, const std::string& folder);

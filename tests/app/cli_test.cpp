@@ -217,12 +217,20 @@ TEST(CliBadInput, UnwritableOutputIsRefusedBeforeTheRun) {
              "cannot write in /proc/self"},
         Case{"certify " + mesh + " " + tree + " --checkpoint /proc/self",
              "cannot write in /proc/self"},
-        Case{"validate --cpu-only --out /proc/self/v", "cannot write in /proc/self"}}) {
+        Case{"validate --cpu-only --out /proc/self/v", "cannot write in /proc/self"},
+        // A checkpoint folder is made, not its parent: a mistyped parent is refused as
+        // -o refuses it, not made into a chain of folders.
+        Case{"certify " + mesh + " " + tree + " --checkpoint " + dir + "/none/ck",
+             "/none/ck: no such folder "},
+        Case{"build " + mesh + " -o " + dir + "/t.json --backend cpu --checkpoint " + dir +
+                 "/none/ck",
+             "/none/ck: no such folder "}}) {
     const CliRun r = vobb_cli(c.args);
     EXPECT_EQ(r.code, 2) << c.args << ": " << r.err;
     EXPECT_EQ(line_count(r.err), 1u) << c.args << ": " << r.err;
     EXPECT_NE(r.err.find(c.says), std::string::npos) << c.args << ": " << r.err;
   }
+  EXPECT_FALSE(std::filesystem::exists(dir + "/none"));
   const std::string empty = test::temp_path("out_empty_dir");
   std::filesystem::remove_all(empty);
   ASSERT_TRUE(std::filesystem::create_directory(empty));
