@@ -86,4 +86,9 @@ double cubemap_bound(const BoxPlanner& planner, bool gl, const Obb& box, int m, 
   return b.rigorous();
 }
 
+double clamp_to_obv_range(const Obb& box, double estimate, double solid_volume) {
+  const double v = volume(box);
+  return std::clamp(estimate, std::max(0.0, v - solid_volume), v);
+}
+
 }  // namespace vobb

@@ -63,4 +63,11 @@ double cubemap_bound(const BoxPlanner& planner, bool gl, const Obb& box, int m,
 // and for an estimate outside [0, V*] too.
 double range_bound(const Obb& box, double estimate);
 
+// The estimate moved into [max(0, V - S), V], V = volume(box) and S >= vol(X) the solid's
+// volume: the exact OBV, V - vol(B ∩ X), lies there, so the moved estimate is never farther
+// from it than the estimate, to the rounding of V (a few eps of V). Where the box is far larger
+// than the solid, or the estimate falls outside [0, V] (an extreme box at small m, whose
+// bound is of the order of V), this is what keeps a search from taking noise for a gain.
+double clamp_to_obv_range(const Obb& box, double estimate, double solid_volume);
+
 }  // namespace vobb

@@ -13,6 +13,7 @@
 #include "builder/subtree_swaps.h"
 #include "collision/query_objective.h"
 #include "common/atomic_file.h"
+#include "common/exact_predicates.h"
 #include "common/sha256.h"
 #include "common/stopwatch.h"
 #include "common/text_util.h"
@@ -95,6 +96,17 @@ Status make_estimator(const Mesh& mesh, const BuildOptions& o, Estimator* e) {
     e->estimate = [c, m](const std::vector<Obb>& boxes) { return c->estimate(boxes, m); };
     e->name = "cpu";
   }
+  // The search sees each cubemap estimate moved into the range that holds the box's OBV
+  // (clamp_to_obv_range): on an extreme box the estimate can be off by the box's volume, and a
+  // search would take a box far larger than the solid, estimated near 0, for a gain. The
+  // solid's volume is rounded up, so the range still holds the OBV.
+  const double solid = std::nextafter(to_double_nearest(exact_signed_volume(mesh)),
+                                      std::numeric_limits<double>::infinity());
+  e->estimate = [raw = std::move(e->estimate), solid](const std::vector<Obb>& boxes) {
+    std::vector<double> v = raw(boxes);
+    for (size_t i = 0; i < v.size(); ++i) v[i] = clamp_to_obv_range(boxes[i], v[i], solid);
+    return v;
+  };
   return Status::ok();
 }
 
@@ -119,7 +131,7 @@ std::string queries_digest(const std::vector<collision::Collider>& colliders) {
 }
 
 // What a variational build depends on, for its checkpoints: a state saved under another
-// fingerprint is refused, so a resumed build is the build that was interrupted. "builder 3":
+// fingerprint is refused, so a resumed build is the build that was interrupted. "builder 4":
 // bump when the builder's decisions change, so that older states are refused. The refit
 // (BuildOptions::refit) runs after the last state, so the states are the same with it or
 // without, and it is not named.
@@ -129,7 +141,7 @@ std::string build_fingerprint(const Mesh& mesh, const BuildOptions& o,
   // The recorded-query builds name the estimator they would have had, as they always did.
   const std::string named =
       estimator == "queries" ? (o.backend == Backend::kPoly ? "poly" : "cpu") : estimator;
-  return "builder 3; mesh " + mesh_sha256(mesh) + "; depth " + std::to_string(o.depth) +
+  return "builder 4; mesh " + mesh_sha256(mesh) + "; depth " + std::to_string(o.depth) +
          "; arity " + std::to_string(o.arity) + "; lloyd " + std::to_string(o.lloyd) + "; seed " +
          std::to_string(o.seed) + "; axis search " + on(o.axis_search) + "; adjust " +
          on(o.adjust) + "; merge " + on(o.merge) + "; sweeps " + std::to_string(o.sweeps) + "; m " +

@@ -72,5 +72,49 @@ TEST(RangeBound, IsHalfTheVolumeForAnEstimateInTheMiddle) {
             Rational(24) * Rational(1 + 64 * eps) * Rational(1 + 4 * eps) * Rational(1 + eps));
 }
 
+// clamp_to_obv_range never moves an estimate away from the exact OBV, which lies in its range
+// [max(0, V - S), V]. The solid is the unit cube [0, 1]^3 (S = 1), and the boxes' OBV are
+// closed forms: a box holding the cube has V - 1, one beside it V, one inside it 0, one
+// 2^10 times the cube's size in each direction V - 1 (the builder's defect: such a box
+// estimated near 0). The extents are powers of two, so volume() is exact and the comparison
+// exact too (as rationals).
+TEST(ClampToObvRange, NeverMovesAnEstimateAwayFromTheExactObv) {
+  const std::array<Vec3, 3> identity = {Vec3::UnitX(), Vec3::UnitY(), Vec3::UnitZ()};
+  auto box = [&](const Vec3& center, const Vec3& half) {
+    Obb b;
+    b.center = center;
+    b.axes = identity;
+    b.half = half;
+    return b;
+  };
+  struct Case {
+    Obb box;
+    Rational obv;
+  };
+  const Vec3 mid(0.5, 0.5, 0.5);
+  const std::vector<Case> cases = {
+      {box(mid, Vec3(1, 1, 1)), Rational(7)},                           // holds the cube
+      {box(Vec3(4, 0.5, 0.5), Vec3(1, 0.5, 0.25)), Rational(1)},        // beside it: all of V = 1
+      {box(mid, Vec3(0.25, 0.125, 0.25)), Rational(0)},                 // inside it
+      {box(mid, Vec3(0x1p10, 0x1p10, 0x1p10)), Rational(0x1p33) - 1}};  // 2^10 times its size
+  for (const Case& c : cases) {
+    const double v = volume(c.box);
+    ASSERT_EQ(Rational(v), exact_volume(c.box));
+    for (double e : {-v, -1.0, 0.0, 0.25 * v, 0.5 * v, v - 1, v, 2 * v}) {
+      const double moved = clamp_to_obv_range(c.box, e, 1.0);
+      EXPECT_LE(abs(Rational(moved) - c.obv), abs(Rational(e) - c.obv)) << e;
+      EXPECT_GE(Rational(moved), Rational(0)) << e;
+      EXPECT_LE(Rational(moved), Rational(v)) << e;
+    }
+    // An estimate at the exact OBV stays there.
+    const double at = to_double_nearest(c.obv);
+    if (Rational(at) == c.obv) {
+      EXPECT_EQ(clamp_to_obv_range(c.box, at, 1.0), at);
+    }
+  }
+  // The large box estimated at 0 moves to its OBV.
+  EXPECT_EQ(Rational(clamp_to_obv_range(cases[3].box, 0, 1.0)), cases[3].obv);
+}
+
 }  // namespace
 }  // namespace vobb
