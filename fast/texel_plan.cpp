@@ -2,6 +2,7 @@
 
 #include <Eigen/LU>
 #include <algorithm>
+#include <cfenv>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -241,8 +242,110 @@ double resolution_bound(const BoxPlan& plan, int m) {
 //
 // Derivation of the per-pair terms: docs/derivations.md, "Round-off of evaluating a plan".
 
+namespace {
+
+// Exact signs from floating-point expansions (docs/derivations.md, "Exact edge sides without
+// rationals"): a sum of doubles is kept as a nonoverlapping expansion (two_sum), products as
+// hi + lo (two_product, by fma). Exact in round-to-nearest while no product underflows or
+// overflows; the callers check both and otherwise use rationals.
+inline void two_sum(double a, double b, double* s, double* e) {
+  *s = a + b;
+  const double bv = *s - a;
+  *e = (a - (*s - bv)) + (b - bv);
+}
+
+// The sign of the exact sum of x[0..n), n <= 32: the terms grown into a nonoverlapping
+// expansion (Shewchuk's Grow-Expansion, zeros dropped), whose sign is its largest component's.
+int sign_of_exact_sum(const double* x, int n) {
+  double e[32];
+  int len = 0;
+  for (int i = 0; i < n; ++i) {
+    double q = x[i];
+    int out = 0;
+    for (int j = 0; j < len; ++j) {
+      double h;
+      two_sum(q, e[j], &q, &h);
+      if (h != 0) e[out++] = h;
+    }
+    if (q != 0) e[out++] = q;
+    len = out;
+  }
+  return len == 0 ? 0 : (e[len - 1] > 0 ? 1 : -1);
+}
+
+// Products in [2^-800, 2^1000] (or exactly 0), times integers of at most 2^13: their
+// two_product parts and the integer multiples of those neither underflow nor overflow
+// (docs/derivations.md, "Exact edge sides without rationals").
+inline bool product_in_range(double hi) {
+  const double a = std::abs(hi);
+  return a == 0 || (a >= 0x1p-800 && a <= 0x1p1000);
+}
+
+// The sign of sum_c w[c] E*[c], E* = p x q, for integers |w[c]| <= 2^13; false where a product
+// leaves product_in_range (or the rounding mode is not to nearest): the caller uses rationals.
+bool edge_dot_sign(const Vec3& p, const Vec3& q, const double w[3], int* sign) {
+  double terms[24];
+  int n = 0;
+  for (int c = 0; c < 3; ++c) {
+    const int c1 = (c + 1) % 3, c2 = (c + 2) % 3;
+    for (int half = 0; half < 2; ++half) {
+      // E*[c] = p[c1] q[c2] - p[c2] q[c1]
+      const double u = half == 0 ? p[c1] : -p[c2];
+      const double v = half == 0 ? q[c2] : q[c1];
+      const double hi = u * v;
+      if (!product_in_range(hi) || (hi == 0 && u != 0 && v != 0)) return false;
+      const double lo = std::fma(u, v, -hi);
+      for (const double part : {hi, lo}) {
+        const double whi = w[c] * part;
+        terms[n++] = whi;
+        terms[n++] = std::fma(w[c], part, -whi);
+      }
+    }
+  }
+  *sign = sign_of_exact_sum(terms, n);
+  return true;
+}
+
+}  // namespace
+
+bool exact_edge_side_by_expansion(const LocalTriangle& t, int k, const Texel& x, int* side) {
+  if (t.edge_zero[k]) {
+    *side = 0;  // E* = 0, decided by plan(): the end of this function's search
+    return true;
+  }
+  if (x.m > 4096 || std::fegetround() != FE_TONEAREST) return false;
+  const int a = k, b = (k + 1) % 3;
+  VOBB_ASSERT(t.p[a].allFinite() && t.p[b].allFinite(), "plan() keeps only finite faces");
+  const bool canonical = t.id[a] < t.id[b];
+  const Vec3& p = canonical ? t.p[a] : t.p[b];
+  const Vec3& q = canonical ? t.p[b] : t.p[a];
+  // m d* = (+-m, 2i + 1 - m, 2j + 1 - m) on the axes (k, a, b) of the cubemap face; the dot
+  // first, then the components of E* in the order of the perturbation (see LocalTriangle).
+  const int fk = x.face / 2, fa = (fk + 1) % 3, fb = (fk + 2) % 3;
+  double w[3];
+  w[fk] = x.face % 2 == 0 ? x.m : -x.m;
+  w[fa] = 2 * x.i + 1 - x.m;
+  w[fb] = 2 * x.j + 1 - x.m;
+  int s = 0;
+  if (!edge_dot_sign(p, q, w, &s)) return false;
+  for (int c : {fa, fb, fk}) {
+    if (s != 0) break;
+    double unit[3] = {0, 0, 0};
+    unit[c] = 1;
+    if (!edge_dot_sign(p, q, unit, &s)) return false;
+  }
+  *side = canonical ? s : -s;  // E* = +-(p x q): the same for the two faces of an edge, negated
+  return true;
+}
+
 int exact_edge_side(const LocalTriangle& t, int k, const Texel& x) {
-  if (t.edge_zero[k]) return 0;  // E* = 0, decided by plan(): the end of this function's search
+  int side = 0;
+  if (exact_edge_side_by_expansion(t, k, x, &side)) return side;
+  return exact_edge_side_rational(t, k, x);
+}
+
+int exact_edge_side_rational(const LocalTriangle& t, int k, const Texel& x) {
+  if (t.edge_zero[k]) return 0;
   const int a = k, b = (k + 1) % 3;
   VOBB_ASSERT(t.p[a].allFinite() && t.p[b].allFinite(), "plan() keeps only finite faces");
   const bool canonical = t.id[a] < t.id[b];

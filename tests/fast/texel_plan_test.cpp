@@ -102,6 +102,84 @@ TEST(TexelPlan, EdgesThroughTheCentreAreMarkedExactly) {
   EXPECT_GT(unmarked, marked);
 }
 
+// exact_edge_side decides by floating-point expansions where every product of two
+// coordinates is 0 or in [2^-800, 2^1000], and gives the sign that rationals give. Edges:
+// random coordinates; exactly collinear pairs (q = 2 p: E* = 0, side 0); pairs one ulp off
+// collinear (E* tiny against the products, the case the double test leaves to this one);
+// pairs in a coordinate plane (E* along an axis: a texel whose weight there is 0 has a dot of
+// 0, and the perturbation decides); coordinates 2^600 apart in scale; a component 0. Texels
+// on every face at m from 1 to 4096, with the centre rows, where a weight is 0. Products out
+// of range (below 2^-800, above 2^1000) are refused, and rationals decide.
+TEST(TexelPlan, ExactEdgeSidesByExpansionAreTheRationalOnes) {
+  std::mt19937_64 rng(11);
+  auto uniform = [&] { return static_cast<double>(rng() >> 11) * 0x1.0p-53 * 2 - 1; };
+  auto random_vec = [&](double scale) -> Vec3 {
+    return Vec3(uniform(), uniform(), uniform()) * scale;
+  };
+  struct Edge {
+    Vec3 p, q;
+    bool in_range;
+  };
+  std::vector<Edge> edges;
+  for (int n = 0; n < 200; ++n) {
+    const Vec3 p = random_vec(1), q = random_vec(1);
+    edges.push_back({p, q, true});
+    const Vec3 twice = p * 2;  // exactly collinear
+    edges.push_back({p, twice, true});
+    Vec3 off = twice;
+    off[n % 3] = std::nextafter(off[n % 3], 10.0);  // one ulp from collinear
+    edges.push_back({p, off, true});
+    Vec3 zero = q;
+    zero[n % 3] = 0;
+    edges.push_back({p, zero, true});
+    edges.push_back({random_vec(0x1p300), random_vec(0x1p-300), true});  // scales 2^600 apart
+    Vec3 pz = p, qz = q;  // E* along an axis: a texel whose weight there is 0 has dot 0
+    pz[n % 3] = qz[n % 3] = 0;
+    edges.push_back({pz, qz, true});
+  }
+  edges.push_back({Vec3(0x1p-500, 1, 1), Vec3(1, 0x1p-400, 1), false});  // 2^-900: refused
+  edges.push_back({Vec3(0x1p600, 1, 1), Vec3(1, 0x1p500, 1), false});    // 2^1100: refused
+  int decided = 0, zero_dots = 0;
+  for (const Edge& e : edges)
+    for (const bool canonical : {true, false}) {
+      LocalTriangle t{};
+      t.p[0] = e.p;
+      t.p[1] = e.q;
+      t.p[2] = Vec3(0.5, 0.25, 0.125);
+      t.id[0] = canonical ? 1 : 2;
+      t.id[1] = canonical ? 2 : 1;
+      t.id[2] = 3;
+      for (const int m : {1, 2, 7, 32, 4096})
+        for (int f = 0; f < 6; ++f)
+          for (const int i : {0, m / 2, m - 1})
+            for (const int j : {0, (m - 1) / 2, m - 1}) {
+              const Texel x{f, i, j, m,
+                            cubemap_direction(f, texel_center(i, m), texel_center(j, m))};
+              int side = 7;
+              const bool by_expansion = exact_edge_side_by_expansion(t, 0, x, &side);
+              EXPECT_EQ(by_expansion, e.in_range) << e.p.transpose() << " / " << e.q.transpose();
+              const int rational = exact_edge_side_rational(t, 0, x);
+              if (by_expansion) {
+                EXPECT_EQ(side, rational) << e.p.transpose() << " / " << e.q.transpose();
+                ++decided;
+              }
+              EXPECT_EQ(exact_edge_side(t, 0, x), rational);
+              // Whether the exact dot was 0 with E* not 0 (the perturbation decided): counted
+              // from the rationals, so the case is seen to occur.
+              const int fk = f / 2, fa = (fk + 1) % 3, fb = (fk + 2) % 3;
+              Rational E[3];
+              for (int c = 0; c < 3; ++c)
+                E[c] = Rational(e.p[(c + 1) % 3]) * Rational(e.q[(c + 2) % 3]) -
+                       Rational(e.p[(c + 2) % 3]) * Rational(e.q[(c + 1) % 3]);
+              const Rational dot =
+                  (f % 2 == 0 ? m : -m) * E[fk] + (2 * i + 1 - m) * E[fa] + (2 * j + 1 - m) * E[fb];
+              zero_dots += sgn(dot) == 0 && (sgn(E[0]) != 0 || sgn(E[1]) != 0 || sgn(E[2]) != 0);
+            }
+    }
+  EXPECT_GT(decided, 100000);
+  EXPECT_GT(zero_dots, 1000);
+}
+
 TEST(TexelPlan, APlanReusedAfterOthersEqualsAFreshOne) {
   const Vec3 d(4.0, 1.2, 0.8);
   const Mesh mesh = test::bipyramid_on_ray(d, 2000, 7);
