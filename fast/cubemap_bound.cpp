@@ -88,7 +88,8 @@ double cubemap_bound(const BoxPlanner& planner, bool gl, const Obb& box, int m, 
 
 double clamp_to_obv_range(const Obb& box, double estimate, double solid_volume) {
   const double v = volume(box);
-  return std::clamp(estimate, std::max(0.0, v - solid_volume), v);
+  const double lo = std::max(0.0, v - std::max(0.0, solid_volume));  // <= v
+  return std::min(std::max(estimate, lo), v);
 }
 
 }  // namespace vobb

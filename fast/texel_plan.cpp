@@ -273,7 +273,7 @@ int sign_of_exact_sum(const double* x, int n) {
   return len == 0 ? 0 : (e[len - 1] > 0 ? 1 : -1);
 }
 
-// Products in [2^-800, 2^1000] (or exactly 0), times integers of at most 2^13: their
+// Products in [2^-800, 2^1000] (or exactly 0), times integers of at most 2^12: their
 // two_product parts and the integer multiples of those neither underflow nor overflow
 // (docs/derivations.md, "Exact edge sides without rationals").
 inline bool product_in_range(double hi) {
@@ -281,7 +281,7 @@ inline bool product_in_range(double hi) {
   return a == 0 || (a >= 0x1p-800 && a <= 0x1p1000);
 }
 
-// The sign of sum_c w[c] E*[c], E* = p x q, for integers |w[c]| <= 2^13; false where a product
+// The sign of sum_c w[c] E*[c], E* = p x q, for integers |w[c]| <= 2^12; false where a product
 // leaves product_in_range (or the rounding mode is not to nearest): the caller uses rationals.
 bool edge_dot_sign(const Vec3& p, const Vec3& q, const double w[3], int* sign) {
   double terms[24];

@@ -175,9 +175,10 @@ Status read_off(const Reader& r, LoadedMesh* out) {
   // is a file written without its line breaks, which OFF needs (a face's colour is told from
   // its indices by where the line ends).
   if (t.size() - first > 3)
-    return r.fail_at(lines.number(), std::to_string(t.size() - first - 3) +
-                                         " values after the vertex, face and edge counts; OFF "
-                                         "gives the counts, each vertex and each face a line");
+    return r.fail_at(lines.number(), "data after the vertex, face and edge counts (" +
+                                         std::to_string(t.size() - first - 3) +
+                                         " more values); OFF gives the counts, each vertex "
+                                         "and each face a line");
   long long nv, nf;
   if (!parse_int(t[first], &nv) || !parse_int(t[first + 1], &nf) || nv < 0 || nf < 0)
     return r.fail_at(lines.number(), "bad vertex or face count");
@@ -193,8 +194,8 @@ Status read_off(const Reader& r, LoadedMesh* out) {
   Mesh& m = out->mesh;
   m.vertices.reserve(nv);
   // Every vertex line has as many values as the first: a normal or colour is on all of them
-  // or on none, and a line with more means two vertices on one line, which would shift every
-  // record after it.
+  // or on none, and a line that differs holds two vertices, or the first line does, which
+  // would shift every record after it.
   size_t values = 0, values_line = 0;
   for (long long i = 0; i < nv; ++i) {
     if (!lines.next_tokens(&t, true))
@@ -215,9 +216,9 @@ Status read_off(const Reader& r, LoadedMesh* out) {
       values_line = lines.number();
     } else if (t.size() != values) {
       return r.fail_at(lines.number(), "vertex line has " + std::to_string(t.size()) +
-                                           " values where line " + std::to_string(values_line) +
+                                           " values, line " + std::to_string(values_line) +
                                            " has " + std::to_string(values) +
-                                           "; OFF gives each vertex a line of its own");
+                                           "; every vertex line of an OFF file has as many");
     }
     m.vertices.push_back(p);
   }

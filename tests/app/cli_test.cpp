@@ -869,19 +869,19 @@ TEST_F(CliOnCube, FlagsThatWouldChangeNothingAreRefused) {
   std::remove(boxes.c_str());
 }
 
-// obv's list of resolutions: every element a count in [1, 4096]; an empty element is
-// refused, not skipped, and a leading zero is decimal.
+// obv's list of resolutions: one list, every element a count in [1, 4096]; an empty element
+// is refused, not skipped, a second --m is refused, and a leading zero is decimal.
 TEST_F(CliOnCube, ResolutionListsHaveNoEmptyElements) {
   Tree t;
   ASSERT_TRUE(read_tree(tree_, &t));
   const std::string boxes = test::temp_path("resolution_list_boxes.json");
   ASSERT_TRUE(write_boxes({t.nodes[0].box}, boxes));
   const std::string obv = "obv " + mesh_ + " --boxes " + boxes + " --backend cpu --m ";
-  for (const char* value : {"8,,16", ",8", "8,", "''", "8,0", "8,4097", "8,0x10"}) {
+  for (const char* value : {"8,,16", ",8", "8,", "''", "8,0", "8,4097", "8,0x10", "8 --m 16"}) {
     const CliRun r = vobb_cli(obv + value);
     EXPECT_EQ(r.code, 2) << value;
     EXPECT_EQ(line_count(r.err), 1u) << r.err;
-    EXPECT_NE(r.err.find("--m: '"), std::string::npos) << value << ": " << r.err;
+    EXPECT_NE(r.err.find("--m: "), std::string::npos) << value << ": " << r.err;
   }
   const CliRun r = vobb_cli(obv + "4,08 --json");
   ASSERT_EQ(r.code, 0) << r.err;

@@ -75,9 +75,8 @@ TEST(RangeBound, IsHalfTheVolumeForAnEstimateInTheMiddle) {
 // clamp_to_obv_range never moves an estimate away from the exact OBV, which lies in its range
 // [max(0, V - S), V]. The solid is the unit cube [0, 1]^3 (S = 1), and the boxes' OBV are
 // closed forms: a box holding the cube has V - 1, one beside it V, one inside it 0, one
-// 2^10 times the cube's size in each direction V - 1 (the builder's defect: such a box
-// estimated near 0). The extents are powers of two, so volume() is exact and the comparison
-// exact too (as rationals).
+// 2^10 times the cube's size in each direction V - 1 (estimated near 0, it moves to its OBV). The
+// extents are powers of two, so volume() is exact and the comparison exact too (as rationals).
 TEST(ClampToObvRange, NeverMovesAnEstimateAwayFromTheExactObv) {
   const std::array<Vec3, 3> identity = {Vec3::UnitX(), Vec3::UnitY(), Vec3::UnitZ()};
   auto box = [&](const Vec3& center, const Vec3& half) {

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cfenv>
 #include <cmath>
 #include <map>
 #include <random>
@@ -107,9 +108,11 @@ TEST(TexelPlan, EdgesThroughTheCentreAreMarkedExactly) {
 // random coordinates; exactly collinear pairs (q = 2 p: E* = 0, side 0); pairs one ulp off
 // collinear (E* tiny against the products, the case the double test leaves to this one);
 // pairs in a coordinate plane (E* along an axis: a texel whose weight there is 0 has a dot of
-// 0, and the perturbation decides); coordinates 2^600 apart in scale; a component 0. Texels
-// on every face at m from 1 to 4096, with the centre rows, where a weight is 0. Products out
-// of range (below 2^-800, above 2^1000) are refused, and rationals decide.
+// 0, and the perturbation decides); products from 2^998 down to 2^-800 in one dot; a component
+// 0. Texels
+// on every face at m from 1 to 4096, with the centre rows, where a weight is 0. Products just
+// out of range (2^-801, 2^1001, an underflow to 0) and a rounding mode other than to nearest
+// are refused, and rationals decide.
 TEST(TexelPlan, ExactEdgeSidesByExpansionAreTheRationalOnes) {
   std::mt19937_64 rng(11);
   auto uniform = [&] { return static_cast<double>(rng() >> 11) * 0x1.0p-53 * 2 - 1; };
@@ -132,13 +135,19 @@ TEST(TexelPlan, ExactEdgeSidesByExpansionAreTheRationalOnes) {
     Vec3 zero = q;
     zero[n % 3] = 0;
     edges.push_back({p, zero, true});
-    edges.push_back({random_vec(0x1p300), random_vec(0x1p-300), true});  // scales 2^600 apart
+    // Products from about 2^998 down to 2^-800 in one dot: magnitudes in [1/2, 1) scaled so
+    // that p0 q1 is near 2^998 and p2 q0 near 2^-798.
+    auto magnitude = [&] { return (0.5 + 0.25 * (uniform() + 1)) * (rng() & 1 ? 1 : -1); };
+    edges.push_back({Vec3(0x1p499 * magnitude(), magnitude(), 0x1p-399 * magnitude()),
+                     Vec3(0x1p-399 * magnitude(), 0x1p499 * magnitude(), magnitude()), true});
     Vec3 pz = p, qz = q;  // E* along an axis: a texel whose weight there is 0 has dot 0
     pz[n % 3] = qz[n % 3] = 0;
     edges.push_back({pz, qz, true});
   }
-  edges.push_back({Vec3(0x1p-500, 1, 1), Vec3(1, 0x1p-400, 1), false});  // 2^-900: refused
-  edges.push_back({Vec3(0x1p600, 1, 1), Vec3(1, 0x1p500, 1), false});    // 2^1100: refused
+  // Just out of range, refused: a product of 2^-801, one of 2^1001, one that underflows to 0.
+  edges.push_back({Vec3(0x1p-401, 1, 1), Vec3(1, 0x1p-400, 1), false});
+  edges.push_back({Vec3(0x1p501, 1, 1), Vec3(1, 0x1p500, 1), false});
+  edges.push_back({Vec3(0x1p-600, 1, 1), Vec3(1, 0x1p-600, 1), false});
   int decided = 0, zero_dots = 0;
   for (const Edge& e : edges)
     for (const bool canonical : {true, false}) {
@@ -178,6 +187,25 @@ TEST(TexelPlan, ExactEdgeSidesByExpansionAreTheRationalOnes) {
     }
   EXPECT_GT(decided, 100000);
   EXPECT_GT(zero_dots, 1000);
+  // In another rounding mode two_sum is not exact: refused, and rationals decide.
+  LocalTriangle t{};
+  t.p[0] = Vec3(0.3, -0.7, 0.2);
+  t.p[1] = Vec3(0.6, -1.4, 0.4000000000000001);
+  t.p[2] = Vec3(0.5, 0.25, 0.125);
+  t.id[0] = 1;
+  t.id[1] = 2;
+  t.id[2] = 3;
+  const Texel x{0, 3, 4, 8, cubemap_direction(0, texel_center(3, 8), texel_center(4, 8))};
+  int side = 0;
+  ASSERT_TRUE(exact_edge_side_by_expansion(t, 0, x, &side));
+  ASSERT_EQ(std::fesetround(FE_UPWARD), 0);
+  int upward = 7;
+  const bool by_expansion = exact_edge_side_by_expansion(t, 0, x, &upward);
+  const int decided_upward = exact_edge_side(t, 0, x);
+  std::fesetround(FE_TONEAREST);
+  EXPECT_FALSE(by_expansion);
+  EXPECT_EQ(decided_upward, side);
+  EXPECT_EQ(side, exact_edge_side_rational(t, 0, x));
 }
 
 TEST(TexelPlan, APlanReusedAfterOthersEqualsAFreshOne) {
