@@ -14,8 +14,11 @@
 //    and says so.
 //  - estimate(): in plain double, for the builder's loop: no enclosure, off the exact value by
 //    round-off of the cells' volumes (tested against the exact value). Where rounded signs
-//    contradict each other it takes values within 1e-10 of their magnitude as 0, and failing
-//    that returns the certified evaluation's midpoint.
+//    contradict each other it takes values within 1e-10 of their magnitude as 0; failing that
+//    (mesh vertices and faces on the planes of B and of earlier boxes, as on a flat part), the
+//    same with every box grown by 2^-30 of its half extents, at most 3.01 2^-30 of the boxes'
+//    volumes above the exact value; and failing that, or where a value overflows, the certified
+//    evaluation's midpoint.
 // 0 exactly where no earlier box meets B by a separating-axis test in double with a margin
 // that round-off cannot cross, or where B is flat. Functions of their arguments alone (the
 // earlier boxes in the order given); batches run in parallel (TBB), each as alone. Thread-safe.
