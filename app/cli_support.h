@@ -224,32 +224,31 @@ inline const CLI::Validator kCount(
 
 // A comma-separated list of counts in [lo, hi], each in decimal digits; no element may be
 // empty ("8,,16" names no resolution between 8 and 16). CLI11's own delimiter drops empty
-// elements silently, so the list is taken whole and split by split_counts.
+// elements silently, so the list is taken whole: count_list checks it, split_counts reads it.
+inline std::vector<std::string> split_commas(const std::string& s) {
+  std::vector<std::string> out;
+  std::size_t begin = 0;
+  for (std::size_t end; (end = s.find(',', begin)) != std::string::npos; begin = end + 1)
+    out.push_back(s.substr(begin, end - begin));
+  out.push_back(s.substr(begin));
+  return out;
+}
+
 inline std::vector<int> split_counts(const std::string& s) {
   std::vector<int> out;
-  std::size_t begin = 0;
-  while (begin <= s.size()) {
-    const std::size_t end = std::min(s.find(',', begin), s.size());
-    out.push_back(std::stoi(s.substr(begin, end - begin)));
-    begin = end + 1;
-  }
+  for (const std::string& item : split_commas(s)) out.push_back(std::stoi(item));
   return out;
 }
 
 inline CLI::Validator count_list(int lo, int hi) {
   return CLI::Validator(
       [lo, hi](std::string& s) -> std::string {
-        std::size_t begin = 0;
-        while (begin <= s.size()) {
-          const std::size_t end = std::min(s.find(',', begin), s.size());
-          std::string item = s.substr(begin, end - begin);
+        for (std::string item : split_commas(s)) {
           if (item.empty()) return "'" + s + "' has an empty element";
-          const std::string bad = kCount(item);
-          if (!bad.empty()) return bad;
+          if (const std::string bad = kCount(item); !bad.empty()) return bad;
           if (item.size() > 9 || std::stoi(item) < lo || std::stoi(item) > hi)
             return "'" + item + "' is not in [" + std::to_string(lo) + ", " + std::to_string(hi) +
                    "]";
-          begin = end + 1;
         }
         return "";
       },

@@ -97,8 +97,9 @@ struct Texel {
 };
 
 // The side of edge k of t for the exact texel ray d* (see LocalTriangle): the sign of
-// d* . E*, in rational arithmetic, with simulation of simplicity for an exact 0; 0 when E* is
-// the zero vector (the edge's line passes through the centre, and so does the face's plane).
+// d* . E*, exactly (by the first of the two paths below that decides it), with simulation of
+// simplicity for an exact 0; 0 when E* is the zero vector (the edge's line passes through the
+// centre, and so does the face's plane).
 int exact_edge_side(const LocalTriangle& t, int k, const Texel& x);
 // The same sign by two paths. By floating-point expansions, without allocation: false where
 // they could not decide it exactly (a product of two coordinates outside [2^-800, 2^1000] and

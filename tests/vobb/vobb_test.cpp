@@ -31,6 +31,17 @@ BuildOptions small_build() {
   return o;
 }
 
+// compare with small_build and the exact values as rationals: whether it ran and certified
+// both trees.
+bool compare_small(const Mesh& mesh, CompareResult* r) {
+  CompareOptions o;
+  o.build = small_build();
+  o.rational = true;
+  const Status s = compare(mesh, o, r);
+  EXPECT_TRUE(s.is_ok()) << s.message();
+  return s.is_ok() && r->certified();
+}
+
 // build_tree's variational tree is build_variational's with the CPU twin, bit for bit, and its
 // mesh_sha256 is the mesh's. Its objective is kOmv unless set, with the polyhedral solver's
 // shares; set to kObv, the builder's own default, no share is taken.
@@ -236,14 +247,10 @@ TEST(Certify, RefusesATreeOfAnotherMesh) {
 // compare's trees are build_tree's, its certificates certify's, and its e each tree's e.
 TEST(Compare, IsBothBuildsCertified) {
   const Mesh mesh = analytic::polygonal_torus().mesh;
-  CompareOptions o;
-  o.build = small_build();
-  o.rational = true;
   CompareResult r;
-  ASSERT_TRUE(compare(mesh, o, &r).is_ok());
-  ASSERT_TRUE(r.certified());
+  ASSERT_TRUE(compare_small(mesh, &r));
   for (int i = 0; i < 2; ++i) {
-    BuildOptions b = o.build;
+    BuildOptions b = small_build();
     b.method = i == 0 ? Method::kObbTree : Method::kVariational;
     Tree tree;
     ASSERT_TRUE(build_tree(mesh, b, &tree).is_ok());
@@ -267,12 +274,8 @@ TEST(Compare, IsBothBuildsCertified) {
 TEST(Compare, AThinCuboidIsNoWorseThanTheBaseline) {
   Mesh mesh = analytic::cube().mesh;
   for (Vec3& p : mesh.vertices) p = Vec3(p[0] * 0x1p13, p[1], p[2] * 0x1p-13);
-  CompareOptions o;
-  o.build = small_build();
-  o.rational = true;
   CompareResult r;
-  ASSERT_TRUE(compare(mesh, o, &r).is_ok());
-  ASSERT_TRUE(r.certified());
+  ASSERT_TRUE(compare_small(mesh, &r));
   EXPECT_LE(r.e_exact[1], r.e_exact[0]) << r.e[1] << " against " << r.e[0];
 }
 
