@@ -284,24 +284,44 @@ inline bool product_in_range(double hi) {
 // The sign of sum_c w[c] E*[c], E* = p x q, for integers |w[c]| <= 2^12; false where a product
 // leaves product_in_range (or the rounding mode is not to nearest): the caller uses rationals.
 bool edge_dot_sign(const Vec3& p, const Vec3& q, const double w[3], int* sign) {
-  double terms[24];
-  int n = 0;
+  double hi[3][2], lo[3][2];  // E*[c] = hi[c][0] + lo[c][0] + hi[c][1] + lo[c][1], exactly
   for (int c = 0; c < 3; ++c) {
     const int c1 = (c + 1) % 3, c2 = (c + 2) % 3;
     for (int half = 0; half < 2; ++half) {
       // E*[c] = p[c1] q[c2] - p[c2] q[c1]
       const double u = half == 0 ? p[c1] : -p[c2];
       const double v = half == 0 ? q[c2] : q[c1];
-      const double hi = u * v;
-      if (!product_in_range(hi) || (hi == 0 && u != 0 && v != 0)) return false;
-      const double lo = std::fma(u, v, -hi);
-      for (const double part : {hi, lo}) {
-        const double whi = w[c] * part;
-        terms[n++] = whi;
-        terms[n++] = std::fma(w[c], part, -whi);
-      }
+      hi[c][half] = u * v;
+      if (!product_in_range(hi[c][half]) || (hi[c][half] == 0 && u != 0 && v != 0)) return false;
+      lo[c][half] = std::fma(u, v, -hi[c][half]);
     }
   }
+  // A filter first: each E*[c] to within a few ulps of itself (where its two products cancel,
+  // their difference is exact), then the dot with a bound on its error; a sign the bound cannot
+  // cross is the exact one (docs/derivations.md, "Exact edge sides without rationals").
+  constexpr double u = 0x1p-53;
+  double dot = 0, bound = 0;
+  for (int c = 0; c < 3; ++c) {
+    const double s1 = hi[c][0] + hi[c][1], s2 = lo[c][0] + lo[c][1], e = s1 + s2;
+    const double we = w[c] * e;
+    dot += we;
+    bound +=
+        std::abs(w[c]) * u * (std::abs(s1) + std::abs(s2) + std::abs(e)) + 4 * u * std::abs(we);
+  }
+  bound *= 1 + 16 * u;  // the bound's own arithmetic: at most 7 roundings
+  if (std::abs(dot) > bound) {
+    *sign = dot > 0 ? 1 : -1;
+    return true;
+  }
+  double terms[24];
+  int n = 0;
+  for (int c = 0; c < 3; ++c)
+    for (int half = 0; half < 2; ++half)
+      for (const double part : {hi[c][half], lo[c][half]}) {
+        const double wpart = w[c] * part;
+        terms[n++] = wpart;
+        terms[n++] = std::fma(w[c], part, -wpart);
+      }
   *sign = sign_of_exact_sum(terms, n);
   return true;
 }

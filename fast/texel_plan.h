@@ -101,10 +101,11 @@ struct Texel {
 // simplicity for an exact 0; 0 when E* is the zero vector (the edge's line passes through the
 // centre, and so does the face's plane).
 int exact_edge_side(const LocalTriangle& t, int k, const Texel& x);
-// The same sign by two paths. By floating-point expansions, without allocation: false where
-// they could not decide it exactly (a product of two coordinates outside [2^-800, 2^1000] and
-// not 0, m above 4096, or a rounding mode other than to nearest). In rationals: always
-// decides; exact_edge_side's path where the first is false, and its reference in the tests.
+// The same sign by two paths. By floating-point expansions (a filter first), without
+// allocation: false where they could not decide it exactly (a product of two coordinates
+// outside [2^-800, 2^1000] and not 0, m above 4096, or a rounding mode other than to nearest).
+// In rationals: always decides; exact_edge_side's path where the first is false, and its
+// reference in the tests.
 bool exact_edge_side_by_expansion(const LocalTriangle& t, int k, const Texel& x, int* side);
 int exact_edge_side_rational(const LocalTriangle& t, int k, const Texel& x);
 

@@ -108,8 +108,9 @@ TEST(TexelPlan, EdgesThroughTheCentreAreMarkedExactly) {
 // random coordinates; exactly collinear pairs (q = 2 p: E* = 0, side 0); pairs one ulp off
 // collinear (E* tiny against the products, the case the double test leaves to this one);
 // pairs in a coordinate plane (E* along an axis: a texel whose weight there is 0 has a dot of
-// 0, and the perturbation decides); products from 2^998 down to 2^-800 in one dot; a component
-// 0. Texels
+// 0, and the perturbation decides); pairs whose E* is orthogonal to one of the texel rays
+// without cancelling (a dot of 0 that the double dot makes noise of), and one ulp off that;
+// products from 2^998 down to 2^-800 in one dot; a component 0. Texels
 // on every face at m from 1 to 4096, with the centre rows, where a weight is 0. Products just
 // out of range (2^-801, 2^1001, an underflow to 0) and a rounding mode other than to nearest
 // are refused, and rationals decide.
@@ -143,6 +144,21 @@ TEST(TexelPlan, ExactEdgeSidesByExpansionAreTheRationalOnes) {
     Vec3 pz = p, qz = q;  // E* along an axis: a texel whose weight there is 0 has dot 0
     pz[n % 3] = qz[n % 3] = 0;
     edges.push_back({pz, qz, true});
+    // q along one of the loop's texel rays, m d* scaled by 2^-12: E* is orthogonal to that
+    // ray, so its dot is exactly 0 while the products do not cancel (the double dot is
+    // rounding noise, which the filter's bound must not take for a sign); and q one ulp off
+    // it, a dot far below that noise.
+    const int m = n % 2 == 0 ? 32 : 4096, f = n % 6, fk = f / 2;
+    const int i = std::array<int, 3>{0, m / 2, m - 1}[n % 3];
+    const int j = std::array<int, 3>{0, (m - 1) / 2, m - 1}[(n / 3) % 3];
+    Vec3 ray;
+    ray[fk] = f % 2 == 0 ? m : -m;
+    ray[(fk + 1) % 3] = 2 * i + 1 - m;
+    ray[(fk + 2) % 3] = 2 * j + 1 - m;
+    edges.push_back({p, ray * 0x1p-12, true});
+    Vec3 nudged = ray * 0x1p-12;
+    nudged[(fk + 1 + n % 2) % 3] = std::nextafter(nudged[(fk + 1 + n % 2) % 3], 10.0);
+    edges.push_back({p, nudged, true});
   }
   // Just out of range, refused: a product of 2^-801, one of 2^1001, one that underflows to 0.
   edges.push_back({Vec3(0x1p-401, 1, 1), Vec3(1, 0x1p-400, 1), false});
