@@ -289,11 +289,11 @@ bool edge_dot_sign(const Vec3& p, const Vec3& q, const double w[3], int* sign) {
     const int c1 = (c + 1) % 3, c2 = (c + 2) % 3;
     for (int half = 0; half < 2; ++half) {
       // E*[c] = p[c1] q[c2] - p[c2] q[c1]
-      const double u = half == 0 ? p[c1] : -p[c2];
-      const double v = half == 0 ? q[c2] : q[c1];
-      hi[c][half] = u * v;
-      if (!product_in_range(hi[c][half]) || (hi[c][half] == 0 && u != 0 && v != 0)) return false;
-      lo[c][half] = std::fma(u, v, -hi[c][half]);
+      const double x = half == 0 ? p[c1] : -p[c2];
+      const double y = half == 0 ? q[c2] : q[c1];
+      hi[c][half] = x * y;
+      if (!product_in_range(hi[c][half]) || (hi[c][half] == 0 && x != 0 && y != 0)) return false;
+      lo[c][half] = std::fma(x, y, -hi[c][half]);
     }
   }
   // A filter first: each E*[c] to within a few ulps of itself (where its two products cancel,
