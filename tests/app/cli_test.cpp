@@ -709,6 +709,11 @@ class CliOnCube : public ::testing::Test {
     std::remove(tree_.c_str());
   }
   void SetUp() override { ASSERT_EQ(built_.code, 0) << built_.err; }
+  // A box file at `path` holding the tree's root box; whether it was written.
+  static bool write_root_box(const std::string& path) {
+    Tree t;
+    return read_tree(tree_, &t) && write_boxes({t.nodes[0].box}, path);
+  }
   static std::string mesh_, tree_;
   static CliRun built_;
 };
@@ -840,10 +845,8 @@ TEST_F(CliOnCube, CertifyPassesFailsAndRefuses) {
 // Flags that would change nothing for what was asked are refused in one line, exit 2, not
 // ignored.
 TEST_F(CliOnCube, FlagsThatWouldChangeNothingAreRefused) {
-  Tree t;
-  ASSERT_TRUE(read_tree(tree_, &t));
   const std::string boxes = test::temp_path("refused_flags_boxes.json");
-  ASSERT_TRUE(write_boxes({t.nodes[0].box}, boxes));
+  ASSERT_TRUE(write_root_box(boxes));
   const std::string obv = "obv " + mesh_ + " --boxes " + boxes;
   struct Case {
     std::string args, says;
@@ -872,10 +875,8 @@ TEST_F(CliOnCube, FlagsThatWouldChangeNothingAreRefused) {
 // obv's list of resolutions: one list, every element a count in [1, 4096]; an empty element
 // is refused, not skipped, a second --m is refused, and a leading zero is decimal.
 TEST_F(CliOnCube, ResolutionListsHaveNoEmptyElements) {
-  Tree t;
-  ASSERT_TRUE(read_tree(tree_, &t));
   const std::string boxes = test::temp_path("resolution_list_boxes.json");
-  ASSERT_TRUE(write_boxes({t.nodes[0].box}, boxes));
+  ASSERT_TRUE(write_root_box(boxes));
   const std::string obv = "obv " + mesh_ + " --boxes " + boxes + " --backend cpu --m ";
   for (const char* value : {"8,,16", ",8", "8,", "''", "8,0", "8,4097", "8,0x10", "8 --m 16"}) {
     const CliRun r = vobb_cli(obv + value);

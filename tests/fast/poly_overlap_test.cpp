@@ -236,8 +236,6 @@ TEST(PolyOverlap, ABatchGivesEachPairsOwnValue) {
 namespace vobb {
 namespace {
 
-// Sibling-like pairs on real meshes: two tight boxes of neighbouring face groups, which touch
-// the same mesh vertices where the groups meet (the builder's case), and random pairs.
 // A closed plate [0, 1]^2 x [0, t], its top and bottom tessellated n by n (two triangles a
 // square), its sides n quads each: a flat part whose faces lie on its tight boxes' planes.
 Mesh plate(int n, double t) {
@@ -319,6 +317,8 @@ TEST(PolyOverlap, DegenerateContactsOfAFlatPartAreEstimatedFromGrownBoxes) {
   EXPECT_LE(Rational(estimate), exact + Rational(3.01 * 0x1p-30 * volumes + r));
 }
 
+// Sibling-like pairs on real meshes: two tight boxes of neighbouring face groups, which touch
+// the same mesh vertices where the groups meet (the builder's case), and random pairs.
 TEST(PolyOverlapReal, EstimatesAreTheExactValueToRoundOff) {
   VOBB_REQUIRE_REAL_MESH("dino");
   for (const std::string name : {"dino"}) {
