@@ -23,7 +23,11 @@ double gl_deviation_bound(const BoxPlan& plan, int m) {
   if (plan.flat || plan.spans.empty()) return cpu_rounding_bound(plan, m);
   constexpr double u = 1.0 / (1 << 24);
   const PlanRounding r = analyse_plan_rounding(plan, m, RoundingModel{u, 3 * kFloatMin, true});
-  const double K = r.most_per_texel + std::ceil(6.0 * m * m / 256) + 8;
+  // The longest chain of float additions a texel's value passes through: its own sums, its
+  // lane's run over the slice, the 8-level tree; the double sum of the slices adds at most
+  // (slices - 1) 2^-53 < 2^-24 of their absolute sum, counted as one more.
+  const double slice = std::min(6.0 * m * m, static_cast<double>(kReduceSliceTexels));
+  const double K = r.most_per_texel + std::ceil(slice / 256) + 8 + (reduce_slices(m) > 1 ? 1 : 0);
   const double summation = K * u / (1 - K * u) * (r.sum_abs + 2 * r.uncertain);
   const double texel_weight = 4.0 / (3.0 * m * m);
   return plan.frame.volume_scale * texel_weight * (r.value_errors + 2 * r.uncertain + summation) +

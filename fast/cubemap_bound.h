@@ -15,6 +15,16 @@ namespace vobb {
 // deviation bound").
 double gl_deviation_bound(const BoxPlan& plan, int m);
 
+// The GL estimator's sum of a box's 6 m^2 texels (shaders/reduce_tiles.comp): slices of at most
+// kReduceSliceTexels texels, each summed in float by 256 lanes (a lane takes every 256th texel
+// of its slice, at most 1,024 of them: far below the loop trips a driver may allow a shader,
+// 65,535 on llvmpipe, and a short float sum), then by a tree of 8 levels; the host adds a box's
+// slices in double.
+inline constexpr int kReduceSliceTexels = 256 * 1024;
+inline int reduce_slices(int m) {
+  return (6 * m * m + kReduceSliceTexels - 1) / kReduceSliceTexels;  // m <= 4096: no overflow
+}
+
 // Whether the shaders can evaluate this plan (above): false when a face's scaled plane is
 // nonzero but below 3 FLT_MIN, the threshold under which analyse_plan_rounding counts its
 // pairs as uncertain in float.

@@ -447,20 +447,27 @@ void GlObvEstimator::flush(int m) {
   glUniform1i(glGetUniformLocation(g.reduce_program, "u_m"), m);
   glUniform1i(glGetUniformLocation(g.reduce_program, "u_tiles_per_row"),
               g.atlas_layout.tiles_per_row);
+  const int slices = reduce_slices(m);
+  glUniform1i(glGetUniformLocation(g.reduce_program, "u_slice_texels"), kReduceSliceTexels);
+  glUniform1i(glGetUniformLocation(g.reduce_program, "u_slices"), slices);
+  const size_t floats = static_cast<size_t>(n) * slices;
   glBindBuffer(GL_SHADER_STORAGE_BUFFER, g.sums);
-  glBufferData(GL_SHADER_STORAGE_BUFFER, n * sizeof(float), nullptr, GL_STREAM_READ);
+  glBufferData(GL_SHADER_STORAGE_BUFFER, floats * sizeof(float), nullptr, GL_STREAM_READ);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, g.sums);
-  glDispatchCompute(n, 1, 1);
+  glDispatchCompute(n, slices, 1);
   glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
-  std::vector<float> sums(n);
-  glGetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, n * sizeof(float), sums.data());
+  std::vector<float> sums(floats);
+  glGetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, floats * sizeof(float), sums.data());
   VOBB_ASSERT(glGetError() == GL_NO_ERROR, "GL estimator batch ran without GL errors");
   ++round_trips_;
 
   const double texel_weight = 4.0 / (3.0 * m * m);
-  for (int t = 0; t < n; ++t)
-    *g.batch_out[t] =
-        g.batch_scale[t] * (g.batch_constant[t] + texel_weight * static_cast<double>(sums[t]));
+  for (int t = 0; t < n; ++t) {
+    double sum = 0;  // the slices in order; one slice: its float, as it was summed
+    for (int s = 0; s < slices; ++s)
+      sum += static_cast<double>(sums[static_cast<size_t>(t) * slices + s]);
+    *g.batch_out[t] = g.batch_scale[t] * (g.batch_constant[t] + texel_weight * sum);
+  }
   g.batch_records.clear();
   g.batch_out.clear();
   g.batch_scale.clear();

@@ -114,6 +114,26 @@ TEST(GlEstimator, MatchesCpuTwinOnAnalyticMeshes) {
   }
 }
 
+// Large m: a box's texels are summed in several slices (cubemap_bound.h), each lane looping far
+// fewer times than llvmpipe allows a shader loop (65,535 trips, after which it ends the loop
+// without an error: at m = 2048 one sum would take 98,304 trips a lane, and the values came out
+// thousands of times too small). m = 210 is the first m of two slices. The bound's summation
+// term grows with a lane's run, K = ceil(min(6 m^2, 2^18) / 256) + 9 additions (docs/
+// derivations.md, "The GL deviation bound"): the median bound stays below 10 K u (the callers'
+// 1e-5 at m <= 32 is about that too), far below the values it must tell apart from wrong ones.
+TEST(GlEstimator, MatchesCpuTwinAtLargeMWhereTheSumTakesSlices) {
+  EXPECT_EQ(reduce_slices(209), 1);
+  EXPECT_EQ(reduce_slices(210), 2);
+  EXPECT_EQ(reduce_slices(2048), 96);
+  const analytic::AnalyticMesh a = analytic::polygonal_torus();
+  VOBB_MAKE_GL(gl, a.mesh);
+  const std::vector<Obb> boxes = random_boxes(a.mesh, 3, 11);
+  for (int m : {210, 2048}) {
+    const double K = std::ceil(std::min(6.0 * m * m, 262144.0) / 256) + 9;
+    EXPECT_LT(expect_gl_matches_cpu(a.mesh, *gl, boxes, m), 10 * K * 0x1p-24) << "m " << m;
+  }
+}
+
 // Boxes beyond what float can evaluate (gl_estimator.h): the cube's faces pass the centre of a
 // box of half extent 2^127 at some 2^-128 box units, below FLT_MIN, where the shader's zeta
 // would be 0 (GL used to answer 0 for an OBV of 8e114). A box of aspect 1e120 (1e60 wide, 1e-60
