@@ -12,6 +12,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -19,6 +20,17 @@
 #include "common/mesh.h"
 
 namespace vobb::test {
+
+// How far from orthonormal the axes orthonormalize() (common/obb.cpp) makes are, as a test
+// measures them. A normalised vector's norm is 1 to about 3 eps, and the test's norm() adds 2.
+// a0 . a1 is what the second projection pass leaves (about 3 eps) plus the test's dot product
+// (3 eps); a2 = a0 x a1 carries the cross product's rounding (2 eps a component, 3.5 eps in
+// direction), plus the second pass's move of a1 (2 eps) after a2 was made, plus the dot
+// product's 3 eps: under 9 eps, taken as 12.
+inline constexpr double kOrthonormalTol = 12 * std::numeric_limits<double>::epsilon();
+// (a0 x a1) . a2 against 1: the three norms' 9 eps, plus the test's cross product and dot
+// product (5 eps): under 14 eps, taken as 16.
+inline constexpr double kRightHandedTol = 16 * std::numeric_limits<double>::epsilon();
 
 inline std::string data_dir() { return VOBB_TEST_DATA_DIR; }
 inline std::string real_mesh(const std::string& name) {
@@ -41,6 +53,24 @@ inline const std::vector<std::string>& clean_real_meshes() {
 inline bool real_meshes_required() {
   const char* v = std::getenv("VOBB_REQUIRE_REAL_MESHES");
   return v != nullptr && std::string(v) == "1";
+}
+
+// CI also sets VOBB_REQUIRE_EVERY_CHECK=1: there a check that this machine cannot run (one that
+// needs a second CPU, or gnuplot) fails the test instead of being left out.
+inline bool every_check_required() {
+  const char* v = std::getenv("VOBB_REQUIRE_EVERY_CHECK");
+  return v != nullptr && std::string(v) == "1";
+}
+
+// Whether a check that needs `what` runs here: true where it is `available`; otherwise the
+// test fails where every check is required, and says on stdout that the check is left out.
+inline bool check_runs(bool available, const std::string& what) {
+  if (available) return true;
+  if (every_check_required())
+    ADD_FAILURE() << "a check needs " << what << " (VOBB_REQUIRE_EVERY_CHECK=1)";
+  else
+    std::printf("left out here: a check that needs %s\n", what.c_str());
+  return false;
 }
 
 // Skips the current test, saying why, when real meshes are not there (offline machine); fails

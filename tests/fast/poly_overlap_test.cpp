@@ -54,9 +54,10 @@ cell_clip::Cell<NT> pair_cell(const Obb& a, const Obb& b) {
   return cells.empty() ? cell_clip::Cell<NT>() : std::move(cells.front());
 }
 
-// The estimate is not certified; it must be the exact value to far below the OBV estimator's
-// error (about 1e-4 of a box's volume), or the builder's objective would not be what it says:
-// within 1e-9 of the cells' volume, against about 1e-15 from round-off.
+// The estimate is not certified; the header promises it within 1e-9 of B's volume of the exact
+// value, far below the OBV estimator's error (about 1e-4 of a box's volume), or the builder's
+// objective would not be what it says. Checked here against the pair's cell, which lies in B,
+// so the check is at least as strict; round-off alone is about 1e-15.
 ::testing::AssertionResult close_to_exact(double estimate, const Rational& exact, const Obb& a,
                                           const Obb& b) {
   const double cell = pair_cell<double>(a, b).volume();

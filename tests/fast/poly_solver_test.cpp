@@ -136,8 +136,8 @@ TEST(PolySolver, EnclosesTheExactValueOnRealMeshesAtEverySize) {
 // The double estimate (the builder's) against the exact value. Each box: the estimate runs the
 // interval path's operations in double, rounded to nearest (half of the 2^-52 per operation
 // that width_bound counts), so its error, plus the exact value's rounding to double (half an
-// ulp of a value at most vol(B)), lies within width_bound. Over the boxes: the solver's stated
-// accuracy target, a median relative error (of the box's volume) of at most 1e-12.
+// ulp of a value at most vol(B)), lies within width_bound. Over the boxes: the median the
+// header states, at most 1e-12 of the box's volume.
 TEST(PolySolver, DoubleEstimateIsExactToRoundOff) {
   const AnalyticMesh torus = analytic::polygonal_torus();
   const std::vector<Obb> boxes = random_boxes(torus.mesh, 200, 99);

@@ -9,6 +9,7 @@
 
 #include "builder/obbtree_builder.h"
 #include "data/analytic_meshes.h"
+#include "test_common.h"
 
 namespace vobb::validate {
 namespace {
@@ -57,13 +58,8 @@ TEST(BoxCorpus, BoxesAreJitteredNodeBoxesOfTheirLevel) {
     for (size_t i = 0; i < boxes.size(); ++i) {
       const Obb& b = boxes[i];
       for (int k = 0; k < 3; ++k) {
-        // The axes come from orthonormalize() (common/obb.cpp). A normalised vector's norm is 1
-        // to about 3 eps, and this test's norm() adds 2. a0 . a1 is what the second projection
-        // pass leaves (about 3 eps) plus this test's dot product (3 eps); a2 = a0 x a1 carries the
-        // cross product's rounding (2 eps a component, 3.5 eps in direction), plus the second
-        // pass's move of a1 (2 eps) after a2 was made, plus the dot product's 3 eps: under 9 eps,
-        // taken as 12.
-        const double tol = 12 * std::numeric_limits<double>::epsilon();
+        // The axes come from orthonormalize() (common/obb.cpp).
+        const double tol = test::kOrthonormalTol;
         EXPECT_NEAR(b.axes[k].norm(), 1.0, tol) << i;
         for (int l = k + 1; l < 3; ++l) EXPECT_NEAR(b.axes[k].dot(b.axes[l]), 0.0, tol) << i;
       }

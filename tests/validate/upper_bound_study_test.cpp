@@ -31,6 +31,15 @@ UpperBoundResult study(const Mesh& mesh, EstimatePerturbation perturb, double c)
   return run_upper_bound_study(config, bound);
 }
 
+// The estimated rows of a study: both trees' kDepth + 1 layers, each at both m. The per-row
+// checks below run in loops over them, so each test first checks that they are all there.
+constexpr size_t kEstimateRows = 2 * (kDepth + 1) * 2;
+size_t estimate_rows(const UpperBoundResult& r) {
+  size_t n = 0;
+  for (const LayerBoundRow& l : r.layers) n += l.estimated.size();
+  return n;
+}
+
 // Both trees, every layer, exact: the layers are the trees' levels, Σ OBV ≥ OMV as rationals,
 // the root's single box has OMV = OBV exactly, and the gap reported is Σ OBV − OMV.
 TEST(UpperBoundStudy, EveryLayerOfBothTreesIsCertifiedExactly) {
@@ -80,6 +89,7 @@ TEST(UpperBoundStudy, EstimatesBelowOmvFailUnlessTheAllowanceCoversThem) {
   const UpperBoundResult none = study(mesh, zero, 0.0);
   EXPECT_TRUE(none.all_exact_hold());  // the perturbation reaches the estimates only
   EXPECT_FALSE(none.all_estimated_hold_with_bound());
+  ASSERT_EQ(estimate_rows(none), kEstimateRows);
   for (const LayerBoundRow& l : none.layers)
     for (const auto& e : l.estimated) {
       EXPECT_EQ(e.sum, 0.0);
@@ -88,6 +98,7 @@ TEST(UpperBoundStudy, EstimatesBelowOmvFailUnlessTheAllowanceCoversThem) {
     }
   const UpperBoundResult covered = study(mesh, zero, 1.0);
   EXPECT_TRUE(covered.all_estimated_hold_with_bound());
+  ASSERT_EQ(estimate_rows(covered), kEstimateRows);
   for (const LayerBoundRow& l : covered.layers)
     for (const auto& e : l.estimated) {
       EXPECT_FALSE(e.above);
@@ -103,6 +114,7 @@ TEST(UpperBoundStudy, EstimatesAboveOmvHoldWithoutAllowance) {
   const auto raised = [](double estimate, const Obb& box, int) { return estimate + volume(box); };
   const UpperBoundResult r = study(mesh, raised, 0.0);
   EXPECT_TRUE(r.all_estimated_hold_with_bound());
+  ASSERT_EQ(estimate_rows(r), kEstimateRows);
   for (const LayerBoundRow& l : r.layers)
     for (const auto& e : l.estimated) {
       EXPECT_TRUE(e.above);

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -157,6 +158,7 @@ TEST(BuildTree, WithoutTheGlComponentGlIsRefusedAndAutoTakesTheCpuTwin) {
   EXPECT_EQ(report.estimator, "cpu");
 }
 
+// Options out of range or contradicting each other: an error naming the option, no tree.
 TEST(BuildTree, RefusesOptionsThatContradictEachOther) {
   const Mesh mesh = analytic::cube().mesh;
   struct Case {
@@ -181,6 +183,14 @@ TEST(BuildTree, RefusesOptionsThatContradictEachOther) {
       {[](BuildOptions* o) { o->subtree_swaps = true, o->queries.resize(1); }, "--subtree-swaps"},
       {[](BuildOptions* o) { o->depth = 31; }, "--depth"},
       {[](BuildOptions* o) { o->arity = 1; }, "--arity"},
+      {[](BuildOptions* o) { o->m = 0; }, "--m"},
+      {[](BuildOptions* o) { o->lloyd = -1; }, "--lloyd"},
+      {[](BuildOptions* o) { o->lloyd = 1001; }, "--lloyd"},
+      {[](BuildOptions* o) { o->sweeps = -1; }, "--sweeps"},
+      {[](BuildOptions* o) { o->sweeps = 101; }, "--sweeps"},
+      {[](BuildOptions* o) { o->time_budget = -1; }, "--time-budget"},
+      {[](BuildOptions* o) { o->time_budget = std::nan(""); }, "--time-budget"},
+      {[](BuildOptions* o) { o->time_budget = 1e-4; }, "--time-budget"},
   };
   for (const Case& c : cases) {
     BuildOptions o = small_build();
@@ -218,8 +228,12 @@ TEST(BuildTree, ResumesFromItsCheckpoint) {
   std::filesystem::remove_all(folder);
 }
 
-// tree_error weighs layers as the certificate does: equal as rationals.
+// tree_error weighs layer l of a depth-D tree by D - l + 1 (DESIGN §1), written out here, and
+// as the certificate does: equal as rationals.
 TEST(Certify, TreeErrorIsTheCertificatesE) {
+  EXPECT_TRUE(tree_error({Rational(7), Rational(7)}) == Rational(21));  // 2 * 7 + 1 * 7
+  // 4 * 1 + 3 * 2 + 2 * 3 + 1 * 4
+  EXPECT_TRUE(tree_error({Rational(1), Rational(2), Rational(3), Rational(4)}) == Rational(20));
   const Mesh mesh = analytic::polygonal_torus().mesh;
   Tree tree;
   ASSERT_TRUE(build_tree(mesh, small_build(), &tree).is_ok());
@@ -229,8 +243,15 @@ TEST(Certify, TreeErrorIsTheCertificatesE) {
   ASSERT_TRUE(certify(mesh, tree, o, &c).is_ok());
   ASSERT_TRUE(c.ok());
   std::vector<Rational> omv;
-  for (const exact::LayerCertificate& l : c.layers) omv.push_back(l.omv);
+  Rational weighted = 0;
+  const long depth = static_cast<long>(c.layers.size()) - 1;
+  for (const exact::LayerCertificate& l : c.layers) {
+    omv.push_back(l.omv);
+    weighted += Rational(static_cast<double>(depth - l.level + 1)) * l.omv;
+  }
+  ASSERT_GE(depth, 2);
   EXPECT_TRUE(tree_error(omv) == c.weighted_error);
+  EXPECT_TRUE(weighted == c.weighted_error);
 }
 
 TEST(Certify, RefusesATreeOfAnotherMesh) {
