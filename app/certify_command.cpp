@@ -89,7 +89,17 @@ void print_text(const exact::Certificate& c, bool rational) {
     std::printf("%5d %7zu %24.17g %24.17g %24.17g %6s\n", l.level, l.boxes, l.omv_nearest,
                 l.sum_obv_nearest, l.overlap_nearest, l.upper_bound_holds() ? "holds" : "FAILS");
   std::printf("weighted error e: %.17g\n", c.weighted_error_nearest);
-  if (rational) std::printf("e (rational): %s\n", c.weighted_error.get_str().c_str());
+  if (rational) {
+    for (const auto& l : c.layers) {
+      std::printf("level %d OMV (rational): %s\n", l.level, l.omv.get_str().c_str());
+      if (l.omv_path == "both")
+        std::printf("level %d OMV by clipping (rational): %s\n", l.level,
+                    l.omv_clip.get_str().c_str());
+      std::printf("level %d sum OBV (rational): %s\n", l.level, l.sum_obv.get_str().c_str());
+      std::printf("level %d overlap (rational): %s\n", l.level, l.overlap().get_str().c_str());
+    }
+    std::printf("e (rational): %s\n", c.weighted_error.get_str().c_str());
+  }
   std::printf("containment: %s (%zu violations in %zu node-face pairs)",
               c.containment.ok() ? "ok" : "FAILED", c.containment.violations,
               c.containment.checked_pairs);

@@ -62,9 +62,14 @@ void print_text(const CompareResult& r, bool rational) {
         r.trees[0].depth, r.trees[1].depth, r.levels - 1);
   std::printf("\ne obbtree %.17g, e variational %.17g, change %+.2f %%\n", r.e[0], r.e[1],
               change(r.e[0], r.e[1]));
-  if (rational)
+  if (rational) {
+    for (size_t l = 0; l < r.levels; ++l)
+      std::printf(
+          "layer %zu OMV obbtree (rational): %s\nlayer %zu OMV variational (rational): %s\n", l,
+          r.layer(0, l).omv.get_str().c_str(), l, r.layer(1, l).omv.get_str().c_str());
     std::printf("e obbtree (rational): %s\ne variational (rational): %s\n",
                 r.e_exact[0].get_str().c_str(), r.e_exact[1].get_str().c_str());
+  }
   std::printf("build seconds: obbtree %.3f, variational %.3f; both certified: %s\n",
               r.build_seconds[0], r.build_seconds[1], r.certified() ? "yes" : "NO");
 }

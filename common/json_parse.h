@@ -10,7 +10,7 @@
 namespace vobb {
 
 // The checksum our checkpoint files carry in "sha256": the SHA-256 of the document without that
-// field, as nlohmann dumps it (keys sorted, doubles in shortest round-trip form), so that
+// field, as nlohmann dumps it (keys sorted, doubles in digits that read back exactly), so that
 // parsing a saved file and dumping it again gives the bytes that were hashed.
 template <class Json>
 std::string json_checksum(Json j) {

@@ -4,8 +4,9 @@
 //        "depth","nodes":[{"id","parent","level","center","axes","half_extents","children",
 //        "faces"}]}, axes[k] being axis k in world coordinates.
 // Boxes: {"boxes":[{"center","axes","half_extents"}, ...]}.
-// Readers ignore keys they do not know. Doubles are written in their shortest round-trip
-// form, so a tree survives write + read bit for bit, and the same tree gives the same bytes.
+// Readers ignore keys they do not know. Doubles are written with digits that read back to the
+// same double (nlohmann's Grisu2: at most 17 significant digits, nearly always the fewest), so
+// a tree survives write + read bit for bit, and the same tree gives the same bytes.
 // Writes are atomic (temp file + rename).
 #pragma once
 

@@ -112,7 +112,8 @@ struct CertifyOptions {
 // Threads: the boxes' OBV are computed in parallel, then the layers, the layers with most boxes
 // first, each layer's boxes in parallel (TBB's threads: limit them with tbb::global_control or
 // a task_arena). The filtered path holds one box's cells per thread. A rational path's union
-// takes one Nef(X) per layer at a time, so memory grows with the mesh, not with the threads.
+// needs a Nef(X) per layer worker (each worker's thread builds its own), so there are at most
+// as many layer workers as memory_bytes holds Nef(X) for (layer_workers), and at least one.
 // The result is the same for any number of threads; only `seconds` varies.
 Certificate certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& options);
 

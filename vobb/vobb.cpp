@@ -392,6 +392,10 @@ Status check_build_options(const BuildOptions& o) {
   if (o.depth < 0 || o.depth > 30) return Status::error("--depth must be within 0..30");
   if (o.arity < 2 || o.arity > 64) return Status::error("--arity must be within 2..64");
   if (o.m < 1 || o.m > 4096) return Status::error("--m must be within 1..4096");
+  if (o.lloyd < 0 || o.lloyd > 1000) return Status::error("--lloyd must be within 0..1000");
+  if (o.sweeps < 0 || o.sweeps > 100) return Status::error("--sweeps must be within 0..100");
+  if (!(o.time_budget == 0 || (o.time_budget >= 1e-3 && o.time_budget <= 1e9)))
+    return Status::error("--time-budget must be 0 (none) or within 1e-3..1e9 seconds");
   return Status::ok();
 }
 
