@@ -84,12 +84,11 @@ Status read_variational_state(const std::string& path, const std::string& finger
     VariationalState st;
     // Counts are whole numbers as saved: nlohmann's get<int> would truncate 1.5 to 1.
     auto count = [&](const char* key) {
-      const nlohmann::json& v = j.at(key);
-      if (!v.is_number_integer() || v.get<int64_t>() < 0 ||
-          v.get<int64_t>() > (int64_t{1} << 31) - 1)
+      int64_t x = 0;
+      if (!json_integer_in(j.at(key), 0, (int64_t{1} << 31) - 1, &x))
         throw nlohmann::json::type_error::create(302, std::string(key) + " is not a count",
                                                  nullptr);
-      return static_cast<int>(v.get<int64_t>());
+      return static_cast<int>(x);
     };
     st.split_levels = count("split_levels");
     st.sweeps = count("sweeps");
@@ -102,10 +101,10 @@ Status read_variational_state(const std::string& path, const std::string& finger
       TreeNode n;
       n.id = static_cast<int32_t>(i);
       auto integer = [&](const nlohmann::json& v) {
-        if (!v.is_number_integer() || v.get<int64_t>() < -1 ||
-            v.get<int64_t>() > (int64_t{1} << 31) - 1)
+        int64_t x = 0;
+        if (!json_integer_in(v, -1, (int64_t{1} << 31) - 1, &x))
           throw nlohmann::json::type_error::create(302, "not an index", nullptr);
-        return static_cast<int32_t>(v.get<int64_t>());
+        return static_cast<int32_t>(x);
       };
       n.parent = integer(jn.at("parent"));
       n.level = integer(jn.at("level"));

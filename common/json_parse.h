@@ -2,6 +2,8 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -17,6 +19,24 @@ std::string json_checksum(Json j) {
   j.erase("sha256");
   const std::string body = j.dump();
   return sha256_hex(body.data(), body.size());
+}
+
+// Whether `v` is an integer within [lo, hi], and then its value. nlohmann keeps an integer above
+// INT64_MAX as unsigned, which get<int64_t> would wrap to a negative one (2^64 - 1 to -1).
+template <class Json>
+bool json_integer_in(const Json& v, int64_t lo, int64_t hi, int64_t* out) {
+  if (!v.is_number_integer()) return false;
+  int64_t x = 0;
+  if (v.is_number_unsigned()) {
+    const uint64_t u = v.template get<uint64_t>();
+    if (u > static_cast<uint64_t>(std::numeric_limits<int64_t>::max())) return false;
+    x = static_cast<int64_t>(u);
+  } else {
+    x = v.template get<int64_t>();
+  }
+  if (x < lo || x > hi) return false;
+  *out = x;
+  return true;
 }
 
 // Parses `text` into *out. False, with *out reset, when it is not JSON or when arrays and

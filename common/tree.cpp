@@ -26,6 +26,9 @@ Status validate_tree(const Tree& tree, const std::string& display) {
   const int32_t n = static_cast<int32_t>(tree.nodes.size());
   if (n == 0) return fail("tree has no nodes");
   if (tree.arity < 2) return fail("arity must be at least 2");
+  if (tree.depth < 0 || tree.depth > kMaxTreeDepth)
+    return fail("depth " + std::to_string(tree.depth) + " is outside 0.." +
+                std::to_string(kMaxTreeDepth));
   int max_level = 0;
   for (int32_t i = 0; i < n; ++i) {
     const TreeNode& node = tree.nodes[i];

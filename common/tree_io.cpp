@@ -45,8 +45,11 @@ std::string get_box(const Json& j, Obb* b) {
 }
 
 bool get_int(const Json& j, const char* key, long long* out) {
-  if (!j.contains(key) || !j[key].is_number_integer()) return false;
-  *out = j[key].get<long long>();
+  int64_t x = 0;
+  if (!j.contains(key) || !json_integer_in(j[key], std::numeric_limits<int64_t>::min(),
+                                           std::numeric_limits<int64_t>::max(), &x))
+    return false;
+  *out = x;
   return true;
 }
 
@@ -55,9 +58,8 @@ bool get_int_list(const Json& j, std::vector<int32_t>* out) {
   out->clear();
   out->reserve(j.size());
   for (const Json& v : j) {
-    if (!v.is_number_integer()) return false;
-    const long long x = v.get<long long>();
-    if (x < INT32_MIN || x > INT32_MAX) return false;
+    int64_t x = 0;
+    if (!json_integer_in(v, INT32_MIN, INT32_MAX, &x)) return false;
     out->push_back(static_cast<int32_t>(x));
   }
   return true;
@@ -106,8 +108,10 @@ Status parse_tree(const std::string& text, const std::string& display, Tree* tre
     return fail("unsupported version (expected 1)");
   if (!get_int(j, "arity", &arity) || arity < 2 || arity > 1 << 20)
     return fail("bad or missing 'arity'");
-  if (!get_int(j, "depth", &depth) || depth < 0 || depth > 1 << 20)
-    return fail("bad or missing 'depth'");
+  if (!get_int(j, "depth", &depth)) return fail("bad or missing 'depth'");
+  if (depth < 0 || depth > kMaxTreeDepth)
+    return fail("depth " + std::to_string(depth) + " is outside 0.." +
+                std::to_string(kMaxTreeDepth));
   if (!j.contains("mesh") || !j["mesh"].is_object() ||
       !get_int(j["mesh"], "triangles", &triangles) || triangles < 0)
     return fail("bad or missing 'mesh.triangles'");
@@ -140,7 +144,7 @@ Status parse_tree(const std::string& text, const std::string& display, Tree* tre
       return fail(at + "bad or missing 'id', 'parent' or 'level'");
     if (id != static_cast<long long>(i))
       return fail(at + "id " + std::to_string(id) + " out of order");
-    if (parent < -1 || parent > INT32_MAX || level < 0 || level > INT32_MAX)
+    if (parent < -1 || parent > INT32_MAX || level < 0 || level > depth)
       return fail(at + "bad 'parent' or 'level'");
     n.id = static_cast<int32_t>(id);
     n.parent = static_cast<int32_t>(parent);
@@ -154,16 +158,22 @@ Status parse_tree(const std::string& text, const std::string& display, Tree* tre
       has_faces[i] = 1;
     }
   }
-  // Fill in inner nodes that left out their faces, children first.
+  // Fill in inner nodes that left out their faces, children first. Each child is taken only
+  // by the parent it names, once, one level below it: the nodes form a tree of at most
+  // kMaxTreeDepth levels, so the faces filled in are at most that many times those listed.
   const int32_t count = static_cast<int32_t>(t.nodes.size());
+  std::vector<char> taken(t.nodes.size(), 0);
   for (int32_t i = count - 1; i >= 0; --i) {
     TreeNode& n = t.nodes[i];
-    if (has_faces[i] || n.is_leaf()) continue;
     for (int32_t c : n.children) {
-      if (c <= i || c >= count)
+      if (c <= i || c >= count || t.nodes[c].parent != i || t.nodes[c].level != n.level + 1 ||
+          taken[c])
         return fail("node " + std::to_string(i) + ": bad child " + std::to_string(c));
-      n.faces.insert(n.faces.end(), t.nodes[c].faces.begin(), t.nodes[c].faces.end());
+      taken[c] = 1;
     }
+    if (has_faces[i] || n.is_leaf()) continue;
+    for (int32_t c : n.children)
+      n.faces.insert(n.faces.end(), t.nodes[c].faces.begin(), t.nodes[c].faces.end());
     std::sort(n.faces.begin(), n.faces.end());
   }
   Status s = validate_tree(t, display);

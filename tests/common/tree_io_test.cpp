@@ -93,6 +93,14 @@ TEST(TreeIo, RefusesBrokenTreesWithOneLine) {
   refused(edit("\"center\":[", "\"centre\":["), "center");
   refused(edit("\"depth\":1", "\"depth\":3"), "deepest leaf");
   refused(edit("\"parent\":0", "\"parent\":2"), "bad child 1");
+  refused(edit("\"children\":[1,2]", "\"children\":[1,1]"), "bad child 1");  // taken twice
+  refused(edit("\"level\":1", "\"level\":2"), "bad 'parent' or 'level'");    // below the depth
+  // Integers beyond int64 are not wrapped (2^64 - 1 would read as -1, the root's parent).
+  refused(edit("\"parent\":0", "\"parent\":18446744073709551615"), "'parent'");
+  refused(edit("\"faces\":[4,5,6,7]", "\"faces\":[4,5,6,18446744073709551615]"), "bad 'faces'");
+  // Inner nodes' faces are filled in from their children's: a chain of one-child nodes deeper
+  // than kMaxTreeDepth could make a small file cost its length times its faces in memory.
+  refused(edit("\"depth\":1", "\"depth\":65"), "depth 65 is outside 0..64");
   // A sha256 or method of another type is damage, not absence: it must not turn the mesh check off.
   refused(edit("\"sha256\":\"abc\"", "\"sha256\":5"), "bad 'mesh.sha256'");
   refused(edit("\"method\":\"test\"", "\"method\":[1]"), "bad 'method'");
