@@ -71,6 +71,11 @@ bool segment_may_meet(const Vec3& p, const Vec3& q, const Aabb& box) {
 }  // namespace
 
 Location locate_point(const Mesh& mesh, const AabbTree& faces, const Vec3& p) {
+  return locate_point(mesh, faces, p, nullptr);
+}
+
+Location locate_point(const Mesh& mesh, const AabbTree& faces, const Vec3& p,
+                      const std::function<bool(int32_t)>& left_out) {
   const Aabb bb = faces.bounds();  // the tree's root: no pass over the vertices per query
   const double reach = 2.0 * (bb.hi - bb.lo).norm() + (p - 0.5 * (bb.lo + bb.hi)).norm() + 1.0;
   // Directions with irrational-looking ratios make edge and vertex hits rare; each retry
@@ -87,7 +92,7 @@ Location locate_point(const Mesh& mesh, const AabbTree& faces, const Vec3& p) {
     // mesh for a long diagonal segment; the slab test accepts only the boxes along it.
     faces.for_each_accepted([&](const Aabb& box) { return segment_may_meet(p, q, box); },
                             [&](int32_t f) {
-                              if (degenerate || on_face) return;
+                              if (degenerate || on_face || (left_out && left_out(f))) return;
                               switch (segment_vs_triangle(p, q, mesh.corner(f, 0),
                                                           mesh.corner(f, 1), mesh.corner(f, 2))) {
                                 case Hit::kProper:

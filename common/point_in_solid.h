@@ -6,6 +6,8 @@
 // so the answer is deterministic). Precondition: the mesh is a solid.
 #pragma once
 
+#include <functional>
+
 #include "common/bvh.h"
 #include "common/mesh.h"
 
@@ -15,5 +17,11 @@ enum class Location { kOutside, kInside, kOnSurface };
 
 // `faces` must be AabbTree::over_faces(mesh).
 Location locate_point(const Mesh& mesh, const AabbTree& faces, const Vec3& p);
+
+// The same against the faces for which `left_out` is false: those must be closed surfaces
+// (the other shells of a mesh, say), and the point lies inside where an odd number of them
+// enclose it.
+Location locate_point(const Mesh& mesh, const AabbTree& faces, const Vec3& p,
+                      const std::function<bool(int32_t)>& left_out);
 
 }  // namespace vobb

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <numeric>
 
+#include "common/bvh.h"
+#include "common/point_in_solid.h"
 #include "common/self_intersections.h"
 #include "common/status.h"
 
@@ -99,15 +101,6 @@ struct DisjointSets {
     if (a != b) parent[std::max(a, b)] = std::min(a, b);
   }
 };
-
-// Solid angle of triangle abc seen from p (Van Oosterom and Strackee), signed.
-double solid_angle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
-  const Vec3 x = a - p, y = b - p, z = c - p;
-  const double lx = x.norm(), ly = y.norm(), lz = z.norm();
-  const double num = x.dot(y.cross(z));
-  const double den = lx * ly * lz + x.dot(y) * lz + y.dot(z) * lx + z.dot(x) * ly;
-  return 2.0 * std::atan2(num, den);
-}
 
 }  // namespace
 
@@ -282,30 +275,30 @@ size_t pinched_vertices(const Mesh& mesh, const std::vector<char>& degenerate, D
   return static_cast<size_t>(std::count(pinched.begin(), pinched.end(), 1));
 }
 
-// The shells that face the wrong way for their nesting depth (winding number 0 outside, 1
-// inside), given the shells' exact signed volumes and their sum. The shells must be closed,
-// manifold, consistently oriented and disjoint.
+// The shells that face the wrong way for their nesting depth: a shell that an even number of
+// the others enclose must bound its solid from outside (positive volume), one that an odd
+// number enclose a cavity (negative), given the shells' exact signed volumes and their sum.
+// The shells must be closed, manifold, consistently oriented and disjoint. Decided exactly, a
+// vertex of each shell located against the others' faces by one ray each (point_in_solid.h):
+// a vertex of one shell lies on no other.
 size_t inward_shells(const Mesh& mesh, const std::vector<std::vector<int32_t>>& shell_faces,
                      const std::vector<Rational>& shell_volume, const Rational& total) {
+  if (shell_faces.size() == 1) return sgn(total) > 0 ? 0 : 1;
+  std::vector<int32_t> shell_of(mesh.faces.size(), -1);
+  for (size_t s = 0; s < shell_faces.size(); ++s)
+    for (int32_t f : shell_faces[s]) shell_of[f] = static_cast<int32_t>(s);
+  const AabbTree faces = AabbTree::over_faces(mesh);
   size_t wrong = 0;
-  if (shell_faces.size() == 1) {
-    wrong = sgn(total) > 0 ? 0 : 1;
-  } else {
-    for (size_t s = 0; s < shell_faces.size(); ++s) {
-      // Winding number of the other shells at a vertex of this one. The vertex is off
-      // every other shell (no intersections), so the sum is an integer up to round-off.
-      const Vec3& p = mesh.corner(shell_faces[s][0], 0);
-      double omega = 0.0;
-      for (size_t t = 0; t < shell_faces.size(); ++t) {
-        if (t == s) continue;
-        for (int32_t f : shell_faces[t])
-          omega += solid_angle(p, mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2));
-      }
-      const long w = std::lround(omega / (4.0 * M_PI));
-      const int sign = sgn(shell_volume[s]);
-      const bool ok = (w == 0 && sign > 0) || (w == 1 && sign < 0);
-      if (!ok) ++wrong;
-    }
+  for (size_t s = 0; s < shell_faces.size(); ++s) {
+    const Vec3& p = mesh.corner(shell_faces[s][0], 0);
+    // Degenerate faces (none here: they are a defect checked before) belong to no shell.
+    const Location at = locate_point(mesh, faces, p, [&](int32_t f) {
+      return shell_of[f] == static_cast<int32_t>(s) || shell_of[f] < 0;
+    });
+    VOBB_ASSERT(at != Location::kOnSurface, "a shell's vertex lies on no other shell");
+    const int sign = sgn(shell_volume[s]);
+    const bool ok = at == Location::kOutside ? sign > 0 : sign < 0;
+    if (!ok) ++wrong;
   }
   return wrong;
 }

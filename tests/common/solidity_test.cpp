@@ -86,6 +86,48 @@ TEST(Solidity, CavityFacingTheWrongWay) {
   EXPECT_EQ(d.count, 1u);
 }
 
+// A cube with a cavity holding an island: three shells, each facing the way its nesting depth
+// says (0 and 2 shells around: out; 1: into the cavity). Flipping one shell makes that one
+// shell wrong, whatever the others enclose.
+TEST(Solidity, NestedShellsEachFaceTheWayTheirDepthSays) {
+  const Mesh nested =
+      append(analytic::cube_with_cavity(4, 1, 3).mesh, cube(1, Vec3(1.5, 1.5, 1.5)).mesh);
+  const SolidityReport r = check_solidity(nested);
+  EXPECT_TRUE(r.solid()) << r.verdict();
+  EXPECT_EQ(r.shells, 3u);
+  EXPECT_EQ(r.volume, Rational(64 - 8 + 1));
+  // Faces 0-11 the outer cube, 12-23 the cavity, 24-35 the island.
+  for (size_t first : {0, 12, 24}) {
+    Mesh m = nested;
+    for (size_t f = first; f < first + 12; ++f) std::swap(m.faces[f][1], m.faces[f][2]);
+    const DefectCount d = only_defect(m);
+    EXPECT_EQ(d.defect, Defect::kInwardOriented) << first;
+    EXPECT_EQ(d.count, 1u) << first;
+  }
+}
+
+// Many shells: 1,000 disjoint tetrahedra on a grid, one of them turned inside out.
+TEST(Solidity, ManyDisjointShellsAreLocatedEachAgainstTheOthers) {
+  Mesh m;
+  for (int k = 0; k < 1000; ++k) {
+    const Vec3 o(3.0 * (k % 10), 3.0 * (k / 10 % 10), 3.0 * (k / 100));
+    const int32_t b = static_cast<int32_t>(m.vertices.size());
+    for (const Vec3& v : {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)})
+      m.vertices.push_back(o + v);
+    for (const Face& f : {Face{b, b + 2, b + 1}, Face{b, b + 1, b + 3}, Face{b, b + 3, b + 2},
+                          Face{b + 1, b + 2, b + 3}})
+      m.faces.push_back(f);
+  }
+  const SolidityReport r = check_solidity(m);
+  EXPECT_TRUE(r.solid()) << r.verdict();
+  EXPECT_EQ(r.shells, 1000u);
+  EXPECT_EQ(r.volume, Rational(1000) / Rational(6));
+  for (size_t f = 4 * 537; f < 4 * 538; ++f) std::swap(m.faces[f][1], m.faces[f][2]);
+  const DefectCount d = only_defect(m);
+  EXPECT_EQ(d.defect, Defect::kInwardOriented);
+  EXPECT_EQ(d.count, 1u);
+}
+
 TEST(Solidity, DisjointShellsAreASolid) {
   const Mesh m = append(cube().mesh, cube(1, Vec3(3, 0, 0)).mesh);
   const SolidityReport r = check_solidity(m);
