@@ -126,6 +126,10 @@ class CompareCommand final : public Command {
     LoadedMesh loaded;
     Status s = load_input_solid(mesh_, &loaded);
     if (!s) return refuse(s);
+    if (!figure_.empty()) {  // before the run, not after it
+      s = check_figure_context();
+      if (!s) return refuse(Status::error(figure_ + ": " + s.message()));
+    }
     CompareOptions o;
     o.build = build_options(flags_);
     o.rational = rational_;
@@ -149,7 +153,7 @@ class CompareCommand final : public Command {
       CompareFigure fig;
       RgbaImage image;
       s = draw_compare_figure(loaded.mesh, r, figure_up_, o.build.note, &image, &fig);
-      if (!s) return refuse(Status::error(figure_ + ": " + s.message()));
+      if (!s) return could_not_finish(Status::error(figure_ + ": " + s.message()));
       s = write_png(figure_, image);
       if (!s) return could_not_finish(s);  // its folder took a file when the run started
       std::fprintf(stderr,

@@ -68,7 +68,7 @@ int run_validate_command(const ValidateFlags& f) {
   }
   validate::SuiteReport report;
   const Status s = validate::run_validation_suite(o, &report);
-  if (!s) return refuse(s);
+  if (!s) return report.ran ? could_not_finish(s) : refuse(s);
   for (const validate::SuiteCheck& c : report.checks)
     std::printf("%-4s %-50s %s\n", c.passed ? "ok" : "FAIL", c.name.c_str(), c.detail.c_str());
   for (const std::string& n : report.notes) std::printf("note: %s\n", n.c_str());

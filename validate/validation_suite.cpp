@@ -887,6 +887,7 @@ Status run_validation_suite(const SuiteOptions& options, SuiteReport* report) {
 
   // Run, check, report.
   SuiteRun run;
+  report->ran = true;
   run_studies(options, plan, &meshes, &run);
   check_discretization(run, report);
   check_trees_and_stiff_cases(run, report);

@@ -56,11 +56,14 @@ struct SuiteReport {
   std::vector<std::string> notes;  // e.g. "gnuplot not found: plots skipped"
   double seconds = 0;
   std::string summary_path;
+  bool ran = false;  // the inputs were taken and the studies ran
   bool ok() const;
 };
 
-// Bad input (a missing mesh, an output folder that cannot be written) gives a failed Status
-// with one line; otherwise the report says which checks passed.
+// Bad input (a missing mesh, an output folder that cannot be made) gives a failed Status with
+// one line before any study runs (`ran` false). A file that cannot be written after the studies
+// (a disk that fills) gives one too, with `ran` true, and the files written before it stay.
+// Otherwise the report says which checks passed.
 Status run_validation_suite(const SuiteOptions& options, SuiteReport* report);
 
 }  // namespace vobb::validate

@@ -62,4 +62,11 @@ Status draw_compare_figure(const Mesh& mesh, const CompareResult& result, const 
   return Status::ok();
 }
 
+Status check_figure_context() {
+  std::unique_ptr<GlContext> gl;
+  const Status s = GlContext::create(&gl);
+  if (!s) return Status::error("cannot draw the figure: " + s.message());
+  return Status::ok();
+}
+
 }  // namespace vobb

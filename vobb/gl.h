@@ -28,4 +28,8 @@ Status draw_compare_figure(const Mesh& mesh, const CompareResult& result, const 
                            const std::function<void(const std::string&)>& note, RgbaImage* image,
                            CompareFigure* figure);
 
+// Whether draw_compare_figure can make its GL context here: makes one and lets it go, so that
+// a run whose last step is the figure can be refused before its work.
+Status check_figure_context();
+
 }  // namespace vobb
