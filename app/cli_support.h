@@ -146,7 +146,9 @@ inline Status check_output_is_writable(const std::string& option, const std::str
   fs::path dir = target.parent_path();
   if (dir.empty()) dir = ".";
   if (!fs::is_directory(dir, ec))
-    return Status::error(option + " " + output + ": no such folder " + dir.string());
+    return Status::error(option + " " + output + ": " +
+                         (fs::exists(dir, ec) ? dir.string() + " is not a folder"
+                                              : "no such folder " + dir.string()));
   const long name_max = ::pathconf(dir.c_str(), _PC_NAME_MAX);
   if (name_max > 0 && target.filename().string().size() > static_cast<size_t>(name_max))
     return Status::error(option + " " + output + ": file name longer than the " +
@@ -193,12 +195,38 @@ inline void say_pending_notes() {
 // CLI::Range lets NaN through (every comparison with it is false), and an unsigned option
 // takes "-1" as 2^64 - 1, so numbers are checked here.
 
-// A finite number (no nan, inf, or text).
+// Whether `s` is a number in decimal notation: an optional sign, digits with at most one point
+// (a digit on one side of it at least), an optional exponent. strtod alone would also take
+// hexadecimal ("0x10"), leading blanks, "inf" and "nan".
+inline bool is_decimal_number(const std::string& s) {
+  std::size_t i = 0;
+  const auto digits = [&] {
+    const std::size_t from = i;
+    while (i < s.size() && std::isdigit(static_cast<unsigned char>(s[i])) != 0) ++i;
+    return i - from;
+  };
+  if (i < s.size() && (s[i] == '+' || s[i] == '-')) ++i;
+  std::size_t mantissa = digits();
+  if (i < s.size() && s[i] == '.') {
+    ++i;
+    mantissa += digits();
+  }
+  if (mantissa == 0) return false;
+  if (i < s.size() && (s[i] == 'e' || s[i] == 'E')) {
+    ++i;
+    if (i < s.size() && (s[i] == '+' || s[i] == '-')) ++i;
+    if (digits() == 0) return false;
+  }
+  return i == s.size();
+}
+
+// A finite number in decimal notation (no nan, inf, hexadecimal, blanks or text).
 inline const CLI::Validator kFinite(
     [](std::string& s) -> std::string {
+      if (!is_decimal_number(s)) return "'" + s + "' is not a number in decimal notation";
       char* end = nullptr;
       const double v = std::strtod(s.c_str(), &end);
-      if (s.empty() || end == nullptr || *end != '\0') return "'" + s + "' is not a number";
+      if (end == nullptr || *end != '\0') return "'" + s + "' is not a number";
       if (!std::isfinite(v)) return "'" + s + "' is not a finite number";
       return "";
     },

@@ -16,9 +16,19 @@ namespace vobb::app {
 
 namespace {
 
-// The command named on the line, or "" when none; an unknown one is refused with the list.
+// The command named on the line, or "" when none; an unknown one is refused with the list, and
+// so is an option before the command other than vobb's own (--help, --version).
 bool named_command(int argc, char** argv, CLI::App& app, std::string* command) {
-  if (argc < 2 || argv[1][0] == '-') return true;
+  if (argc < 2) return true;
+  if (argv[1][0] == '-') {
+    const std::string flag = argv[1];
+    if (flag == "-h" || flag == "--help" || flag == "--version") return true;
+    std::fprintf(stderr,
+                 "vobb: usage: unknown option '%s' before the command; a command's options "
+                 "follow it (see vobb --help)\n",
+                 one_line(flag).c_str());
+    return false;
+  }
   std::string names;
   for (const CLI::App* sc : app.get_subcommands([](CLI::App*) { return true; })) {
     names += (names.empty() ? "" : ", ") + sc->get_name();

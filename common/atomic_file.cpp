@@ -181,7 +181,9 @@ Status make_checkpoint_folder(const std::string& what, const std::string& folder
   fs::path parent = own.parent_path();
   if (parent.empty()) parent = ".";
   if (!fs::is_directory(folder, ec) && !fs::is_directory(parent, ec))
-    return Status::error(what + ": no such folder " + parent.string());
+    return Status::error(what + ": " +
+                         (fs::exists(parent, ec) ? parent.string() + " is not a folder"
+                                                 : "no such folder " + parent.string()));
   fs::create_directory(folder, ec);
   if (ec) return Status::error(what + ": cannot make the checkpoint folder: " + ec.message());
   // A folder such as /sys/kernel exists and takes no file.

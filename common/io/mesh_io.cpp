@@ -179,9 +179,12 @@ Status read_off(const Reader& r, LoadedMesh* out) {
                                          std::to_string(t.size() - first - 3) +
                                          " more values); OFF gives the counts, each vertex "
                                          "and each face a line");
-  long long nv, nf;
+  long long nv, nf, ne = 0;
   if (!parse_int(t[first], &nv) || !parse_int(t[first + 1], &nf) || nv < 0 || nf < 0)
     return r.fail_at(lines.number(), "bad vertex or face count");
+  // The edge count, where given, is not used (writers often put 0), but it is a count.
+  if (t.size() - first == 3 && (!parse_int(t[first + 2], &ne) || ne < 0))
+    return r.fail_at(lines.number(), "bad edge count '" + std::string(t[first + 2]) + "'");
   const size_t left = r.text().size() - std::min(r.text().size(), lines.offset());
   if (!count_fits(nv, 6, left + 1) || nv > kMaxIndex)
     return r.fail_at(lines.number(), "truncated: header promises " + std::to_string(nv) +
@@ -701,11 +704,29 @@ Status read_stl_binary(const Reader& r, LoadedMesh* out) {
   return Status::ok();
 }
 
+// ASCII STL's keywords are lower case in its grammar; some writers use upper case: taken either
+// way, letter by letter.
+bool stl_keyword(std::string_view word, std::string_view keyword) {
+  if (word.size() != keyword.size()) return false;
+  for (size_t i = 0; i < word.size(); ++i)
+    if (std::tolower(static_cast<unsigned char>(word[i])) != keyword[i]) return false;
+  return true;
+}
+
+// Whether the text starts as an ASCII STL does: "solid" (in either case) after any blanks.
+bool starts_ascii_stl(std::string_view d) {
+  const size_t at = std::min(d.find_first_not_of(" \t\r\n"), d.size());
+  const std::string_view word = d.substr(at, 5);
+  return stl_keyword(word, "solid") &&
+         (d.size() == at + 5 || std::isspace(static_cast<unsigned char>(d[at + 5])) != 0);
+}
+
 Status read_stl_ascii(const Reader& r, LoadedMesh* out) {
   Lines lines(r.text());
   std::vector<std::string_view> t;
   Mesh& m = out->mesh;
-  if (!lines.next_tokens(&t, false) || t[0] != "solid") return r.fail("not an STL file");
+  if (!lines.next_tokens(&t, false) || !stl_keyword(t[0], "solid"))
+    return r.fail("not an STL file");
   // The grammar, one keyword line each: facet normal nx ny nz / outer loop / vertex x y z
   // (three times) / endloop / endfacet. A line out of that order, or with other tokens, is
   // refused: read loosely it could drop or merge corners without a word.
@@ -728,15 +749,15 @@ Status read_stl_ascii(const Reader& r, LoadedMesh* out) {
       if (t.size() == 1 &&
           k.find_first_not_of(std::string_view("\x1a\0", 2)) == std::string_view::npos)
         continue;
-      if (k != "solid")
+      if (!stl_keyword(k, "solid"))
         return r.fail_at(lines.number(),
                          "unexpected '" + std::string(k.substr(0, 32)) + "' after endsolid");
       ended = false;
       continue;
     }
-    if (k == "facet") {
+    if (stl_keyword(k, "facet")) {
       if (at != At::kSolid) return r.fail_at(lines.number(), "facet inside a facet");
-      if (t.size() < 2 || t[1] != "normal")
+      if (t.size() < 2 || !stl_keyword(t[1], "normal"))
         return r.fail_at(lines.number(), "'facet' without 'normal'");
       if (!(s = keyword_line("facet normal", 5))) return s;
       // The normal is ignored, but must be numbers: nan, inf and MSVC's 1.#IND / 1.#QNAN, which
@@ -750,15 +771,15 @@ Status read_stl_ascii(const Reader& r, LoadedMesh* out) {
                            "not a number: '" + std::string(t[c].substr(0, 32)) + "'");
       }
       at = At::kFacet;
-    } else if (k == "outer") {
+    } else if (stl_keyword(k, "outer")) {
       if (at != At::kFacet)
         return r.fail_at(lines.number(), "'outer loop' outside a facet, or twice");
-      if (t.size() < 2 || t[1] != "loop")
+      if (t.size() < 2 || !stl_keyword(t[1], "loop"))
         return r.fail_at(lines.number(), "'outer' without 'loop'");
       if (!(s = keyword_line("outer loop", 2))) return s;
       at = At::kLoop;
       corners = 0;
-    } else if (k == "vertex") {
+    } else if (stl_keyword(k, "vertex")) {
       if (at != At::kLoop) return r.fail_at(lines.number(), "vertex outside an outer loop");
       if (corners == 3) return r.fail_at(lines.number(), "facet with more than 3 vertices");
       if (t.size() < 4) return r.fail_at(lines.number(), "vertex needs 3 coordinates");
@@ -772,12 +793,12 @@ Status read_stl_ascii(const Reader& r, LoadedMesh* out) {
                                              "' after the vertex's coordinates");
       m.vertices.push_back(p);
       ++corners;
-    } else if (k == "endloop") {
+    } else if (stl_keyword(k, "endloop")) {
       if (at != At::kLoop) return r.fail_at(lines.number(), "'endloop' outside an outer loop");
       if (corners != 3) return r.fail_at(lines.number(), "facet without exactly 3 vertices");
       if (!(s = keyword_line("endloop", 1))) return s;
       at = At::kLoopEnd;
-    } else if (k == "endfacet") {
+    } else if (stl_keyword(k, "endfacet")) {
       if (at == At::kLoop) return r.fail_at(lines.number(), "'endfacet' before 'endloop'");
       if (at != At::kLoopEnd)
         return r.fail_at(lines.number(), "'endfacet' without a facet and its outer loop");
@@ -785,7 +806,7 @@ Status read_stl_ascii(const Reader& r, LoadedMesh* out) {
       const int32_t b = static_cast<int32_t>(m.vertices.size()) - 3;
       m.faces.push_back({b, b + 1, b + 2});
       at = At::kSolid;
-    } else if (k == "endsolid") {
+    } else if (stl_keyword(k, "endsolid")) {
       if (at != At::kSolid) return r.fail_at(lines.number(), "'endsolid' inside a facet");
       ended = true;
     } else {
@@ -805,7 +826,7 @@ Status read_stl(const Reader& r, LoadedMesh* out) {
     std::memcpy(&n, d.data() + 80, 4);
     if (d.size() == 84 + 50ull * n) return read_stl_binary(r, out);
   }
-  if (d.substr(0, 5) == "solid") {
+  if (starts_ascii_stl(d)) {
     // A binary file whose header starts with "solid" and that carries trailing bytes: if the
     // ASCII parse fails but the binary layout fits, read it as binary.
     Status s = read_stl_ascii(r, out);
@@ -880,7 +901,7 @@ std::string looks_like(std::string_view text) {
   const std::string_view head = t[0];
   if (head.size() >= 3 && head.size() <= 6 && head.substr(head.size() - 3) == "OFF") return "off";
   if (head == "ply") return "ply";
-  if (head == "solid") return "stl";
+  if (stl_keyword(head, "solid")) return "stl";
   for (const char* k : {"v", "vn", "vt", "f", "o", "g", "mtllib", "usemtl"})
     if (head == k) return "obj";
   return "";
@@ -935,7 +956,7 @@ Status load_mesh(const std::string& path, LoadedMesh* out) {
       // An ASCII STL starts with "solid", as a binary one's 80-byte header may; a NUL among
       // the first 84 bytes (the header and the count) is no ASCII one's (some pad their end).
       if (size >= 84 && static_cast<size_t>(in.gcount()) == content.size() &&
-          (content.compare(0, 5, "solid") != 0 || content.find('\0') < 84)) {
+          (!starts_ascii_stl(content) || content.find('\0') < 84)) {
         uint32_t n;
         std::memcpy(&n, content.data() + 80, 4);
         if (const std::string defect = stl_binary_layout_defect(size, n); !defect.empty())

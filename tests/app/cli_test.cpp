@@ -83,6 +83,11 @@ TEST(CliBadInput, MissingFileDirectoryAndUsage) {
   EXPECT_NE(r.err.find("unknown command 'frobnicate'; the commands are info, build"),
             std::string::npos)
       << r.err;
+  // An option before the command is named as such, not taken for a missing argument.
+  r = vobb_cli("-x info");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(line_count(r.err), 1u) << r.err;
+  EXPECT_NE(r.err.find("unknown option '-x' before the command"), std::string::npos) << r.err;
   r = vobb_cli("build x.off");
   EXPECT_EQ(r.err.rfind("vobb build: usage: ", 0), 0u) << r.err;
   EXPECT_NE(r.err.find("see vobb build --help"), std::string::npos) << r.err;
@@ -94,6 +99,19 @@ TEST(CliBadInput, MissingFileDirectoryAndUsage) {
     EXPECT_EQ(r.code, 2) << args;
     EXPECT_EQ(line_count(r.err), 1u) << args << ": " << r.err;
     EXPECT_NE(r.err.find("--collider-margin"), std::string::npos) << args << ": " << r.err;
+  }
+  // Numbers are decimal: hexadecimal, blanks, infinities and text are refused, naming the flag;
+  // a sign, a point and an exponent are taken.
+  for (const char* value : {"0x10", "' 2'", "'2 '", "inf", "1e309", ".", "1e", "+", "2x", "1..2"}) {
+    r = vobb_cli(std::string("build x.off -o t.json --time-budget ") + value);
+    EXPECT_EQ(r.code, 2) << value;
+    EXPECT_EQ(line_count(r.err), 1u) << value << ": " << r.err;
+    EXPECT_NE(r.err.find("--time-budget"), std::string::npos) << value << ": " << r.err;
+  }
+  for (const char* value : {"2", "+2.5", ".5", "5.", "1e2", "2.5E-1"}) {
+    r = vobb_cli(std::string("build x.off -o t.json --time-budget ") + value);
+    EXPECT_EQ(r.code, 2) << value;  // taken: the missing mesh is what is refused
+    EXPECT_NE(r.err.find("x.off"), std::string::npos) << value << ": " << r.err;
   }
   // An objective that is neither, and two objectives at once, before the mesh is read.
   for (const char* args : {"build x.off -o t.json --objective sum",
@@ -198,6 +216,11 @@ TEST(CliBadInput, UnwritableOutputIsRefusedBeforeTheRun) {
        {Case{"build " + open_mesh + " -o /nonexistent/t.json --backend cpu",
              "no such folder /nonexistent"},
         Case{"build " + open_mesh + " -o " + dir + " --backend cpu", "is a folder"},
+        // A file where the folder should be: named for what it is.
+        Case{"build " + open_mesh + " -o " + mesh + "/t.json --backend cpu",
+             mesh + " is not a folder"},
+        Case{"certify " + mesh + " " + tree + " --checkpoint " + mesh + "/ck",
+             mesh + " is not a folder"},
         Case{"export " + tree + " --level 1 -o /nonexistent/b.obj", "no such folder /nonexistent"},
         Case{"collide " + open_mesh + " " + tree + " --static --colliders 5 -o /nonexistent/c.json",
              "no such folder /nonexistent"},
@@ -1001,6 +1024,22 @@ TEST_F(CliOnCube, RationalTextGivesEveryRationalOfTheJson) {
     EXPECT_NE(ctext.out.find(name + std::string(" (rational): ") + c.at(key).get<std::string>()),
               std::string::npos)
         << ctext.out;
+}
+
+// compare --figure where no GL context can be made is refused before the run: one line, exit 2,
+// nothing printed and no --tree written.
+TEST_F(CliOnCube, CompareFigureWithoutGlIsRefusedBeforeTheRun) {
+  const std::string figure = test::temp_path("nogl.png"), tree = test::temp_path("nogl.json");
+  ::setenv("VOBB_GL", "off", 1);
+  const CliRun r = vobb_cli("compare " + mesh_ + " --depth 2 --m 4 --backend cpu --tree " + tree +
+                            " --figure " + figure);
+  ::unsetenv("VOBB_GL");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_EQ(line_count(r.err), 1u) << r.err;
+  EXPECT_NE(r.err.find("cannot draw the figure"), std::string::npos) << r.err;
+  EXPECT_EQ(r.out, "");
+  EXPECT_FALSE(test::exists(tree));
+  EXPECT_FALSE(test::exists(figure));
 }
 
 TEST_F(CliOnCube, VariationalTreeCertifies) {

@@ -6,6 +6,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -129,6 +130,17 @@ TEST(MeshIo, AsciiStlWithSeveralSolidsReadsThemAll) {
   write_text(path, odd_normals);
   s = load_mesh(path, &lm);
   EXPECT_TRUE(s) << s.message();
+  // Keywords in upper case, and blanks before the first "solid", as some writers put them: the
+  // same four faces (they were taken for a binary STL of 1,347,374,924 triangles).
+  std::string upper = two;
+  for (char& c : upper) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  for (const std::string& text : {upper, "\n  " + two}) {
+    write_text(path, text);
+    s = load_mesh(path, &lm);
+    ASSERT_TRUE(s) << s.message();
+    EXPECT_EQ(lm.mesh.faces.size(), 4u);
+    EXPECT_EQ(lm.format, "stl");
+  }
   std::remove(path.c_str());
 }
 

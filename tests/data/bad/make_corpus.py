@@ -54,6 +54,7 @@ files["index_out_of_range.obj"] = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 9\n
 files["not_a_number.obj"] = "v 0 0 0\nv 1 zero 0\nv 0 1 0\nf 1 2 3\n"
 files["huge_count.off"] = "OFF\n1000000000000000 12 0\n0 0 0\n"
 files["negative_count.off"] = "OFF\n-8 12 0\n"
+files["bad_edge_count.off"] = off(V, F).replace("\n8 12 0\n", "\n8 12 x\n", 1)
 files["not_off_header.off"] = "PLY\n8 12 0\n"
 cav_v = [tuple(4 * x for x in v) for v in V] + [tuple(1 + 2 * x for x in v) for v in V]
 cav_f = F + [tuple(i + 8 for i in f) for f in F]  # cavity facing out: wrong
