@@ -17,7 +17,7 @@
 
 #include "fast/cpu_estimator.h"
 #include "fast/cubemap.h"
-#include "vobb/shaders.h"
+#include "shaders/shaders.h"
 
 namespace vobb {
 

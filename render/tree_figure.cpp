@@ -8,7 +8,7 @@
 #include <initializer_list>
 
 #include "common/obb.h"
-#include "vobb/shaders.h"
+#include "shaders/shaders.h"
 
 namespace vobb {
 
