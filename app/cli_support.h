@@ -177,7 +177,7 @@ inline void note_precision(const std::string& path, const LoadedMesh& mesh) {
   pending_precision_note() = "vobb: " + one_line(basename_of(path)) +
                              ": read in single precision through assimp (" + one_line(mesh.format) +
                              "): the results are for its coordinates rounded to float32; OFF, "
-                             "OBJ, PLY and ASCII STL files are read as written\n";
+                             "OBJ, PLY and STL files are read as written\n";
 }
 // A command's mesh: read as a solid (load_solid), its single-precision read noted.
 inline Status load_input_solid(const std::string& path, LoadedMesh* mesh) {
