@@ -42,9 +42,11 @@ class BuildCommand final : public Command {
     const auto t0 = std::chrono::steady_clock::now();
     BuildOptions o = build_options(flags_);
     // Refused before the mesh is read: the options as they will be once the query files are
-    // (one stand-in collider per file).
+    // (one stand-in collider per file, a unit sphere).
     BuildOptions shape = o;
-    shape.queries.resize(flags_.queries.size());
+    collision::Collider stand_in;
+    stand_in.radius = 1;
+    shape.queries.assign(flags_.queries.size(), stand_in);
     Status s = check_build_options(shape);
     if (!s) return refuse(s);
     LoadedMesh loaded;

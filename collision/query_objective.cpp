@@ -19,7 +19,11 @@ constexpr double kU = std::numeric_limits<double>::epsilon() / 2;
 // overflow (the mesh itself is within 2^120, DESIGN §7).
 constexpr double kMaxCoordinate = 0x1p240;
 
+}  // namespace
+
 std::string collider_defect(const Collider& c) {
+  if (c.shape != ColliderShape::kSphere && c.shape != ColliderShape::kBox)
+    return "shape neither a sphere nor a box";
   if (!c.center.allFinite()) return "centre not finite";
   if (!(c.center.cwiseAbs().maxCoeff() <= kMaxCoordinate)) return "centre beyond 2^240";
   if (c.shape == ColliderShape::kSphere) {
@@ -37,8 +41,6 @@ std::string collider_defect(const Collider& c) {
   const std::string bad = box_defect(b);
   return bad.empty() ? "" : "box " + bad;
 }
-
-}  // namespace
 
 Status write_query_stream(const QueryStream& stream, const std::string& path) {
   std::string out = "{\"format\": \"vobb-queries\", \"version\": 1, \"mesh_sha256\": \"" +

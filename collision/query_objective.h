@@ -52,6 +52,11 @@ struct QueryStream {
   std::vector<Collider> colliders;
 };
 
+// What makes a collider unfit for a query file or the query objective, in words ("" when it is
+// fit): a shape that is neither, coordinates not finite or beyond 2^240, a radius or half
+// extent that is not a positive normal number up to 2^240, box axes box_defect refuses.
+std::string collider_defect(const Collider& c);
+
 Status write_query_stream(const QueryStream& stream, const std::string& path);
 // One-line errors naming the file: not a query file, a collider that is not finite, a radius
 // or half extent that is not positive and normal, box axes further from orthonormal than

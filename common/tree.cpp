@@ -48,11 +48,8 @@ Status validate_tree(const Tree& tree, const std::string& display) {
     for (int32_t c : node.children)
       if (c <= 0 || c >= n || tree.nodes[c].parent != i)
         return fail(at + "bad child " + std::to_string(c));
-    if (!node.box.center.allFinite() || !node.box.half.allFinite() ||
-        (node.box.half.array() < 0).any())
-      return fail(at + "box has non-finite or negative values");
-    for (const Vec3& a : node.box.axes)
-      if (!a.allFinite()) return fail(at + "box has non-finite axes");
+    // The boxes a tree file may hold (read_tree refuses the others), in memory too.
+    if (const std::string bad = box_defect(node.box); !bad.empty()) return fail(at + bad);
     if (!std::is_sorted(node.faces.begin(), node.faces.end()) ||
         std::adjacent_find(node.faces.begin(), node.faces.end()) != node.faces.end())
       return fail(at + "faces are not sorted and distinct");

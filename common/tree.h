@@ -49,8 +49,8 @@ std::vector<int32_t> layer(const Tree& tree, int level);
 // The lowest common ancestor of nodes a and b (ids) of a valid tree.
 int32_t common_ancestor(const Tree& tree, int32_t a, int32_t b);
 
-// Structural check: ids, parent/child links, levels, arity, depth (at most kMaxTreeDepth), and
-// that the leaves
+// Structural check: ids, parent/child links, levels, arity, depth (at most kMaxTreeDepth), boxes
+// fit for vobb (box_defect, common/obb.h), and that the leaves
 // partition the faces [0, mesh_triangles) with each inner node's faces the union of its
 // children's. Messages are one line prefixed with `display`.
 Status validate_tree(const Tree& tree, const std::string& display);
@@ -63,6 +63,7 @@ Status check_tree_fits(const Mesh& mesh, const Tree& tree, const std::string& di
                        const std::string& mesh_sha256 = {});
 
 // Conservativeness by exact predicates: each face of each node lies in that node's box.
+// Precondition: the tree fits the mesh (check_tree_fits).
 struct ContainmentReport {
   size_t checked_pairs = 0;  // (node, face) pairs tested
   size_t violations = 0;     // (node, face) pairs with a vertex outside the box

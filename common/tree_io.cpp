@@ -91,6 +91,8 @@ std::string tree_to_json(const Tree& tree) {
 }
 
 Status write_tree(const Tree& tree, const std::string& path) {
+  // No file its reader would refuse.
+  if (Status s = validate_tree(tree, basename_of(path)); !s) return s;
   return write_file_atomic(path, tree_to_json(tree));
 }
 
@@ -190,6 +192,9 @@ Status read_tree(const std::string& path, Tree* tree) {
 }
 
 Status write_boxes(const std::vector<Obb>& boxes, const std::string& path) {
+  for (size_t i = 0; i < boxes.size(); ++i)  // no file its reader would refuse
+    if (const std::string bad = box_defect(boxes[i]); !bad.empty())
+      return Status::error(basename_of(path) + ": box " + std::to_string(i) + ": " + bad);
   Json arr = Json::array();
   for (const Obb& b : boxes) {
     Json jb;

@@ -20,11 +20,13 @@
 namespace vobb {
 
 std::string tree_to_json(const Tree& tree);
+// Refuses, writing nothing, a tree validate_tree refuses: no file its reader would refuse.
 Status write_tree(const Tree& tree, const std::string& path);
 // Parses and validates (validate_tree). An inner node without "faces" gets its children's.
 Status read_tree(const std::string& path, Tree* tree);
 Status parse_tree(const std::string& text, const std::string& display, Tree* tree);
 
+// Refuses, writing nothing, a box box_defect refuses.
 Status write_boxes(const std::vector<Obb>& boxes, const std::string& path);
 Status read_boxes(const std::string& path, std::vector<Obb>* boxes);
 

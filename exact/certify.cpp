@@ -779,8 +779,9 @@ Status damaged(const std::string& file, const std::string& why) {
 
 // obv.json's (read from `file`) OBV into *out, one per node of `tree`: each an enclosure, its
 // bits 128 or 256, no unknown field, and its rational where given (inside the enclosure; given
-// where exact). A field missing or of another type throws nlohmann's exception.
-Status parse_obv(const nlohmann::json& jo, const Tree& tree, const std::string& file,
+// where exact; in a `rational` run, one not given is 0, and must lie inside it too). A field
+// missing or of another type throws nlohmann's exception.
+Status parse_obv(const nlohmann::json& jo, const Tree& tree, const std::string& file, bool rational,
                  std::vector<Enclosed>* out) {
   auto bad = [&](const std::string& why) { return damaged(file, why); };
   const nlohmann::json& obv = jo.at("obv");
@@ -808,6 +809,9 @@ Status parse_obv(const nlohmann::json& jo, const Tree& tree, const std::string& 
         (!parse_rational(jo_i["rational"], &e.q) || !e.value.contains(e.q)))
       return bad(at + ": its rational is not one, or lies outside its enclosure");
     if (e.exact && !jo_i.contains("rational")) return bad(at + ": exact, without its rational");
+    // The writer leaves out a rational 0; in a run of every rational, that 0 is the rational.
+    if (rational && !jo_i.contains("rational") && !e.value.contains(e.q))
+      return bad(at + ": its rational (0, not written) lies outside its enclosure");
     out->push_back(std::move(e));
   }
   return Status::ok();
@@ -1069,7 +1073,7 @@ Status CertifyCheckpoint::save(const CertifyState& state) {
   return write_file_atomic(layers_path(), j.dump() + "\n");
 }
 
-Status CertifyCheckpoint::load(const Tree& tree, CertifyState* state, bool* found) {
+Status CertifyCheckpoint::load(const Tree& tree, CertifyState* state, bool* found, bool rational) {
   *found = false;
   const std::string obv_file = obv_path(), layers_file = layers_path();
   if (path_absent(obv_file) && path_absent(layers_file)) return Status::ok();
@@ -1084,7 +1088,7 @@ Status CertifyCheckpoint::load(const Tree& tree, CertifyState* state, bool* foun
     current = obv_file;
     // obv.json's checksum of its contents (read_checkpoint_files checked it).
     const std::string obv_sha = jo["sha256"].get<std::string>();
-    r = parse_obv(jo, tree, current, &s.obv);
+    r = parse_obv(jo, tree, current, rational, &s.obv);
     if (!r) return r;
     if (!j.is_null()) {
       current = layers_file;

@@ -147,11 +147,12 @@ class CertifyCheckpoint {
   // The saved state. Neither file there: ok with *found = false. Refused, with one line naming
   // the file: a damaged file (not JSON or nested too deep, bad checksum, unknown field, a
   // rational that does not parse or has a zero denominator), another certification's
-  // (fingerprint), layers.json without
-  // obv.json or naming another one, and a state that does not fit `tree`: an OBV count other
-  // than its nodes', a layer outside 0..depth or given twice, a box count or a sum of OBV
-  // other than the layer's, or a path's result that contradicts itself.
-  Status load(const Tree& tree, CertifyState* state, bool* found);
+  // (fingerprint), layers.json without obv.json or naming another one, and a state that does
+  // not fit `tree`: an OBV count other than its nodes', a layer outside 0..depth or given
+  // twice, a box count or a sum of OBV other than the layer's, or a path's result that
+  // contradicts itself; and, for a run that computes every rational (`rational`), a box's OBV
+  // whose rational (0 where the file leaves it out) lies outside its enclosure.
+  Status load(const Tree& tree, CertifyState* state, bool* found, bool rational = false);
   // The files in `folder` checked as files only (JSON, format, fields, checksum), before the
   // tree they belong to is known: so that a run can refuse a damaged folder before its long
   // work rather than after it. load() checks the rest.

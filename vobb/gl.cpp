@@ -2,6 +2,7 @@
 
 #include <memory>
 
+#include "common/tree.h"
 #include "fast/gl_context.h"
 #include "fast/gl_estimator.h"
 #include "render/tree_figure.h"
@@ -49,6 +50,13 @@ Status draw_compare_figure(const Mesh& mesh, const CompareResult& result, const 
   FigureOptions fo;
   Status s = set_figure_up(up, &fo);
   if (!s) return s;
+  // The trees as certify takes them: a broken one (a result edited, or of another mesh) is an
+  // error here, not a crash in the drawing.
+  for (int k = 0; k < 2; ++k) {
+    s = check_tree_fits(mesh, result.trees[k],
+                        k == 0 ? "the obbtree tree" : "the variational tree");
+    if (!s) return s;
+  }
   std::unique_ptr<GlContext> gl;
   s = GlContext::create(&gl);
   if (!s) return Status::error("cannot draw the figure: " + s.message());

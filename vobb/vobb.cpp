@@ -15,6 +15,7 @@
 #include "common/atomic_file.h"
 #include "common/exact_predicates.h"
 #include "common/sha256.h"
+#include "common/solidity.h"
 #include "common/stopwatch.h"
 #include "common/text_util.h"
 #include "exact/outer_volume.h"
@@ -161,6 +162,24 @@ Tree baseline_tree(const Mesh& mesh, const BuildOptions& o) {
   return build_obbtree(mesh, opt);
 }
 
+// What any mesh load_solid gives has, checked in one pass where a caller passes another: faces,
+// each indexing the vertices, and finite coordinates within kMaxCoordinate. The rest of
+// solidity (closed, manifold, no self-intersections) stays the caller's precondition.
+Status check_mesh(const Mesh& mesh) {
+  if (mesh.faces.empty()) return Status::error("the mesh has no faces");
+  const size_t n = mesh.vertices.size();
+  for (size_t f = 0; f < mesh.faces.size(); ++f)
+    for (const int32_t v : mesh.faces[f])
+      if (v < 0 || static_cast<size_t>(v) >= n)
+        return Status::error("face " + std::to_string(f) + ": vertex index " + std::to_string(v) +
+                             " out of range (" + std::to_string(n) + " vertices)");
+  for (size_t v = 0; v < n; ++v)
+    if (!(mesh.vertices[v].cwiseAbs().maxCoeff() <= kMaxCoordinate))  // NaN fails too
+      return Status::error("vertex " + std::to_string(v) +
+                           ": a coordinate is not finite or beyond 2^240");
+  return Status::ok();
+}
+
 // A margin beyond the model's size is no collider of this model, and it keeps the grown boxes'
 // volumes far from overflow.
 Status check_margin(const Mesh& mesh, const BuildOptions& o) {
@@ -270,7 +289,7 @@ struct CertifySaver {
         folder, std::string(exact::kCertifyVersion) + "; mesh " + mesh_sha256(mesh) + "; tree " +
                     sha256_hex(tree_json.data(), tree_json.size()) + "; path " + path);
     bool resuming = false;
-    s = files->load(tree, &resume, &resuming);
+    s = files->load(tree, &resume, &resuming, o.rational);
     if (!s) return s;
     opt->resume = resuming ? &resume : nullptr;
     if (resuming)
@@ -387,6 +406,12 @@ Status check_build_options(const BuildOptions& o) {
   // The baseline takes well under a second and has no search to budget or resume.
   if (!o.checkpoint.empty() && !variational)
     return Status::error("--checkpoint applies to --method variational only");
+  if (o.queries.size() > collision::kMaxRecordedQueries)
+    return Status::error("--queries: more than " + std::to_string(collision::kMaxRecordedQueries) +
+                         " colliders");
+  for (size_t i = 0; i < o.queries.size(); ++i)
+    if (const std::string bad = collision::collider_defect(o.queries[i]); !bad.empty())
+      return Status::error("--queries: collider " + std::to_string(i) + ": " + bad);
   if (o.time_budget > 0 && !variational)
     return Status::error("--time-budget applies to --method variational only");
   if (o.depth < 0 || o.depth > 30) return Status::error("--depth must be within 0..30");
@@ -401,6 +426,8 @@ Status check_build_options(const BuildOptions& o) {
 
 Status build_tree(const Mesh& mesh, const BuildOptions& o, Tree* tree, BuildReport* report) {
   Status s = check_build_options(o);
+  if (!s) return s;
+  s = check_mesh(mesh);
   if (!s) return s;
   s = check_margin(mesh, o);
   if (!s) return s;
@@ -442,7 +469,9 @@ Status read_queries(const Mesh& mesh, const std::vector<std::string>& paths, Bui
 
 Status certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& o,
                exact::Certificate* certificate) {
-  Status s = check_tree_fits(mesh, tree, o.tree_name);
+  Status s = check_mesh(mesh);
+  if (!s) return s;
+  s = check_tree_fits(mesh, tree, o.tree_name);
   if (!s) return s;
   return certify_with(mesh, tree, o, o.checkpoint,
                       std::string(path_name(o.path)) + (o.rational ? "; rational" : ""),
@@ -452,6 +481,7 @@ Status certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& o,
 Status estimate_obv(const Mesh& mesh, const std::vector<Obb>& boxes, const EstimateOptions& o,
                     ObvReport* out) {
   *out = ObvReport();
+  if (Status s = check_mesh(mesh); !s) return s;
   const size_t n = boxes.size();
   for (const Obb& b : boxes)
     if (const std::string d = box_defect(b); !d.empty()) return Status::error("box refused: " + d);
@@ -562,6 +592,7 @@ std::vector<std::string> compare_checkpoint_files() {
 
 const exact::LayerCertificate& CompareResult::layer(int tree, size_t level) const {
   const auto& layers = certificates[tree].layers;
+  VOBB_ASSERT(!layers.empty(), "layer() of a comparison that compare() filled in");
   return layers[std::min(level, layers.size() - 1)];
 }
 
@@ -571,6 +602,8 @@ Status compare(const Mesh& mesh, const CompareOptions& co, CompareResult* r) {
   o.method = Method::kVariational;
   if (!o.queries.empty()) return Status::error("--queries applies to build only");
   Status s = check_build_options(o);
+  if (!s) return s;
+  s = check_mesh(mesh);
   if (!s) return s;
   s = check_margin(mesh, o);
   if (!s) return s;

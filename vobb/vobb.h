@@ -3,7 +3,9 @@
 // into the tree error e (DESIGN §1).
 //
 // - Meshes: the calls take a solid mesh, as load_solid gives it (a precondition; load_solid
-//   refuses a mesh that is no solid, naming the defect).
+//   refuses a mesh that is no solid, naming the defect). What breaks the calls outright is
+//   checked in one pass and refused with an error: no faces, a vertex index out of range, a
+//   coordinate not finite or beyond 2^240.
 // - Every call returns a Status: bad input (a tree of another mesh or of a broken structure,
 //   options out of range or contradicting each other, a damaged checkpoint) is an error with a
 //   one-line message, not an exception or an abort. Out of memory throws std::bad_alloc.
@@ -187,6 +189,8 @@ struct CompareResult {
   bool e_rational[2] = {false, false};
   Rational e_exact[2];
   bool certified() const { return certificates[0].ok() && certificates[1].ok(); }
+  // Layer `level` of tree 0 or 1 (its leaf layer below its last). Precondition: compare()
+  // filled this in.
   const exact::LayerCertificate& layer(int tree, size_t level) const;
 };
 // Both builders on one mesh, both trees certified; `*result` is replaced. build.queries is

@@ -265,6 +265,103 @@ TEST(Certify, RefusesATreeOfAnotherMesh) {
   EXPECT_NE(s.message().find("built for another mesh"), std::string::npos) << s.message();
 }
 
+// A mesh that no load_solid gives (no faces, an index out of range, a coordinate not finite or
+// beyond 2^240) is refused by every call with one line, not a crash inside it.
+TEST(PublicFace, RefusesMeshesThatBreakTheCallsOutright) {
+  const Mesh cube = analytic::cube().mesh;
+  Tree tree;
+  ASSERT_TRUE(build_tree(cube, small_build(), &tree).is_ok());
+  struct Case {
+    std::function<void(Mesh*)> spoil;
+    std::string says;
+  };
+  const std::vector<Case> cases = {
+      {[](Mesh* m) { m->faces.clear(); }, "no faces"},
+      {[](Mesh* m) { m->faces[3][1] = 1000000; }, "face 3: vertex index 1000000 out of range"},
+      {[](Mesh* m) { m->faces[0][0] = -5; }, "face 0: vertex index -5 out of range"},
+      {[](Mesh* m) { m->vertices[2].x() = std::nan(""); }, "vertex 2"},
+      {[](Mesh* m) { m->vertices[1].y() = HUGE_VAL; }, "vertex 1"},
+      {[](Mesh* m) { m->vertices[0].z() = 0x1p241; }, "beyond 2^240"},
+  };
+  for (const Case& c : cases) {
+    Mesh m = cube;
+    c.spoil(&m);
+    for (Method method : {Method::kObbTree, Method::kVariational}) {
+      BuildOptions o = small_build();
+      o.method = method;
+      Tree t;
+      const Status s = build_tree(m, o, &t);
+      ASSERT_FALSE(s.is_ok()) << c.says;
+      EXPECT_NE(s.message().find(c.says), std::string::npos) << s.message();
+    }
+    exact::Certificate cert;
+    Status s = certify(m, tree, CertifyOptions(), &cert);
+    ASSERT_FALSE(s.is_ok()) << c.says;
+    EXPECT_NE(s.message().find(c.says), std::string::npos) << s.message();
+    ObvReport report;
+    s = estimate_obv(m, {tree.nodes[0].box}, EstimateOptions(), &report);
+    ASSERT_FALSE(s.is_ok()) << c.says;
+    EXPECT_NE(s.message().find(c.says), std::string::npos) << s.message();
+    CompareOptions co;
+    co.build = small_build();
+    CompareResult r;
+    s = compare(m, co, &r);
+    ASSERT_FALSE(s.is_ok()) << c.says;
+    EXPECT_NE(s.message().find(c.says), std::string::npos) << s.message();
+  }
+}
+
+// Recorded queries set in the options are checked as a query file's are.
+TEST(BuildTree, RefusesCollidersAQueryFileWouldRefuse) {
+  const Mesh cube = analytic::cube().mesh;
+  collision::Collider good;
+  good.center = Vec3(0.5, 0.5, 0.5);
+  good.radius = 0.1;
+  for (const double radius : {std::nan(""), -1.0, 0.0, HUGE_VAL}) {
+    BuildOptions o = small_build();
+    o.queries = {good, good};
+    o.queries[1].radius = radius;
+    Tree t;
+    const Status s = build_tree(cube, o, &t);
+    ASSERT_FALSE(s.is_ok()) << radius;
+    EXPECT_NE(s.message().find("--queries: collider 1: radius"), std::string::npos) << s.message();
+  }
+  BuildOptions o = small_build();
+  o.queries = {good};
+  Tree t;
+  EXPECT_TRUE(build_tree(cube, o, &t).is_ok());
+}
+
+// A tree in memory is held to what its file may hold: boxes box_defect refuses are refused by
+// certify, and write_tree and write_boxes write no file their readers would refuse.
+TEST(Certify, RefusesBoxesATreeFileCouldNotHold) {
+  const Mesh cube = analytic::cube().mesh;
+  Tree tree;
+  ASSERT_TRUE(build_tree(cube, small_build(), &tree).is_ok());
+  Tree far = tree;
+  for (TreeNode& n : far.nodes) n.box.half = Vec3(1e300, 1e300, 1e300);
+  exact::Certificate cert;
+  Status s = certify(cube, far, CertifyOptions(), &cert);
+  ASSERT_FALSE(s.is_ok());
+  EXPECT_NE(s.message().find("extends beyond"), std::string::npos) << s.message();
+  const std::string path = test::temp_path("refused_tree.json");
+  std::remove(path.c_str());
+  s = write_tree(far, path);
+  EXPECT_FALSE(s.is_ok());
+  Tree child = tree;
+  child.nodes[0].children[0] = 99;
+  s = write_tree(child, path);
+  ASSERT_FALSE(s.is_ok());
+  EXPECT_NE(s.message().find("bad child 99"), std::string::npos) << s.message();
+  EXPECT_FALSE(test::exists(path));
+  Obb nan_box = tree.nodes[0].box;
+  nan_box.center.x() = std::nan("");
+  s = write_boxes({tree.nodes[0].box, nan_box}, path);
+  ASSERT_FALSE(s.is_ok());
+  EXPECT_NE(s.message().find("box 1"), std::string::npos) << s.message();
+  EXPECT_FALSE(test::exists(path));
+}
+
 // compare's trees are build_tree's, its certificates certify's, and its e each tree's e.
 TEST(Compare, IsBothBuildsCertified) {
   const Mesh mesh = analytic::polygonal_torus().mesh;
