@@ -2,6 +2,7 @@
 
 #include <mpfr.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -52,6 +53,13 @@ int orient3d(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
   const double ux = b[0] - a[0], uy = b[1] - a[1], uz = b[2] - a[2];
   const double vx = c[0] - a[0], vy = c[1] - a[1], vz = c[2] - a[2];
   const double wx = d[0] - a[0], wy = d[1] - a[1], wz = d[2] - a[2];
+  // Differences of 2^340 or more (or one that overflowed: to infinity, or to the largest
+  // double under directed rounding) go to rationals: below it no product of three overflows,
+  // which the filter's bound assumes.
+  constexpr double kFar = 0x1p340;
+  if (!(std::max({std::abs(ux), std::abs(uy), std::abs(uz), std::abs(vx), std::abs(vy),
+                  std::abs(vz), std::abs(wx), std::abs(wy), std::abs(wz)}) < kFar))
+    return orient3d_exact(a, b, c, d);
   const double m0 = vy * wz - vz * wy, m1 = vz * wx - vx * wz, m2 = vx * wy - vy * wx;
   const double det = ux * m0 + uy * m1 + uz * m2;
   const double perm = std::abs(ux) * (std::abs(vy * wz) + std::abs(vz * wy)) +
@@ -65,8 +73,13 @@ int orient3d(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
 }
 
 int orient2d(const Vec3& a, const Vec3& b, const Vec3& c, int i, int j) {
-  const double l = (b[i] - a[i]) * (c[j] - a[j]);
-  const double r = (b[j] - a[j]) * (c[i] - a[i]);
+  // As orient3d: differences of 2^510 or more (a product of two may overflow) go to rationals.
+  constexpr double kFar = 0x1p510;
+  const double bi = b[i] - a[i], cj = c[j] - a[j], bj = b[j] - a[j], ci = c[i] - a[i];
+  if (!(std::max({std::abs(bi), std::abs(cj), std::abs(bj), std::abs(ci)}) < kFar))
+    return orient2d_exact(a, b, c, i, j);
+  const double l = bi * cj;
+  const double r = bj * ci;
   const double det = l - r;
   const double bound = kOrient2dBound * (std::abs(l) + std::abs(r)) + kUnderflowSlack;
   if (det > bound) return 1;
@@ -146,6 +159,12 @@ std::string format_nearest(const Rational& q) {
 
 void enclose(const Rational& q, double* lo, double* hi) {
   const double d = to_double_nearest(q);
+  if (std::isinf(d)) {  // beyond the doubles: between the largest finite one and infinity
+    const double most = std::numeric_limits<double>::max();
+    *lo = d > 0 ? most : -INFINITY;
+    *hi = d > 0 ? INFINITY : -most;
+    return;
+  }
   const int c = cmp(Rational(d), q);
   *lo = c > 0 ? std::nextafter(d, -INFINITY) : d;
   *hi = c < 0 ? std::nextafter(d, INFINITY) : d;

@@ -39,10 +39,12 @@ Rational exact_signed_volume(const Mesh& mesh, const std::vector<int32_t>& faces
 // rationals with different denominators grow slowly this way). Consumes the vector.
 Rational sum_pairwise(std::vector<Rational>& terms);
 
-// The double nearest to q (ties to even), as MPFR rounds it. mpq_get_d truncates instead.
+// The double nearest to q (ties to even), as MPFR rounds it (infinity beyond the doubles;
+// +0 for a q that rounds to zero, of either sign). mpq_get_d truncates instead.
 double to_double_nearest(const Rational& q);
 
-// [lo, hi]: the largest double <= q and the smallest double >= q (equal when q is a double).
+// [lo, hi]: the largest double <= q and the smallest double >= q (equal when q is a double;
+// the largest finite double and infinity beyond the doubles).
 void enclose(const Rational& q, double* lo, double* hi);
 
 // "%.17g" of the correctly rounded double: the way every exact value is printed.

@@ -6,6 +6,9 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#if defined(__SSE2__)
+#include <xmmintrin.h>
+#endif
 
 #include "common/status.h"
 
@@ -273,6 +276,16 @@ int sign_of_exact_sum(const double* x, int n) {
   return len == 0 ? 0 : (e[len - 1] > 0 ? 1 : -1);
 }
 
+// Whether double arithmetic rounds to nearest. fegetround reads the x87 control word, but
+// double arithmetic on x86-64 runs in SSE, whose mode a library may set alone (CGAL's
+// Protect_FPU_rounding does): both are read.
+bool rounding_to_nearest() {
+#if defined(__SSE2__)
+  if ((_mm_getcsr() & _MM_ROUND_MASK) != _MM_ROUND_NEAREST) return false;
+#endif
+  return std::fegetround() == FE_TONEAREST;
+}
+
 // Products in [2^-800, 2^1000] (or exactly 0), times integers of at most 2^12: their
 // two_product parts and the integer multiples of those neither underflow nor overflow
 // (docs/derivations.md, "Exact edge sides without rationals").
@@ -333,7 +346,7 @@ bool exact_edge_side_by_expansion(const LocalTriangle& t, int k, const Texel& x,
     *side = 0;  // E* = 0, decided by plan(): the end of this function's search
     return true;
   }
-  if (x.m > 4096 || std::fegetround() != FE_TONEAREST) return false;
+  if (x.m > 4096 || !rounding_to_nearest()) return false;
   const int a = k, b = (k + 1) % 3;
   VOBB_ASSERT(t.p[a].allFinite() && t.p[b].allFinite(), "plan() keeps only finite faces");
   const bool canonical = t.id[a] < t.id[b];

@@ -4,6 +4,7 @@
 
 #include <cfenv>
 #include <cmath>
+#include <limits>
 #include <random>
 
 namespace vobb {
@@ -146,6 +147,27 @@ TEST(OrientInAnyRounding, NearDegeneratePointsMatchTheRationals) {
   }
 }
 
+// Inputs whose differences overflow: under a directed rounding an overflowing difference is the
+// largest double, not infinity, so the filter would see a value off by half of it. Cases an
+// audit found, where the filter gave the wrong sign rounding upward: such inputs go to rationals.
+TEST(OrientInAnyRounding, DifferencesThatOverflowGoToTheRationals) {
+  const double M = std::numeric_limits<double>::max();
+  const Vec3 a(M, 0, 0), b(-M, 0x1.8p-47, 0), c(std::nextafter(M, 0.0), 0x1p-100, 0);
+  ASSERT_EQ(reference_orient2d(a, b, c, 0, 1), -1);
+  const Vec3 A(M, 0, 0), B(M, 0, 1), C(-M, 0x1.8p-47, 0), D(std::nextafter(M, 0.0), 0x1p-100, 0);
+  ASSERT_EQ(reference_orient3d(A, B, C, D), -1);
+  for (const int mode : {FE_TONEAREST, FE_UPWARD, FE_DOWNWARD, FE_TOWARDZERO}) {
+    int got2, got3;
+    {
+      const Rounding r(mode);
+      got2 = orient2d(a, b, c, 0, 1);
+      got3 = orient3d(A, B, C, D);
+    }
+    EXPECT_EQ(got2, -1) << "mode " << mode;
+    EXPECT_EQ(got3, -1) << "mode " << mode;
+  }
+}
+
 TEST(Orient2d, CollinearityIsExact) {
   EXPECT_TRUE(collinear(Vec3(0, 0, 0), Vec3(1, 1, 1), Vec3(3, 3, 3)));
   EXPECT_FALSE(collinear(Vec3(0, 0, 0), Vec3(1, 1, 1), Vec3(3, 3, std::nextafter(3.0, 4.0))));
@@ -170,6 +192,26 @@ TEST(ToDoubleNearest, RoundsToNearestNotTowardZero) {
   EXPECT_EQ(to_double_nearest(q), 1.0 + std::ldexp(1.0, -52));
   EXPECT_EQ(q.get_d(), 1.0);
   EXPECT_EQ(format_nearest(Rational(1, 10)), "0.10000000000000001");
+}
+
+// Beyond the doubles: the nearest is infinity from 2^1024 - 2^970 (the midpoint between the
+// largest double and 2^1024) on, and enclose gives the largest double and infinity.
+TEST(ToDoubleNearest, BeyondTheDoublesIsInfinityAndEnclosedByTheLargestOne) {
+  const Rational two_1024(mpz_class(1) << 1024), two_970(mpz_class(1) << 970);
+  const double most = std::numeric_limits<double>::max();  // 2^1024 - 2^971
+  EXPECT_EQ(to_double_nearest(two_1024 - two_970 - 1), most);
+  EXPECT_EQ(to_double_nearest(two_1024 - two_970), INFINITY);  // a tie: to even, 2^1024
+  EXPECT_EQ(to_double_nearest(-two_1024), -INFINITY);
+  double lo = 0, hi = 0;
+  enclose(two_1024, &lo, &hi);
+  EXPECT_EQ(lo, most);
+  EXPECT_EQ(hi, INFINITY);
+  enclose(-two_1024 - two_1024, &lo, &hi);
+  EXPECT_EQ(lo, -INFINITY);
+  EXPECT_EQ(hi, -most);
+  enclose(Rational(most), &lo, &hi);  // the largest double itself
+  EXPECT_EQ(lo, most);
+  EXPECT_EQ(hi, most);
 }
 
 // Below 2^-1022 the doubles are the multiples of 2^-1074: one rounding to nearest, ties to

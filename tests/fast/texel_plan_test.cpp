@@ -5,6 +5,9 @@
 #include <algorithm>
 #include <array>
 #include <cfenv>
+#if defined(__SSE2__)
+#include <xmmintrin.h>
+#endif
 #include <cmath>
 #include <map>
 #include <random>
@@ -222,6 +225,29 @@ TEST(TexelPlan, ExactEdgeSidesByExpansionAreTheRationalOnes) {
   EXPECT_FALSE(by_expansion);
   EXPECT_EQ(decided_upward, side);
   EXPECT_EQ(side, exact_edge_side_rational(t, 0, x));
+#if defined(__SSE2__)
+  // The SSE rounding mode set alone, as CGAL's Protect_FPU_rounding sets it (fegetround reads
+  // the x87 word, and still says to nearest): refused too. Rounded upward, the expansion would
+  // give this edge the side opposite to the rationals' (a case an audit found by search).
+  LocalTriangle u{};
+  u.p[0] = Vec3(0x1.574p-1, -0x1.fap-5, -0x1.d740000000001p-2);
+  u.p[1] = Vec3(-0x1.556b660c186bfp+11, 0x1.f74d36c82e713p+7, 0x1.d4bca7828755p+10);
+  u.p[2] = Vec3(1, 2, 3);
+  u.id[0] = 0;
+  u.id[1] = 1;
+  u.id[2] = 2;
+  const Texel y{0, 1246, 430, 2746,
+                cubemap_direction(0, texel_center(1246, 2746), texel_center(430, 2746))};
+  const int rational = exact_edge_side_rational(u, 0, y);
+  const unsigned csr = _mm_getcsr();
+  _MM_SET_ROUNDING_MODE(_MM_ROUND_UP);
+  int sse_upward = 7;
+  const bool sse_by_expansion = exact_edge_side_by_expansion(u, 0, y, &sse_upward);
+  const int sse_decided = exact_edge_side(u, 0, y);
+  _mm_setcsr(csr);
+  EXPECT_FALSE(sse_by_expansion);
+  EXPECT_EQ(sse_decided, rational);
+#endif
 }
 
 TEST(TexelPlan, APlanReusedAfterOthersEqualsAFreshOne) {
