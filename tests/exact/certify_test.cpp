@@ -567,6 +567,25 @@ TEST_F(CertifyTorus, DamagedOrForeignCheckpointsAreRefused) {
     EXPECT_TRUE(s) << s.message();
     EXPECT_EQ(back.layers.size(), 2u);
   }
+  // The writer leaves out a rational 0. The root's OBV (the torus's hole: above 0) enclosed
+  // without its rational is a filtered run's entry; a run of every rational reads it as 0,
+  // outside the enclosure: damaged, not taken (where it was taken, the run aborted on its own
+  // check of the rationals).
+  {
+    nlohmann::json j = obv;
+    ASSERT_FALSE(j["obv"][0]["exact"].get<bool>());
+    ASSERT_FALSE(j["obv"][0].contains("rational"));
+    sign(&j);
+    write_text(obv_file, j.dump());
+    s = CertifyCheckpoint(dir, "fp").load(t, &back, &found);
+    EXPECT_TRUE(s) << s.message();
+    s = CertifyCheckpoint(dir, "fp").load(t, &back, &found, /*rational=*/true);
+    EXPECT_FALSE(s);
+    EXPECT_NE(s.message().find("OBV of node 0: its rational (0, not written) lies outside"),
+              std::string::npos)
+        << s.message();
+    restore();
+  }
   std::system(("rm -rf " + dir).c_str());
 }
 

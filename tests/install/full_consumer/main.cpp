@@ -66,6 +66,12 @@ int main(int argc, char** argv) {
   check(vobb::draw_compare_figure(mesh, result, "y", nullptr, &image, &figure).is_ok() &&
             vobb::write_png(argv[3], image).is_ok(),
         "figure drawn and written");
+  vobb::CompareResult spoiled = result;  // a child that is no node: refused, not drawn
+  spoiled.trees[1].nodes[0].children[0] = 100000000;
+  const vobb::Status refused =
+      vobb::draw_compare_figure(mesh, spoiled, "y", nullptr, &image, &figure);
+  check(!refused.is_ok() && refused.message().find("bad child 100000000") != std::string::npos,
+        "figure of a broken tree refused: " + refused.message());
 
   vobb::collision::ExperimentOptions collide;
   collide.dynamic = false;
