@@ -146,9 +146,7 @@ inline Status check_output_is_writable(const std::string& option, const std::str
   fs::path dir = target.parent_path();
   if (dir.empty()) dir = ".";
   if (!fs::is_directory(dir, ec))
-    return Status::error(option + " " + output + ": " +
-                         (fs::exists(dir, ec) ? dir.string() + " is not a folder"
-                                              : "no such folder " + dir.string()));
+    return Status::error(option + " " + output + ": " + vobb::not_a_folder(dir.string()));
   const long name_max = ::pathconf(dir.c_str(), _PC_NAME_MAX);
   if (name_max > 0 && target.filename().string().size() > static_cast<size_t>(name_max))
     return Status::error(option + " " + output + ": file name longer than the " +

@@ -30,5 +30,5 @@ run() {
 }
 for round in 1 2; do
   run new "$vobb"
-  [ -n "$old" ] && run old "$old"
+  if [ -n "$old" ]; then run old "$old"; fi
 done

@@ -39,8 +39,8 @@ Status write_variational_state(const VariationalState& st, const std::string& fi
                      {"axes", axes}});
   }
   j["nodes"] = std::move(nodes);
-  // nlohmann writes doubles in their shortest round-trip form: a resumed build reads the
-  // very axes it saved. The checksum covers everything else, so a damaged digit is refused
+  // nlohmann writes doubles in digits that read back to the same double: a resumed build reads
+  // the very axes it saved. The checksum covers everything else, so a damaged digit is refused
   // rather than resumed into another tree.
   j["sha256"] = json_checksum(j);
   return write_file_atomic(path, j.dump() + "\n");

@@ -171,6 +171,11 @@ Status check_folder_takes_files(const std::string& what, const std::string& dir)
   return Status::ok();
 }
 
+std::string not_a_folder(const std::string& dir) {
+  std::error_code ec;
+  return std::filesystem::exists(dir, ec) ? dir + " is not a folder" : "no such folder " + dir;
+}
+
 Status make_checkpoint_folder(const std::string& what, const std::string& folder) {
   namespace fs = std::filesystem;
   std::error_code ec;
@@ -181,9 +186,7 @@ Status make_checkpoint_folder(const std::string& what, const std::string& folder
   fs::path parent = own.parent_path();
   if (parent.empty()) parent = ".";
   if (!fs::is_directory(folder, ec) && !fs::is_directory(parent, ec))
-    return Status::error(what + ": " +
-                         (fs::exists(parent, ec) ? parent.string() + " is not a folder"
-                                                 : "no such folder " + parent.string()));
+    return Status::error(what + ": " + not_a_folder(parent.string()));
   fs::create_directory(folder, ec);
   if (ec) return Status::error(what + ": cannot make the checkpoint folder: " + ec.message());
   // A folder such as /sys/kernel exists and takes no file.

@@ -34,6 +34,10 @@ Status output_target(const std::string& path, std::string* target);
 constexpr int kStrayAgeSeconds = 60;
 size_t remove_stray_temporaries(const std::string& folder);
 
+// Why `dir`, which is not a folder, cannot hold an output: "X is not a folder" where something
+// else is there, "no such folder X" where nothing is.
+std::string not_a_folder(const std::string& dir);
+
 // Whether the folder `dir` takes a new file: a probe file is made there and removed. `what`
 // begins the error line (the option and its value).
 Status check_folder_takes_files(const std::string& what, const std::string& dir);

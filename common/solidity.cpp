@@ -372,7 +372,7 @@ SolidityReport check_solidity(const Mesh& mesh) {
   if (!r.defects.empty()) return r;  // volume and nesting mean nothing on a broken surface
 
   // Exact volume, and orientation: with closed, manifold, consistent, disjoint shells, each
-  // shell must face the way its nesting depth says (winding number 0 outside, 1 inside).
+  // shell must face the way its nesting depth says (inward_shells).
   {
     std::vector<Rational> shell_volume(shell_faces.size());
     Rational total = 0;

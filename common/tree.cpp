@@ -26,9 +26,7 @@ Status validate_tree(const Tree& tree, const std::string& display) {
   const int32_t n = static_cast<int32_t>(tree.nodes.size());
   if (n == 0) return fail("tree has no nodes");
   if (tree.arity < 2) return fail("arity must be at least 2");
-  if (tree.depth < 0 || tree.depth > kMaxTreeDepth)
-    return fail("depth " + std::to_string(tree.depth) + " is outside 0.." +
-                std::to_string(kMaxTreeDepth));
+  if (const std::string bad = depth_defect(tree.depth); !bad.empty()) return fail(bad);
   int max_level = 0;
   for (int32_t i = 0; i < n; ++i) {
     const TreeNode& node = tree.nodes[i];
@@ -48,8 +46,11 @@ Status validate_tree(const Tree& tree, const std::string& display) {
     for (int32_t c : node.children)
       if (c <= 0 || c >= n || tree.nodes[c].parent != i)
         return fail(at + "bad child " + std::to_string(c));
-    // The boxes a tree file may hold (read_tree refuses the others), in memory too.
-    if (const std::string bad = box_defect(node.box); !bad.empty()) return fail(at + bad);
+    if (!node.box.center.allFinite() || !node.box.half.allFinite() ||
+        (node.box.half.array() < 0).any())
+      return fail(at + "box has non-finite or negative values");
+    for (const Vec3& a : node.box.axes)
+      if (!a.allFinite()) return fail(at + "box has non-finite axes");
     if (!std::is_sorted(node.faces.begin(), node.faces.end()) ||
         std::adjacent_find(node.faces.begin(), node.faces.end()) != node.faces.end())
       return fail(at + "faces are not sorted and distinct");

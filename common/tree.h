@@ -38,6 +38,11 @@ struct Tree {
 // The deepest tree vobb reads or checks (the builders make at most 30 levels): a reader fills in
 // each inner node's faces from its children's, at most the depth times the faces a file lists.
 inline constexpr int kMaxTreeDepth = 64;
+// "" for a depth in 0..kMaxTreeDepth, else what is wrong with it.
+inline std::string depth_defect(long long depth) {
+  if (depth >= 0 && depth <= kMaxTreeDepth) return "";
+  return "depth " + std::to_string(depth) + " is outside 0.." + std::to_string(kMaxTreeDepth);
+}
 
 // The weight ω(l) = D - l + 1 of layer l (0 <= l <= D) in the error of a tree of depth D,
 // e = Σ_l ω(l) OMV(layer l) (DESIGN §1): the one place it is written.
@@ -49,8 +54,8 @@ std::vector<int32_t> layer(const Tree& tree, int level);
 // The lowest common ancestor of nodes a and b (ids) of a valid tree.
 int32_t common_ancestor(const Tree& tree, int32_t a, int32_t b);
 
-// Structural check: ids, parent/child links, levels, arity, depth (at most kMaxTreeDepth), boxes
-// fit for vobb (box_defect, common/obb.h), and that the leaves
+// Structural check: ids, parent/child links, levels, arity, depth (at most kMaxTreeDepth), and
+// that the leaves
 // partition the faces [0, mesh_triangles) with each inner node's faces the union of its
 // children's. Messages are one line prefixed with `display`.
 Status validate_tree(const Tree& tree, const std::string& display);

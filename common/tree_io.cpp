@@ -91,8 +91,11 @@ std::string tree_to_json(const Tree& tree) {
 }
 
 Status write_tree(const Tree& tree, const std::string& path) {
-  // No file its reader would refuse.
+  // No file its reader would refuse: the structure, and each box as read_tree takes boxes.
   if (Status s = validate_tree(tree, basename_of(path)); !s) return s;
+  for (const TreeNode& n : tree.nodes)
+    if (const std::string bad = box_defect(n.box); !bad.empty())
+      return Status::error(basename_of(path) + ": node " + std::to_string(n.id) + ": " + bad);
   return write_file_atomic(path, tree_to_json(tree));
 }
 
@@ -111,9 +114,7 @@ Status parse_tree(const std::string& text, const std::string& display, Tree* tre
   if (!get_int(j, "arity", &arity) || arity < 2 || arity > 1 << 20)
     return fail("bad or missing 'arity'");
   if (!get_int(j, "depth", &depth)) return fail("bad or missing 'depth'");
-  if (depth < 0 || depth > kMaxTreeDepth)
-    return fail("depth " + std::to_string(depth) + " is outside 0.." +
-                std::to_string(kMaxTreeDepth));
+  if (const std::string bad = depth_defect(depth); !bad.empty()) return fail(bad);
   if (!j.contains("mesh") || !j["mesh"].is_object() ||
       !get_int(j["mesh"], "triangles", &triangles) || triangles < 0)
     return fail("bad or missing 'mesh.triangles'");

@@ -20,7 +20,8 @@
 namespace vobb {
 
 std::string tree_to_json(const Tree& tree);
-// Refuses, writing nothing, a tree validate_tree refuses: no file its reader would refuse.
+// Refuses, writing nothing, a tree validate_tree refuses or with a box box_defect refuses: no
+// file its reader would refuse.
 Status write_tree(const Tree& tree, const std::string& path);
 // Parses and validates (validate_tree). An inner node without "faces" gets its children's.
 Status read_tree(const std::string& path, Tree* tree);

@@ -881,10 +881,16 @@ Status parse_layer_values(const nlohmann::json& jl, const Tree& tree, const std:
     if (*by != "filter" && *by != "exact")
       return bad(at + "a value's rounded_by or bound_by is neither filter nor exact");
   l.upper_bound = jl.at("upper_bound").get<bool>();
-  l.exact_obv = jl.at("exact_obv").get<uint64_t>();
-  l.exact_overlap = jl.at("exact_overlap").get<uint64_t>();
-  l.refined_obv = jl.at("refined_obv").get<uint64_t>();
-  l.refined_overlap = jl.at("refined_overlap").get<uint64_t>();
+  // Counts of the layer's boxes: whole numbers up to its box count (get<uint64_t> would wrap a
+  // negative one and truncate 1.5).
+  for (const auto& [key, count] :
+       {std::pair{"exact_obv", &l.exact_obv}, std::pair{"exact_overlap", &l.exact_overlap},
+        std::pair{"refined_obv", &l.refined_obv}, std::pair{"refined_overlap", &l.refined_overlap}}) {
+    int64_t x = 0;
+    if (!json_integer_in(jl.at(key), 0, static_cast<int64_t>(ids.size()), &x))
+      return bad(at + key + " is not a count up to its boxes");
+    *count = static_cast<size_t>(x);
+  }
   l.rational = jl.at("rational").get<bool>();
   if (l.rational) {
     if (!parse_rational(jl.at("omv"), &l.omv) || !parse_rational(jl.at("sum_obv"), &l.sum_obv))

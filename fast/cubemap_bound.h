@@ -22,7 +22,7 @@ double gl_deviation_bound(const BoxPlan& plan, int m);
 // slices in double.
 inline constexpr int kReduceSliceTexels = 256 * 1024;
 inline int reduce_slices(int m) {
-  return (6 * m * m + kReduceSliceTexels - 1) / kReduceSliceTexels;  // m <= 4096: no overflow
+  return (6 * m * m + kReduceSliceTexels - 1) / kReduceSliceTexels;  // an int below m = 18,918
 }
 
 // Whether the shaders can evaluate this plan (above): false when a face's scaled plane is
