@@ -885,7 +885,8 @@ Status parse_layer_values(const nlohmann::json& jl, const Tree& tree, const std:
   // negative one and truncate 1.5).
   for (const auto& [key, count] :
        {std::pair{"exact_obv", &l.exact_obv}, std::pair{"exact_overlap", &l.exact_overlap},
-        std::pair{"refined_obv", &l.refined_obv}, std::pair{"refined_overlap", &l.refined_overlap}}) {
+        std::pair{"refined_obv", &l.refined_obv},
+        std::pair{"refined_overlap", &l.refined_overlap}}) {
     int64_t x = 0;
     if (!json_integer_in(jl.at(key), 0, static_cast<int64_t>(ids.size()), &x))
       return bad(at + key + " is not a count up to its boxes");

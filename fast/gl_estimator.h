@@ -6,7 +6,8 @@
 // parallel (TBB, as many threads as the caller's arena allows). Each span becomes one instanced
 // quad in an R32F atlas, one 3m x 2m tile per box; the fragment shader runs the ray test of
 // texel_hit() in float and blends the hit's value additively; a compute pass sums each tile in
-// slices (cubemap_bound.h), and the host adds a box's slices in double. Boxes whose plan draws nothing take no GPU work.
+// slices (cubemap_bound.h), and the host adds a box's slices in double. Boxes whose plan draws
+// nothing take no GPU work.
 // Calls may come from several threads at once (the variational builder searches nodes in
 // parallel). Each plans its boxes on its own thread and gathers their span records into
 // requests of up to an atlas of boxes (or 64 MiB of records); the estimator's own drawing
