@@ -622,9 +622,10 @@ TEST(VariationalBuilder, BudgetEndsTheSearchInTheCallUnderWay) {
 // ran out, at most one per other thread. With budget_check_seconds far below any call's time,
 // every call holds at most one box per thread, so the boxes estimated stay below k + threads^2
 // (the call that crosses k adds under `threads`, the others at most threads - 1 calls of
-// `threads`). Calls near the budget sleep 1 ms, so that other threads' calls are under way when
-// it runs out; with 2 and 4 threads, some run must have had two calls in flight, or the bounds
-// were not put to the test. The tree is complete, valid and conservative.
+// `threads`). Calls near the budget sleep 1 ms (and wait up to 50 ms for another call), so that
+// other threads' calls are under way when it runs out; with 2 and 4 threads, some run must
+// have had two calls in flight, or the bounds were not put to the test. The tree is complete,
+// valid and conservative.
 TEST(VariationalBuilder, BudgetEndsConcurrentSearches) {
   const Mesh mesh = analytic::polygonal_torus().mesh;
   const CpuObvEstimator cpu(mesh);
@@ -654,8 +655,13 @@ TEST(VariationalBuilder, BudgetEndsConcurrentSearches) {
         const int now = ++in_flight;
         for (int seen = most; now > seen && !most.compare_exchange_weak(seen, now);) {
         }
-        if (boxes + 40 * static_cast<size_t>(threads) >= k)
+        if (boxes + 40 * static_cast<size_t>(threads) >= k) {
+          // 1 ms, and with other threads up to 50 ms more until another call is under way: a
+          // loaded machine may not run the second thread within a fixed millisecond.
           std::this_thread::sleep_for(std::chrono::milliseconds(1));
+          for (int waited = 0; threads > 1 && in_flight < 2 && waited < 50; ++waited)
+            std::this_thread::sleep_for(std::chrono::milliseconds(1));
+        }
         if (boxes >= k) ++calls_after;
         boxes += batch.size();
         std::vector<double> v = cpu.estimate(batch, 8);
