@@ -8,6 +8,7 @@
 
 #include "common/atomic_file.h"
 #include "common/json_parse.h"
+#include "common/solidity.h"  // kMaxCoordinate: colliders keep to the meshes' range
 #include "common/text_util.h"
 
 namespace vobb::collision {
@@ -15,9 +16,6 @@ namespace {
 
 using Json = nlohmann::json;
 constexpr double kU = std::numeric_limits<double>::epsilon() / 2;
-// Coordinates beyond this are refused: the predicates' squares and products stay far from
-// overflow (the mesh itself is within 2^120, DESIGN §7).
-constexpr double kMaxCoordinate = 0x1p240;
 
 }  // namespace
 

@@ -55,9 +55,8 @@ std::vector<int32_t> layer(const Tree& tree, int level);
 int32_t common_ancestor(const Tree& tree, int32_t a, int32_t b);
 
 // Structural check: ids, parent/child links, levels, arity, depth (at most kMaxTreeDepth), and
-// that the leaves
-// partition the faces [0, mesh_triangles) with each inner node's faces the union of its
-// children's. Messages are one line prefixed with `display`.
+// that the leaves partition the faces [0, mesh_triangles) with each inner node's faces the
+// union of its children's. Messages are one line prefixed with `display`.
 Status validate_tree(const Tree& tree, const std::string& display);
 
 // validate_tree, and that the tree indexes this mesh: its triangle count and, where the tree

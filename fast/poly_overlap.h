@@ -15,12 +15,11 @@
 //  - estimate(): in plain double, for the builder's loop: no enclosure. Where the rounded signs
 //    agree, off the exact value by round-off of the cells' volumes alone, within 1e-9 of B's
 //    volume (about 1e-15 on the tests' boxes; the cubemap's error, which the search lives with,
-//    is about 1e-4 of a box's volume). Where rounded signs
-//    contradict each other it takes values within 1e-10 of their magnitude as 0; failing that
-//    (mesh vertices and faces on the planes of B and of earlier boxes, as on a flat part), the
-//    same with every box grown by 2^-30 of its half extents, at most 3.01 2^-30 of the boxes'
-//    volumes above the exact value; and failing that, or where a value overflows, the certified
-//    evaluation's midpoint.
+//    is about 1e-4 of a box's volume). Where rounded signs contradict each other it takes
+//    values within 1e-10 of their magnitude as 0; failing that (mesh vertices and faces on the
+//    planes of B and of earlier boxes, as on a flat part), the same with every box grown by
+//    2^-30 of its half extents, at most 3.01 2^-30 of the boxes' volumes above the exact value;
+//    and failing that, or where a value overflows, the certified evaluation's midpoint.
 // 0 exactly where no earlier box meets B by a separating-axis test in double with a margin
 // that round-off cannot cross, or where B is flat. Functions of their arguments alone (the
 // earlier boxes in the order given); batches run in parallel (TBB), each as alone. Thread-safe.
