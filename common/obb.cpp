@@ -53,11 +53,11 @@ std::string box_defect(const Obb& b) {
         return "axes are not orthonormal (a" + std::to_string(i) + " . a" + std::to_string(k) +
                " is off by " + format_double(dev) + ")";
     }
-  // The same range as mesh coordinates (solidity.h), with room for a box around such a mesh.
+  static_assert(kMaxBoxReach == 4 * kMaxCoordinate);
   for (int j = 0; j < 3; ++j) {
     const double reach = std::abs(b.center[j]) + b.half[0] * std::abs(b.axes[0][j]) +
                          b.half[1] * std::abs(b.axes[1][j]) + b.half[2] * std::abs(b.axes[2][j]);
-    if (!(reach <= 2 * kMaxCoordinate)) return "extends beyond +-2^241 (about 3.5e72)";
+    if (!(reach <= kMaxBoxReach)) return "extends beyond +-2^242 (about 7.1e72)";
   }
   return "";
 }

@@ -32,9 +32,15 @@ double volume(const Obb& box);
 // What makes a box unfit for vobb's estimators and files, in words ("" when it is fit):
 // non-finite numbers, a negative or subnormal half extent (below 2^-1022; zero is a flat box
 // and fine), axes further from orthonormal than 1e-5 in some dot product (DESIGN §7: axes
-// written with 6 significant digits are off by 2e-6 at most), or a box reaching beyond twice
-// the mesh coordinate range (2^241). Box files and the validation suite refuse such boxes.
+// written with 6 significant digits are off by 2e-6 at most), or a box reaching beyond
+// kMaxBoxReach in some coordinate. Box files and the validation suite refuse such boxes.
 std::string box_defect(const Obb& box);
+
+// Largest |coordinate| a box's corners may reach, 2^242 (about 7.1e72): four times the mesh
+// range (kMaxCoordinate, common/solidity.h). Every box fit_obb makes around faces within that
+// range reaches at most 3 kMaxCoordinate and its round-off padding (docs/derivations.md,
+// "The reach of a fitted box"), so no box the builders make is refused.
+inline constexpr double kMaxBoxReach = 0x1p242;
 
 // A box and the earlier boxes that what it shares with them is measured against
 // (fast/poly_overlap.h).

@@ -37,7 +37,8 @@ const char* defect_name(Defect d);
 // Largest accepted |coordinate|, 2^240 (about 1.8e72), and least accepted extent (the
 // largest side of the bounding box), 2^-240 (about 5.7e-73). Between them every double
 // computed downstream stays finite and normal: differences of coordinates are at most 2^241,
-// box volumes and triple products at most 6 (2^241)^3, and the baseline's second moments,
+// triple products at most 6 (2^241)^3, box volumes (boxes reach at most 2^242: kMaxBoxReach,
+// common/obb.h) at most (2^243)^3, and the baseline's second moments,
 // a sum over at most 2^31 faces of area times squared distance, at most 2^31 (2^242)^2 (2^241)^2
 // = 2^997 < 2^1024; at the small end extent^4 = 2^-960 is still above the least normal, 2^-1022.
 constexpr double kMaxCoordinate = 0x1p240;

@@ -48,7 +48,7 @@ double roundoff_term(const Obb& box) {
 
 double range_bound(const Obb& box, double estimate) {
   // U: Hadamard's inequality, |det A| <= ||a0|| ||a1|| ||a2||, in double, carried as a mantissa
-  // and a power of two so that no intermediate product underflows (a box may be 2^241 long and
+  // and a power of two so that no intermediate product underflows (a box may be 2^243 long and
   // 2^-1022 thin). Each norm is within 2 eps of its value (the dot product's roundings, halved
   // by the square root, and the root's own), each h_k ||a_k|| within one more (up to eps where
   // it is subnormal: h_k >= 2^-1022 by box_defect and ||a_k|| >= 1/2), and the 3 mantissa

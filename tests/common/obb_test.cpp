@@ -2,11 +2,13 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <limits>
 #include <numeric>
 #include <random>
 
+#include "common/solidity.h"  // kMaxCoordinate
 #include "data/analytic_meshes.h"
 #include "test_common.h"
 
@@ -137,6 +139,45 @@ TEST(FitObb, SingleFaceGetsAThinButValidBox) {
   EXPECT_LE(box.half[2], 2 * fit_slack(box, 1.0));
   ExactBoxContainment inside(box);
   for (const Vec3& v : m.vertices) EXPECT_TRUE(inside.contains(v));
+}
+
+// A box fit around faces within the mesh range reaches at most 3 kMaxCoordinate
+// (docs/derivations.md, "The reach of a fitted box"): box_defect takes it. These axes are the
+// ones a search over rotations found to reach furthest around the whole range's cube, about
+// 2.837 kMaxCoordinate in x; a limit of twice the range refused that box.
+TEST(FitObb, BoxesAroundTheWholeCoordinateRangePassBoxDefect) {
+  const double r = kMaxCoordinate;
+  const Mesh m = analytic::cube(2 * r, Vec3::Constant(-r)).mesh;
+  std::vector<int32_t> faces(m.faces.size());
+  std::iota(faces.begin(), faces.end(), 0);
+  const Eigen::Matrix3d rot = Eigen::Quaterniond(0.43302023128856754, -0.7865646551718255,
+                                                 -0.07945384911397368, -0.433008785580843)
+                                  .normalized()
+                                  .toRotationMatrix();
+  std::mt19937_64 rng(11);
+  std::vector<std::array<Vec3, 3>> frames = {{rot.col(0), rot.col(1), rot.col(2)}};
+  for (int t = 0; t < 200; ++t) frames.push_back(random_axes(rng));
+  double furthest = 0;
+  for (const auto& axes : frames) {
+    const Obb box = fit_obb(m, faces, axes);
+    EXPECT_EQ(box_defect(box), "");
+    for (const Vec3& c : corners(box)) {
+      ASSERT_LE(c.cwiseAbs().maxCoeff(), 3 * r * (1 + 0x1p-40));  // the derived bound
+      furthest = std::max(furthest, c.cwiseAbs().maxCoeff());
+    }
+  }
+  EXPECT_GT(furthest, 2.8 * r);  // the case the derivation's bound is about
+}
+
+TEST(BoxDefect, RefusesABoxReachingBeyondTheLimitInAnyCoordinate) {
+  for (int j = 0; j < 3; ++j) {
+    Obb box;
+    box.half = Vec3::Constant(0x1p200);
+    box.center[j] = kMaxBoxReach - 0x1p200;  // its face at the limit exactly: taken
+    EXPECT_EQ(box_defect(box), "");
+    box.center[j] = -kMaxBoxReach;  // one face 2^200 beyond it
+    EXPECT_EQ(box_defect(box), "extends beyond +-2^242 (about 7.1e72)");
+  }
 }
 
 TEST(ExactBoxContainment, BoundaryIsInsideAndOneUlpBeyondIsOutside) {
