@@ -384,6 +384,14 @@ Objective search_objective(const BuildOptions& o) {
 }
 
 Status check_build_options(const BuildOptions& o) {
+  // Values cast into the enums from outside their lists (the CLI cannot make them).
+  if (o.method != Method::kVariational && o.method != Method::kObbTree)
+    return Status::error("--method is neither variational nor obbtree");
+  if (o.backend != Backend::kAuto && o.backend != Backend::kCpu && o.backend != Backend::kGl &&
+      o.backend != Backend::kPoly)
+    return Status::error("--backend is none of auto, cpu, gl, poly");
+  if (o.objective && *o.objective != Objective::kObv && *o.objective != Objective::kOmv)
+    return Status::error("--objective is neither obv nor omv");
   const bool variational = o.method == Method::kVariational;
   if (!std::isfinite(o.collider_margin) || o.collider_margin < 0)
     return Status::error("--collider-margin must be a finite length >= 0");
@@ -469,6 +477,9 @@ Status read_queries(const Mesh& mesh, const std::vector<std::string>& paths, Bui
 
 Status certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& o,
                exact::Certificate* certificate) {
+  if (o.path != exact::OmvPath::kAuto && o.path != exact::OmvPath::kClip &&
+      o.path != exact::OmvPath::kNef && o.path != exact::OmvPath::kBoth)
+    return Status::error("--path is none of auto, clip, nef, both");
   Status s = check_mesh(mesh);
   if (!s) return s;
   s = check_tree_fits(mesh, tree, o.tree_name);

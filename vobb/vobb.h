@@ -112,7 +112,8 @@ Status read_queries(const Mesh& mesh, const std::vector<std::string>& paths, Bui
 // else kOmv, but kObv with a collider margin; with queries the search counts hits and takes no
 // shares (kObv).
 Objective search_objective(const BuildOptions& options);
-// The combinations of options that contradict each other, refused with the flag's name.
+// The combinations of options that contradict each other, and values out of range (enums
+// cast from outside their lists included), refused with the flag's name.
 Status check_build_options(const BuildOptions& options);
 // Builds the tree of a solid mesh; fills every field, mesh_sha256 included. Deterministic: the
 // same mesh and options give the same tree on any number of threads, and a build resumed from
@@ -130,10 +131,10 @@ struct CertifyOptions {
   std::function<void(const exact::CertifyState&)> saved;  // after each checkpoint saved
   std::string tree_name = "tree";  // how messages name the tree (its file, say)
 };
-// Checks that the tree is well formed and indexes this mesh (check_tree_fits, common/tree.h,
-// which also serves alone), then certifies it (exact/certify.h): OMV, sum of OBV and
-// overlap per layer, e, containment. Creates no GL context. *certificate->ok() says whether it
-// certifies.
+// Checks the path (one of OmvPath's), that the tree is well formed and indexes this mesh
+// (check_tree_fits, common/tree.h, which also serves alone), then certifies it (exact/certify.h):
+// OMV, sum of OBV and overlap per layer, e, containment. Creates no GL context. *certificate->ok()
+// says whether it certifies.
 Status certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& options,
                exact::Certificate* certificate);
 

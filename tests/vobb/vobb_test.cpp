@@ -191,6 +191,10 @@ TEST(BuildTree, RefusesOptionsThatContradictEachOther) {
       {[](BuildOptions* o) { o->time_budget = -1; }, "--time-budget"},
       {[](BuildOptions* o) { o->time_budget = std::nan(""); }, "--time-budget"},
       {[](BuildOptions* o) { o->time_budget = 1e-4; }, "--time-budget"},
+      // Values outside the enums' lists, which only a cast makes.
+      {[](BuildOptions* o) { o->method = static_cast<Method>(2); }, "--method"},
+      {[](BuildOptions* o) { o->backend = static_cast<Backend>(-1); }, "--backend"},
+      {[](BuildOptions* o) { o->objective = static_cast<Objective>(2); }, "--objective"},
   };
   for (const Case& c : cases) {
     BuildOptions o = small_build();
@@ -252,6 +256,18 @@ TEST(Certify, TreeErrorIsTheCertificatesE) {
   ASSERT_GE(depth, 2);
   EXPECT_TRUE(tree_error(omv) == c.weighted_error);
   EXPECT_TRUE(weighted == c.weighted_error);
+}
+
+TEST(Certify, RefusesAPathOutsideItsList) {
+  const Mesh cube = analytic::cube().mesh;
+  Tree tree;
+  ASSERT_TRUE(build_tree(cube, small_build(), &tree).is_ok());
+  CertifyOptions o;
+  o.path = static_cast<exact::OmvPath>(4);
+  exact::Certificate c;
+  const Status s = certify(cube, tree, o, &c);
+  ASSERT_FALSE(s.is_ok());
+  EXPECT_NE(s.message().find("--path"), std::string::npos) << s.message();
 }
 
 TEST(Certify, RefusesATreeOfAnotherMesh) {
