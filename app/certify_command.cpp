@@ -20,7 +20,7 @@ constexpr const char* kThreadsHelp =
     "core this process may use); the values are exact, so the same for any number. Each thread "
     "that computes a union holds its own Nef polyhedron of the mesh";
 
-nlohmann::ordered_json enclosure(const exact::MpInterval& x) {
+nlohmann::ordered_json enclosure(const MpInterval& x) {
   return nlohmann::ordered_json::array({x.inf(), x.sup()});
 }
 

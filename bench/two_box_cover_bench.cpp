@@ -55,9 +55,9 @@ Obb refined_fit(const Mesh& mesh, const std::vector<int32_t>& faces, const Mat3&
 
 // A set of boxes' OMV, enclosed: [lo, hi]. `obv` holds each box's enclosed OBV.
 std::pair<double, double> omv(const vobb::exact::FilteredSolver& fs, const std::vector<Obb>& boxes,
-                              const std::vector<vobb::exact::MpInterval>& obv) {
+                              const std::vector<vobb::MpInterval>& obv) {
   const std::vector<std::vector<int32_t>> earlier = fs.rational().earlier_neighbours(boxes);
-  vobb::exact::MpInterval sum = obv[0];
+  vobb::MpInterval sum = obv[0];
   for (size_t j = 1; j < boxes.size(); ++j) sum += obv[j];
   for (size_t j = 1; j < boxes.size(); ++j) sum -= fs.overlap_term(boxes, j, earlier[j]).value;
   return {sum.inf(), sum.sup()};
@@ -267,7 +267,7 @@ int main(int argc, char** argv) {
     if (counts == 5) {
       const std::vector<int32_t> ids2 = vobb::layer(tree, 2);
       std::vector<Obb> boxes;
-      std::vector<vobb::exact::MpInterval> obv;
+      std::vector<vobb::MpInterval> obv;
       for (int32_t id : ids2) {
         boxes.push_back(tree.nodes[id].box);
         obv.push_back(fs.obv(boxes.back()).value);
@@ -319,7 +319,7 @@ int main(int argc, char** argv) {
       continue;
     }
     // Each box's OBV once; then every pairing's four boxes.
-    std::vector<vobb::exact::MpInterval> obv[2];
+    std::vector<vobb::MpInterval> obv[2];
     for (int h = 0; h < 2; ++h)
       for (const Cover& s : halves[h]) {
         obv[h].push_back(fs.obv(s.box_a).value);
@@ -330,7 +330,7 @@ int main(int argc, char** argv) {
       for (size_t j = 0; j < halves[1].size(); ++j) {
         const std::vector<Obb> boxes{halves[0][i].box_a, halves[0][i].box_b, halves[1][j].box_a,
                                      halves[1][j].box_b};
-        const std::vector<vobb::exact::MpInterval> v{obv[0][2 * i], obv[0][2 * i + 1],
+        const std::vector<vobb::MpInterval> v{obv[0][2 * i], obv[0][2 * i + 1],
                                                      obv[1][2 * j], obv[1][2 * j + 1]};
         const auto [lo, hi] = omv(fs, boxes, v);
         if (0.5 * (lo + hi) < l2) l2 = 0.5 * (lo + hi), width = hi - lo;

@@ -17,7 +17,7 @@
 #include "common/status.h"
 #include "common/tree.h"
 #include "exact/filtered_solver.h"
-#include "exact/mp_interval.h"
+#include "common/mp_interval.h"
 
 namespace vobb::exact {
 

@@ -13,11 +13,6 @@
 
 namespace vobb {
 
-template <>
-struct box_clip::ClipTraits<exact::MpInterval> {
-  static int sign(const exact::MpInterval& x) { return x.sign(); }  // throws Undecided
-};
-
 namespace exact {
 namespace {
 

@@ -22,7 +22,7 @@
 #include "common/bvh.h"
 #include "common/mesh.h"
 #include "common/obb.h"
-#include "exact/mp_interval.h"
+#include "common/mp_interval.h"
 #include "exact/outer_volume.h"
 
 namespace vobb::exact {

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "common/cell_clip.h"
+#include "common/mp_interval.h"
 #include "fast/interval.h"
 
 namespace vobb {
@@ -31,6 +32,22 @@ PolyOverlap PolyOverlapSolver::evaluate(const Obb& box, const std::vector<Obb>& 
       return r;
     }
   } catch (const CGAL::Uncertain_conversion_exception&) {
+  }
+  // The same arithmetic in wider enclosures: ill-conditioned cuts (a box sheared 1e8 to one)
+  // leave double intervals undecided where 128 or 256 bits still decide every sign. Taken
+  // where the enclosure also rounds to one double, which is then the rationals' nearest.
+  for (const mpfr_prec_t bits : {MpInterval::kPrec, MpInterval::kMaxPrec}) {
+    try {
+      const MpInterval::Precision precision(bits);
+      const MpInterval v = cell_clip::shared_outside_volume<MpInterval>(mesh_, faces_, box, near);
+      if (v.nearest(&r.estimate)) {
+        r.lo = std::max(v.inf(), 0.0);
+        r.hi = v.sup();
+        r.enclosure_bits = static_cast<int>(bits);
+        return r;
+      }
+    } catch (const Undecided&) {
+    }
   }
   const Rational q = cell_clip::shared_outside_volume<Rational>(mesh_, faces_, box, near);
   enclose(q, &r.lo, &r.hi);

@@ -9,9 +9,10 @@
 // taken by the signed prism decomposition over the faces in its column (common/cell_clip.h,
 // the arithmetic that the exact clipping path runs in rationals).
 //  - evaluate(): in interval arithmetic (CGAL::Interval_nt, under upward rounding); [lo, hi]
-//    provably contains the exact value. Where the intervals cannot decide a sign (a mesh vertex
-//    or a box corner on a plane), or a value comes out non-finite, it is computed in rationals,
-//    and says so.
+//    provably contains the exact value. Where the intervals cannot decide a sign or a value
+//    comes out non-finite, the same in MPFR intervals of 128, then 256 bits (common/
+//    mp_interval.h), taken where one decides every sign and rounds to one double; where neither
+//    does (a mesh vertex or a box corner on a plane), in rationals. It says which.
 //  - estimate(): in plain double, for the builder's loop: no enclosure. Where the rounded signs
 //    agree, off the exact value by round-off of the cells' volumes alone, within 1e-9 of B's
 //    volume (about 1e-15 on the tests' boxes; the cubemap's error, which the search lives with,
@@ -19,7 +20,7 @@
 //    values within 1e-10 of their magnitude as 0; failing that (mesh vertices and faces on the
 //    planes of B and of earlier boxes, as on a flat part), the same with every box grown by
 //    2^-30 of its half extents, at most 3.01 2^-30 of the boxes' volumes above the exact value;
-//    and failing that, or where a value overflows, the certified evaluation's midpoint.
+//    and failing that, or where a value overflows, the certified evaluation's estimate.
 // 0 exactly where no earlier box meets B by a separating-axis test in double with a margin
 // that round-off cannot cross, or where B is flat. Functions of their arguments alone (the
 // earlier boxes in the order given); batches run in parallel (TBB), each as alone. Thread-safe.
@@ -38,9 +39,11 @@
 namespace vobb {
 
 struct PolyOverlap {
-  double lo = 0, hi = 0;  // lo <= the exact value <= hi
-  double estimate = 0;    // the midpoint of [lo, hi] (the nearest double when exact)
-  bool exact = false;     // computed in rationals: the intervals could not decide a sign
+  double lo = 0, hi = 0;   // lo <= the exact value <= hi
+  double estimate = 0;     // the midpoint of [lo, hi]; the exact value's nearest double when
+                           // enclosure_bits or exact is set
+  int enclosure_bits = 0;  // 128 or 256: an MPFR enclosure decided it (double intervals did not)
+  bool exact = false;      // computed in rationals: no enclosure could decide a sign
 };
 
 class PolyOverlapSolver {

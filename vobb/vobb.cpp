@@ -657,9 +657,9 @@ Status compare(const Mesh& mesh, const CompareOptions& co, CompareResult* r) {
   // 1e-35), or with `rational`, the layers' rationals do.
   const int depth = static_cast<int>(r->levels) - 1;
   for (int i = 0; i < 2; ++i) {
-    exact::MpInterval e(0);
+    MpInterval e(0);
     for (size_t l = 0; l < r->levels; ++l)
-      e += exact::MpInterval(layer_weight(depth, static_cast<int>(l))) *
+      e += MpInterval(layer_weight(depth, static_cast<int>(l))) *
            r->layer(i, l).omv_enclosure;
     if (e.nearest(&r->e[i]) && !co.rational) continue;
     if (!r->certificates[i].rational) {

@@ -318,6 +318,41 @@ TEST(PolyOverlap, DegenerateContactsOfAFlatPartAreEstimatedFromGrownBoxes) {
   EXPECT_LE(Rational(estimate), exact + Rational(3.01 * 0x1p-30 * volumes + r));
 }
 
+// A unit cube sheared 1e8 to one (x += 1e8 z), in two tight boxes of its two halves of faces
+// along frames turned by 1e-8 or less: the cuts are so ill-conditioned that double intervals
+// decide none of these shares. The MPFR enclosures decide some; each enclosure holds the exact
+// value, and where an MPFR enclosure or the rationals decided, the estimate is its nearest
+// double.
+TEST(PolyOverlap, IllConditionedCutsAreDecidedInWiderEnclosures) {
+  Mesh mesh = analytic::cube().mesh;
+  for (Vec3& v : mesh.vertices) v.x() += 1e8 * v.z();
+  ASSERT_TRUE(check_solidity(mesh).solid());
+  const PolyOverlapSolver poly(mesh);
+  const std::vector<int32_t> half1 = {1, 2, 4, 7, 8, 9}, half2 = {0, 3, 5, 6, 10, 11};
+  auto frame = [](double turn) {
+    return orthonormalize({Vec3(1, turn, 1e-8), Vec3(-turn, 1, 0), Vec3::Zero()});
+  };
+  int by_doubles = 0, by_mpfr = 0, by_rationals = 0;
+  for (const double t1 : {0.0, 5e-9, 1e-8, -5e-9})
+    for (const double t2 : {0.0, 5e-9, 1e-8, 2e-8}) {
+      SCOPED_TRACE(std::to_string(t1) + " " + std::to_string(t2));
+      const Obb a = tight_box(mesh, half1, frame(t1)), b = tight_box(mesh, half2, frame(t2));
+      const Rational exact = poly.exact(b, {a});
+      const PolyOverlap r = poly.evaluate(b, {a});
+      EXPECT_LE(Rational(r.lo), exact);
+      EXPECT_LE(exact, Rational(r.hi));
+      if (r.exact || r.enclosure_bits > 0) EXPECT_EQ(r.estimate, to_double_nearest(exact));
+      if (r.enclosure_bits > 0) EXPECT_TRUE(r.enclosure_bits == 128 || r.enclosure_bits == 256);
+      EXPECT_FALSE(r.exact && r.enclosure_bits > 0);  // one tier decided
+      by_doubles += !r.exact && r.enclosure_bits == 0;
+      by_mpfr += r.enclosure_bits > 0;
+      by_rationals += r.exact;
+    }
+  EXPECT_EQ(by_doubles, 0);  // the case is as ill-conditioned as it claims
+  EXPECT_GT(by_mpfr, 0);
+  EXPECT_GT(by_rationals, 0);  // tight boxes touch mesh vertices: some signs are 0 exactly
+}
+
 // Sibling-like pairs on real meshes: two tight boxes of neighbouring face groups, which touch
 // the same mesh vertices where the groups meet (the builder's case), and random pairs.
 TEST(PolyOverlapReal, EstimatesAreTheExactValueToRoundOff) {

@@ -1,11 +1,11 @@
-#include "exact/mp_interval.h"
+#include "common/mp_interval.h"
 
 #include <cstdlib>
 #include <cstring>
 
 #include "common/status.h"
 
-namespace vobb::exact {
+namespace vobb {
 
 namespace {
 thread_local mpfr_prec_t current_bits = MpInterval::kPrec;
@@ -222,4 +222,4 @@ MpInterval MpInterval::collapsed_for_tests() const {
   return r;
 }
 
-}  // namespace vobb::exact
+}  // namespace vobb

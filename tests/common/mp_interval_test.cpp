@@ -1,11 +1,11 @@
-#include "exact/mp_interval.h"
+#include "common/mp_interval.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <random>
 
-namespace vobb::exact {
+namespace vobb {
 namespace {
 
 // Random rationals with numerators and denominators up to 2^40, of either sign, some of them
@@ -93,4 +93,4 @@ TEST(MpInterval, OutwardDoublesAndTextRoundTrip) {
 }
 
 }  // namespace
-}  // namespace vobb::exact
+}  // namespace vobb

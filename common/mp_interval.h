@@ -1,24 +1,26 @@
-// vobb::exact::MpInterval — a closed interval of binary floating-point numbers (MPFR) of 128
-// bits, or 256 within a Precision scope, every operation rounded outward. Whatever values lie in
-// the operands, the exact result of the same operation on them lies in the result: a chain of
+// vobb::MpInterval — a closed interval of binary floating-point numbers (MPFR) of 128 bits, or
+// 256 within a Precision scope, every operation rounded outward. Whatever values lie in the
+// operands, the exact result of the same operation on them lies in the result: a chain of
 // operations encloses the exact value of the same expression in rationals. Holds its significands
 // inline: no allocation.
 //
-// It is certify's filter (exact/filtered_solver.h): 128 bits tell apart boxes whose faces
-// touch mesh vertices (1e-17 apart in relative terms) and leave a sum's enclosure within one
-// double's rounding cell except at rounding ties; 256 bits serve where near-degenerate cuts
-// (slivers between nearly coplanar planes) widen an enclosure past that. A sign it cannot
-// decide throws Undecided; the caller then computes in rationals.
+// It is certify's filter (exact/filtered_solver.h) and the polyhedral overlap's second tier
+// (fast/poly_overlap.h): 128 bits tell apart boxes whose faces touch mesh vertices (1e-17 apart
+// in relative terms) and leave a sum's enclosure within one double's rounding cell except at
+// rounding ties; 256 bits serve where near-degenerate cuts (slivers between nearly coplanar
+// planes) widen an enclosure past that. A sign it cannot decide throws Undecided; the caller
+// then computes in rationals.
 #pragma once
 
 #include <gmp.h>
 #include <mpfr.h>
 
 #include <string>
+#include <utility>
 
 #include "common/exact_predicates.h"
 
-namespace vobb::exact {
+namespace vobb {
 
 // A decision the enclosure cannot take (it holds 0 and other values).
 struct Undecided {};
@@ -85,4 +87,23 @@ class MpInterval {
   mp_limb_t lo_limbs_[kLimbs], hi_limbs_[kLimbs];
 };
 
-}  // namespace vobb::exact
+// Signs and double bounds for the clipping code that is generic over the number type
+// (common/box_frame_clip.h, common/cell_clip.h).
+namespace box_clip {
+template <class NT>
+struct ClipTraits;
+template <>
+struct ClipTraits<MpInterval> {
+  static int sign(const MpInterval& x) { return x.sign(); }  // throws Undecided
+};
+}  // namespace box_clip
+namespace cell_clip {
+template <class NT>
+struct NumberBounds;
+template <>
+struct NumberBounds<MpInterval> {
+  static std::pair<double, double> of(const MpInterval& x) { return {x.inf(), x.sup()}; }
+};
+}  // namespace cell_clip
+
+}  // namespace vobb
