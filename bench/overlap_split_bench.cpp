@@ -18,11 +18,11 @@
 
 namespace {
 
+using vobb::MpInterval;
 using vobb::Obb;
 using vobb::Rational;
 using vobb::exact::Enclosed;
 using vobb::exact::FilteredSolver;
-using vobb::MpInterval;
 
 // The overlap term of `boxes` (sum over j of box j's share): its enclosure, and the rational
 // when `exact` (the clipping path, box by box).

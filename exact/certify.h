@@ -14,10 +14,10 @@
 
 #include "common/exact_predicates.h"
 #include "common/mesh.h"
+#include "common/mp_interval.h"
 #include "common/status.h"
 #include "common/tree.h"
 #include "exact/filtered_solver.h"
-#include "common/mp_interval.h"
 
 namespace vobb::exact {
 

@@ -21,8 +21,8 @@
 
 #include "common/bvh.h"
 #include "common/mesh.h"
-#include "common/obb.h"
 #include "common/mp_interval.h"
+#include "common/obb.h"
 #include "exact/outer_volume.h"
 
 namespace vobb::exact {
