@@ -330,8 +330,8 @@ int main(int argc, char** argv) {
       for (size_t j = 0; j < halves[1].size(); ++j) {
         const std::vector<Obb> boxes{halves[0][i].box_a, halves[0][i].box_b, halves[1][j].box_a,
                                      halves[1][j].box_b};
-        const std::vector<vobb::MpInterval> v{obv[0][2 * i], obv[0][2 * i + 1],
-                                                     obv[1][2 * j], obv[1][2 * j + 1]};
+        const std::vector<vobb::MpInterval> v{obv[0][2 * i], obv[0][2 * i + 1], obv[1][2 * j],
+                                              obv[1][2 * j + 1]};
         const auto [lo, hi] = omv(fs, boxes, v);
         if (0.5 * (lo + hi) < l2) l2 = 0.5 * (lo + hi), width = hi - lo;
       }
