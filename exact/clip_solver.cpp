@@ -1,4 +1,6 @@
 #include <limits>
+#include <memory>
+#include <mutex>
 
 #include "common/box_frame_clip.h"
 #include "exact/convex_cell.h"
@@ -19,43 +21,52 @@ Rational dot(const Rational* n, const Vec3& p) {
 
 }  // namespace
 
-ClipSolver::ClipSolver(const Mesh& mesh) : mesh_(mesh), faces_(AabbTree::over_faces(mesh)) {
-  prisms_.resize(mesh.faces.size());
-  for (size_t f = 0; f < mesh.faces.size(); ++f) {
-    const Vec3 &a = mesh.corner(f, 0), &b = mesh.corner(f, 1), &c = mesh.corner(f, 2);
-    Rational e1[3], e2[3], nrm[3];
-    for (int i = 0; i < 3; ++i) {
-      e1[i] = Rational(b[i]) - Rational(a[i]);
-      e2[i] = Rational(c[i]) - Rational(a[i]);
-    }
-    nrm[0] = e1[1] * e2[2] - e1[2] * e2[1];
-    nrm[1] = e1[2] * e2[0] - e1[0] * e2[2];
-    nrm[2] = e1[0] * e2[1] - e1[1] * e2[0];
-    Prism& P = prisms_[f];
-    P.sign = sgn(nrm[2]);
-    if (P.sign == 0) continue;  // a vertical face bounds no column
-    const Vec3* corner[3] = {&a, &b, &c};
-    for (int k = 0; k < 3; ++k) {
-      const Vec3& p = *corner[k];
-      const Vec3& q = *corner[(k + 1) % 3];
-      // Vertical plane through edge pq, normal (q - p) x z; the shadow's inside is on the left
-      // of pq when the projection runs counter-clockwise (sign +1), on the right otherwise.
-      HalfSpace& h = P.h[k];
-      h.n[0] = Rational(q[1]) - Rational(p[1]);
-      h.n[1] = Rational(p[0]) - Rational(q[0]);
-      h.n[2] = 0;
-      if (P.sign < 0) {
-        h.n[0] = -h.n[0];
-        h.n[1] = -h.n[1];
-      }
-      h.d = dot(h.n, p);
-    }
-    // Below the face: moving along -z decreases sign * n . x.
-    HalfSpace& below = P.h[3];
-    for (int i = 0; i < 3; ++i) below.n[i] = P.sign > 0 ? nrm[i] : Rational(-nrm[i]);
-    below.d = dot(below.n, a);
-    for (HalfSpace& h : P.h) h.set_shadow();
+ClipSolver::ClipSolver(const Mesh& mesh)
+    : mesh_(mesh),
+      faces_(AabbTree::over_faces(mesh)),
+      prisms_(mesh.faces.size()),
+      made_(std::make_unique<std::once_flag[]>(mesh.faces.size())) {}
+
+const ClipSolver::Prism& ClipSolver::prism(int32_t f) const {
+  std::call_once(made_[f], [&] { prisms_[f] = std::make_unique<Prism>(make_prism(f)); });
+  return *prisms_[f];
+}
+
+ClipSolver::Prism ClipSolver::make_prism(int32_t f) const {
+  Prism P;
+  const Vec3 &a = mesh_.corner(f, 0), &b = mesh_.corner(f, 1), &c = mesh_.corner(f, 2);
+  Rational e1[3], e2[3], nrm[3];
+  for (int i = 0; i < 3; ++i) {
+    e1[i] = Rational(b[i]) - Rational(a[i]);
+    e2[i] = Rational(c[i]) - Rational(a[i]);
   }
+  nrm[0] = e1[1] * e2[2] - e1[2] * e2[1];
+  nrm[1] = e1[2] * e2[0] - e1[0] * e2[2];
+  nrm[2] = e1[0] * e2[1] - e1[1] * e2[0];
+  P.sign = sgn(nrm[2]);
+  if (P.sign == 0) return P;  // a vertical face bounds no column
+  const Vec3* corner[3] = {&a, &b, &c};
+  for (int k = 0; k < 3; ++k) {
+    const Vec3& p = *corner[k];
+    const Vec3& q = *corner[(k + 1) % 3];
+    // Vertical plane through edge pq, normal (q - p) x z; the shadow's inside is on the left
+    // of pq when the projection runs counter-clockwise (sign +1), on the right otherwise.
+    HalfSpace& h = P.h[k];
+    h.n[0] = Rational(q[1]) - Rational(p[1]);
+    h.n[1] = Rational(p[0]) - Rational(q[0]);
+    h.n[2] = 0;
+    if (P.sign < 0) {
+      h.n[0] = -h.n[0];
+      h.n[1] = -h.n[1];
+    }
+    h.d = dot(h.n, p);
+  }
+  // Below the face: moving along -z decreases sign * n . x.
+  HalfSpace& below = P.h[3];
+  for (int i = 0; i < 3; ++i) below.n[i] = P.sign > 0 ? nrm[i] : Rational(-nrm[i]);
+  below.d = dot(below.n, a);
+  for (HalfSpace& h : P.h) h.set_shadow();
+  return P;
 }
 
 ClipSolver::~ClipSolver() = default;
@@ -71,7 +82,7 @@ Rational ClipSolver::inside_volume(const ConvexCell& cell) const {
   std::vector<Rational> terms;
   long whole = 0;  // signed count of prisms that contain the whole cell
   faces_.for_each_overlap(column, [&](int32_t f) {
-    const Prism& P = prisms_[f];
+    const Prism& P = prism(f);
     if (P.sign == 0) return;
     // The filter settles most faces: a prism that surely misses the cell adds nothing, one
     // that surely contains it adds the cell's volume; only the rest are clipped exactly.

@@ -18,6 +18,7 @@
 #pragma once
 
 #include <memory>
+#include <mutex>
 #include <vector>
 
 #include "common/bvh.h"
@@ -59,9 +60,14 @@ class ClipSolver {
 
  private:
   struct Prism;
+  // Face f's prism, made at its first need (thread-safe): only inside_volume needs prisms, and
+  // only where certify's filter falls back to rationals or a path asks for them.
+  const Prism& prism(int32_t f) const;
+  Prism make_prism(int32_t f) const;
   const Mesh& mesh_;
   AabbTree faces_;
-  std::vector<Prism> prisms_;  // one per face; vertical faces have sign 0
+  mutable std::vector<std::unique_ptr<Prism>> prisms_;  // per face; vertical faces: sign 0
+  std::unique_ptr<std::once_flag[]> made_;
 };
 
 class NefSolver {
