@@ -3,10 +3,14 @@
 #include <mpfr.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <limits>
 #include <vector>
+
+#include "common/status.h"
 
 namespace vobb {
 namespace {
@@ -93,17 +97,6 @@ bool collinear(const Vec3& a, const Vec3& b, const Vec3& c) {
          orient2d(a, b, c, 2, 0) == 0;
 }
 
-namespace {
-
-Rational triple(const Vec3& a, const Vec3& b, const Vec3& c) {
-  Rational ax(a[0]), ay(a[1]), az(a[2]);
-  Rational bx(b[0]), by(b[1]), bz(b[2]);
-  Rational cx(c[0]), cy(c[1]), cz(c[2]);
-  return ax * (by * cz - bz * cy) + ay * (bz * cx - bx * cz) + az * (bx * cy - by * cx);
-}
-
-}  // namespace
-
 Rational sum_pairwise(std::vector<Rational>& terms) {
   if (terms.empty()) return Rational(0);
   size_t n = terms.size();
@@ -116,11 +109,54 @@ Rational sum_pairwise(std::vector<Rational>& terms) {
 }
 
 Rational exact_signed_volume(const Mesh& mesh, const std::vector<int32_t>& faces) {
-  std::vector<Rational> terms;
-  terms.reserve(faces.size());
+  // Every coordinate is an integer multiple of 2^e0, the least unit among the faces' coordinates'
+  // lowest set bits; in that unit each triple product, and so the sum of them, is an integer:
+  // integer arithmetic with no fractions to reduce, and one division at the end.
+  std::vector<char> used(mesh.vertices.size(), 0);
   for (int32_t f : faces)
-    terms.push_back(triple(mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2)));
-  Rational six_v = sum_pairwise(terms);
+    for (int k = 0; k < 3; ++k) used[mesh.faces[f][k]] = 1;
+  long e0 = std::numeric_limits<long>::max();
+  for (size_t v = 0; v < used.size(); ++v)
+    if (used[v])
+      for (int k = 0; k < 3; ++k) {
+        const double x = mesh.vertices[v][k];
+        VOBB_ASSERT(std::isfinite(x), "exact_signed_volume needs finite coordinates");
+        if (x == 0) continue;
+        int e = 0;
+        const auto m = static_cast<int64_t>(std::ldexp(std::frexp(x, &e), 53));  // x = m 2^(e-53)
+        e0 = std::min<long>(e0, e - 53 + __builtin_ctzll(static_cast<uint64_t>(std::abs(m))));
+      }
+  if (e0 == std::numeric_limits<long>::max()) return Rational(0);  // every coordinate is 0
+  std::vector<std::array<mpz_class, 3>> scaled(mesh.vertices.size());
+  for (size_t v = 0; v < used.size(); ++v)
+    if (used[v])
+      for (int k = 0; k < 3; ++k) {
+        const double x = mesh.vertices[v][k];
+        if (x == 0) continue;
+        int e = 0;
+        const auto m = static_cast<int64_t>(std::ldexp(std::frexp(x, &e), 53));
+        const int tz = __builtin_ctzll(static_cast<uint64_t>(std::abs(m)));
+        mpz_class& z = scaled[v][k];
+        z = static_cast<long>(m / (int64_t{1} << tz));  // odd, below 2^53: exact
+        mpz_mul_2exp(z.get_mpz_t(), z.get_mpz_t(), static_cast<mp_bitcnt_t>(e - 53 + tz - e0));
+      }
+  mpz_class sum, t;
+  for (int32_t f : faces) {
+    const auto& a = scaled[mesh.faces[f][0]];
+    const auto& b = scaled[mesh.faces[f][1]];
+    const auto& c = scaled[mesh.faces[f][2]];
+    for (int i = 0; i < 3; ++i) {  // a_i (b_j c_k - b_k c_j), (i, j, k) cyclic
+      const int j = (i + 1) % 3, k = (i + 2) % 3;
+      mpz_mul(t.get_mpz_t(), b[j].get_mpz_t(), c[k].get_mpz_t());
+      mpz_submul(t.get_mpz_t(), b[k].get_mpz_t(), c[j].get_mpz_t());
+      mpz_addmul(sum.get_mpz_t(), a[i].get_mpz_t(), t.get_mpz_t());
+    }
+  }
+  Rational six_v(sum);  // in units of 2^(3 e0)
+  if (e0 < 0)
+    mpq_div_2exp(six_v.get_mpq_t(), six_v.get_mpq_t(), static_cast<mp_bitcnt_t>(-3 * e0));
+  else
+    mpq_mul_2exp(six_v.get_mpq_t(), six_v.get_mpq_t(), static_cast<mp_bitcnt_t>(3 * e0));
   return six_v / 6;
 }
 

@@ -31,7 +31,8 @@ int orient2d(const Vec3& a, const Vec3& b, const Vec3& c, int i, int j);
 bool collinear(const Vec3& a, const Vec3& b, const Vec3& c);
 
 // Exact signed volume enclosed by the faces (divergence theorem), positive for an outward
-// oriented closed mesh. Sums pairwise so that operands stay balanced.
+// oriented closed mesh: the sum of the faces' triple products over 6, in integer units of the
+// coordinates' least set bit. Precondition: the faces' coordinates are finite.
 Rational exact_signed_volume(const Mesh& mesh);
 Rational exact_signed_volume(const Mesh& mesh, const std::vector<int32_t>& faces);
 

@@ -182,6 +182,48 @@ TEST(Orient2d, CollinearityIsExact) {
   EXPECT_EQ(orient2d(Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, -1, 0), 0, 1), -1);
 }
 
+// The volume's integer sum against the definition in rationals, on soups whose coordinates
+// span the doubles: subnormals, zeros, both signs, up to 2^240, and odd mantissas.
+TEST(ExactSignedVolume, IsTheRationalSumOfTripleProductsOverSix) {
+  auto reference = [](const Mesh& m) -> Rational {  // not GMP's expression, which would dangle
+    Rational six_v = 0;
+    for (size_t f = 0; f < m.faces.size(); ++f) {
+      Rational a[3], b[3], c[3];
+      for (int k = 0; k < 3; ++k) {
+        a[k] = Rational(m.corner(f, 0)[k]);
+        b[k] = Rational(m.corner(f, 1)[k]);
+        c[k] = Rational(m.corner(f, 2)[k]);
+      }
+      six_v += a[0] * (b[1] * c[2] - b[2] * c[1]) + a[1] * (b[2] * c[0] - b[0] * c[2]) +
+               a[2] * (b[0] * c[1] - b[1] * c[0]);
+    }
+    return six_v / 6;
+  };
+  std::mt19937_64 rng(23);
+  std::uniform_real_distribution<double> unit(-1, 1);
+  // Scales 2^240 down by up to 0, 40 or 1320 binades (the last reaching subnormals).
+  for (const int spread : {0, 40, 1320}) {
+    std::uniform_int_distribution<int> drop(0, spread);
+    for (int trial = 0; trial < 20; ++trial) {
+      Mesh m;
+      for (int v = 0; v < 12; ++v) {
+        Vec3 p;
+        for (int k = 0; k < 3; ++k)
+          p[k] = rng() % 7 == 0 ? 0.0 : std::ldexp(unit(rng), 240 - drop(rng));
+        m.vertices.push_back(p);
+      }
+      for (int f = 0; f < 16; ++f)
+        m.faces.push_back({static_cast<int32_t>(rng() % 12), static_cast<int32_t>(rng() % 12),
+                           static_cast<int32_t>(rng() % 12)});
+      EXPECT_EQ(exact_signed_volume(m), reference(m)) << spread << " " << trial;
+    }
+  }
+  Mesh zero;  // every coordinate 0
+  zero.vertices.assign(3, Vec3::Zero());
+  zero.faces = {{0, 1, 2}};
+  EXPECT_EQ(exact_signed_volume(zero), Rational(0));
+}
+
 TEST(ToDoubleNearest, RoundsToNearestNotTowardZero) {
   EXPECT_EQ(to_double_nearest(Rational(1, 3)), 1.0 / 3.0);  // IEEE division rounds to nearest
   // 1 + 2^-53 + 2^-80 lies just above the midpoint of 1 and 1 + 2^-52: nearest is the latter,

@@ -341,8 +341,12 @@ TEST(PolyOverlap, IllConditionedCutsAreDecidedInWiderEnclosures) {
       const PolyOverlap r = poly.evaluate(b, {a});
       EXPECT_LE(Rational(r.lo), exact);
       EXPECT_LE(exact, Rational(r.hi));
-      if (r.exact || r.enclosure_bits > 0) EXPECT_EQ(r.estimate, to_double_nearest(exact));
-      if (r.enclosure_bits > 0) EXPECT_TRUE(r.enclosure_bits == 128 || r.enclosure_bits == 256);
+      if (r.exact || r.enclosure_bits > 0) {
+        EXPECT_EQ(r.estimate, to_double_nearest(exact));
+      }
+      if (r.enclosure_bits > 0) {
+        EXPECT_TRUE(r.enclosure_bits == 128 || r.enclosure_bits == 256);
+      }
       EXPECT_FALSE(r.exact && r.enclosure_bits > 0);  // one tier decided
       by_doubles += !r.exact && r.enclosure_bits == 0;
       by_mpfr += r.enclosure_bits > 0;
