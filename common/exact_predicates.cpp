@@ -3,7 +3,6 @@
 #include <mpfr.h>
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -108,48 +107,56 @@ Rational sum_pairwise(std::vector<Rational>& terms) {
   return terms[0];
 }
 
+namespace {
+
+// x = odd 2^exp exactly, for finite x != 0 (odd below 2^53 in magnitude).
+void split_double(double x, long* odd, long* exp) {
+  int e = 0;
+  const auto m = static_cast<int64_t>(std::ldexp(std::frexp(x, &e), 53));  // x = m 2^(e-53)
+  const int tz = __builtin_ctzll(static_cast<uint64_t>(std::abs(m)));
+  *odd = static_cast<long>(m / (int64_t{1} << tz));
+  *exp = e - 53 + tz;
+}
+
+}  // namespace
+
 Rational exact_signed_volume(const Mesh& mesh, const std::vector<int32_t>& faces) {
   // Every coordinate is an integer multiple of 2^e0, the least unit among the faces' coordinates'
   // lowest set bits; in that unit each triple product, and so the sum of them, is an integer:
-  // integer arithmetic with no fractions to reduce, and one division at the end.
-  std::vector<char> used(mesh.vertices.size(), 0);
-  for (int32_t f : faces)
-    for (int k = 0; k < 3; ++k) used[mesh.faces[f][k]] = 1;
+  // integer arithmetic with no fractions to reduce, and one division at the end. Each corner is
+  // converted where it is used, so a call costs time in its faces alone (a mesh's shells are
+  // summed one call each).
   long e0 = std::numeric_limits<long>::max();
-  for (size_t v = 0; v < used.size(); ++v)
-    if (used[v])
+  for (int32_t f : faces)
+    for (int c = 0; c < 3; ++c)
       for (int k = 0; k < 3; ++k) {
-        const double x = mesh.vertices[v][k];
+        const double x = mesh.corner(f, c)[k];
         VOBB_ASSERT(std::isfinite(x), "exact_signed_volume needs finite coordinates");
         if (x == 0) continue;
-        int e = 0;
-        const auto m = static_cast<int64_t>(std::ldexp(std::frexp(x, &e), 53));  // x = m 2^(e-53)
-        e0 = std::min<long>(e0, e - 53 + __builtin_ctzll(static_cast<uint64_t>(std::abs(m))));
+        long odd = 0, exp = 0;
+        split_double(x, &odd, &exp);
+        e0 = std::min(e0, exp);
       }
   if (e0 == std::numeric_limits<long>::max()) return Rational(0);  // every coordinate is 0
-  std::vector<std::array<mpz_class, 3>> scaled(mesh.vertices.size());
-  for (size_t v = 0; v < used.size(); ++v)
-    if (used[v])
-      for (int k = 0; k < 3; ++k) {
-        const double x = mesh.vertices[v][k];
-        if (x == 0) continue;
-        int e = 0;
-        const auto m = static_cast<int64_t>(std::ldexp(std::frexp(x, &e), 53));
-        const int tz = __builtin_ctzll(static_cast<uint64_t>(std::abs(m)));
-        mpz_class& z = scaled[v][k];
-        z = static_cast<long>(m / (int64_t{1} << tz));  // odd, below 2^53: exact
-        mpz_mul_2exp(z.get_mpz_t(), z.get_mpz_t(), static_cast<mp_bitcnt_t>(e - 53 + tz - e0));
-      }
-  mpz_class sum, t;
+  mpz_class p[3][3], sum, t;  // p[c][k]: corner c's coordinate k in units of 2^e0
   for (int32_t f : faces) {
-    const auto& a = scaled[mesh.faces[f][0]];
-    const auto& b = scaled[mesh.faces[f][1]];
-    const auto& c = scaled[mesh.faces[f][2]];
+    for (int c = 0; c < 3; ++c)
+      for (int k = 0; k < 3; ++k) {
+        const double x = mesh.corner(f, c)[k];
+        if (x == 0) {
+          p[c][k] = 0;
+          continue;
+        }
+        long odd = 0, exp = 0;
+        split_double(x, &odd, &exp);
+        mpz_set_si(p[c][k].get_mpz_t(), odd);
+        mpz_mul_2exp(p[c][k].get_mpz_t(), p[c][k].get_mpz_t(), static_cast<mp_bitcnt_t>(exp - e0));
+      }
     for (int i = 0; i < 3; ++i) {  // a_i (b_j c_k - b_k c_j), (i, j, k) cyclic
       const int j = (i + 1) % 3, k = (i + 2) % 3;
-      mpz_mul(t.get_mpz_t(), b[j].get_mpz_t(), c[k].get_mpz_t());
-      mpz_submul(t.get_mpz_t(), b[k].get_mpz_t(), c[j].get_mpz_t());
-      mpz_addmul(sum.get_mpz_t(), a[i].get_mpz_t(), t.get_mpz_t());
+      mpz_mul(t.get_mpz_t(), p[1][j].get_mpz_t(), p[2][k].get_mpz_t());
+      mpz_submul(t.get_mpz_t(), p[1][k].get_mpz_t(), p[2][j].get_mpz_t());
+      mpz_addmul(sum.get_mpz_t(), p[0][i].get_mpz_t(), t.get_mpz_t());
     }
   }
   Rational six_v(sum);  // in units of 2^(3 e0)

@@ -43,7 +43,7 @@ struct PolyOverlap {
   double estimate = 0;     // the midpoint of [lo, hi]; the exact value's nearest double when
                            // enclosure_bits or exact is set
   int enclosure_bits = 0;  // 128 or 256: an MPFR enclosure decided it (double intervals did not)
-  bool exact = false;      // computed in rationals: no enclosure could decide a sign
+  bool exact = false;      // computed in rationals: no enclosure decided it (see evaluate())
 };
 
 class PolyOverlapSolver {
