@@ -56,6 +56,7 @@ class ObvCommand final : public Command {
     o.gl_fallback = backend_ != "gl";
     o.ms = split_counts(ms_text_);
     o.r_bound = r_bound_;
+    o.rational = rational_;
     // Flags that would change nothing for the backends asked for are refused, not ignored.
     const bool cubemap = o.cpu || o.gl;
     if (m_option_->count() > 0 && !cubemap)
@@ -87,8 +88,6 @@ class ObvCommand final : public Command {
     const size_t n = boxes.size();
     const bool want_exact = backend_ == "exact" || backend_ == "all";
     const bool want_poly = backend_ == "poly" || backend_ == "all";
-    std::vector<double> exact(n);
-    for (size_t i = 0; i < r.exact.size(); ++i) exact[i] = to_double_nearest(r.exact[i]);
     nlohmann::ordered_json out = nlohmann::ordered_json::array();
     if (!json_)
       std::printf("%5s %8s %5s %24s %24s %12s %12s %10s%s%s\n", "box", "backend", "m", "OBV",
@@ -108,8 +107,8 @@ class ObvCommand final : public Command {
         if (p.exact_box) jb["interval_from_exact"] = p.why;
       }
       if (want_exact) {
-        jb["exact"] = exact[i];
-        if (rational_) jb["exact_rational"] = r.exact[i].get_str();
+        jb["exact"] = r.exact[i];
+        if (rational_) jb["exact_rational"] = r.exact_rational[i].get_str();
         jb["exact_seconds"] = r.exact_seconds[i];
       }
       nlohmann::ordered_json est = nlohmann::ordered_json::array();
@@ -126,8 +125,8 @@ class ObvCommand final : public Command {
                     r.poly.empty() ? nullptr : &r.poly[i], want_poly);
       }
       if (!json_ && r.runs.empty())
-        std::printf("%5zu %8s %5s %24.17g %24s %12s %12s %10.6f\n", i, "exact", "-", exact[i], "-",
-                    "-", "-", r.exact_seconds[i]);
+        std::printf("%5zu %8s %5s %24.17g %24s %12s %12s %10.6f\n", i, "exact", "-", r.exact[i],
+                    "-", "-", "-", r.exact_seconds[i]);
       jb["estimates"] = est;
       out.push_back(jb);
     }
@@ -139,19 +138,18 @@ class ObvCommand final : public Command {
       std::printf("%s\n", report_json(doc).c_str());
     } else if (rational_ && want_exact) {
       for (size_t i = 0; i < n; ++i)
-        std::printf("box %zu exact (rational): %s\n", i, r.exact[i].get_str().c_str());
+        std::printf("box %zu exact (rational): %s\n", i, r.exact_rational[i].get_str().c_str());
     }
   }
 
-  // One row of the table; `exact` the box's exact OBV, whose nearest double is printed and from
-  // which the relative error is computed exactly before it is rounded.
-  void print_row(size_t i, const ObvRun& run, const Rational* exact, const PolyObv* poly,
+  // One row of the table; with `exact`, the box's exact OBV and the estimate's relative error
+  // from it, each correctly rounded (estimate_obv).
+  void print_row(size_t i, const ObvRun& run, const double* exact, const PolyObv* poly,
                  bool want_poly) const {
     char rel[32] = "-", ex[40] = "-", mm[16] = "-", rb[24] = "", iv[64] = "";
-    if (exact && *exact != 0)
-      std::snprintf(rel, sizeof rel, "%.3e",
-                    to_double_nearest(abs(Rational(run.obv[i]) - *exact) / *exact));
-    if (exact) std::snprintf(ex, sizeof ex, "%.17g", to_double_nearest(*exact));
+    if (exact && !std::isnan(run.rel_error[i]))
+      std::snprintf(rel, sizeof rel, "%.3e", run.rel_error[i]);
+    if (exact) std::snprintf(ex, sizeof ex, "%.17g", *exact);
     if (run.m > 0) std::snprintf(mm, sizeof mm, "%d", run.m);
     if (r_bound_ && run.m > 0) std::snprintf(rb, sizeof rb, " %12.3e", run.r_bound[i]);
     if (r_bound_ && run.m == 0) std::snprintf(rb, sizeof rb, " %12s", "-");

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <filesystem>
 #include <memory>
+#include <optional>
 
 #include "builder/obbtree_builder.h"
 #include "builder/subtree_swaps.h"
@@ -18,6 +19,7 @@
 #include "common/solidity.h"
 #include "common/stopwatch.h"
 #include "common/text_util.h"
+#include "exact/filtered_solver.h"
 #include "exact/outer_volume.h"
 #include "fast/cpu_estimator.h"
 #include "fast/cubemap_bound.h"
@@ -489,6 +491,54 @@ Status certify(const Mesh& mesh, const Tree& tree, const CertifyOptions& o,
                       certificate);
 }
 
+namespace {
+
+// A box's exact OBV for estimate_obv: its enclosure from certify's filter (128 bits, then 256
+// where that does not round to one double), and the rational only where an enclosure cannot
+// decide a rounding asked of it, or where it is asked for.
+class ExactObv {
+ public:
+  ExactObv(const exact::FilteredSolver& filter, const Obb& box, bool rational)
+      : filter_(filter), box_(box), e_(filter.obv(box)) {
+    double d;
+    if (!e_.exact && !e_.value.nearest(&d)) e_ = filter.obv(box, MpInterval::kMaxPrec);
+    if (rational) rational_value();
+  }
+  double nearest() {
+    double d;
+    if (!e_.exact && e_.value.nearest(&d)) return d;
+    return to_double_nearest(rational_value());
+  }
+  const Rational& rational() { return rational_value(); }
+  // |estimate - OBV| / OBV correctly rounded; NaN where the OBV is 0.
+  double relative_error(double estimate) {
+    if (!e_.exact) {
+      try {
+        const MpInterval::Precision precision(e_.bits);
+        const MpInterval rel = abs(MpInterval(estimate) - e_.value) / e_.value;
+        double d;
+        if (rel.nearest(&d)) return d;
+      } catch (const Undecided&) {  // the enclosure holds 0: the rational decides
+      }
+    }
+    const Rational& q = rational_value();
+    if (q == 0) return std::nan("");
+    return to_double_nearest(Rational(abs(Rational(estimate) - q) / q));
+  }
+
+ private:
+  const Rational& rational_value() {
+    if (!q_) q_ = e_.exact ? e_.q : filter_.rational().obv(box_);
+    return *q_;
+  }
+  const exact::FilteredSolver& filter_;
+  const Obb& box_;
+  exact::Enclosed e_;
+  std::optional<Rational> q_;
+};
+
+}  // namespace
+
 Status estimate_obv(const Mesh& mesh, const std::vector<Obb>& boxes, const EstimateOptions& o,
                     ObvReport* out) {
   *out = ObvReport();
@@ -581,12 +631,17 @@ Status estimate_obv(const Mesh& mesh, const std::vector<Obb>& boxes, const Estim
                       "2^300 box units); "
                       "estimated at half its volume");
   if (o.exact) {
-    out->exact.assign(n, Rational(0));
+    out->exact.assign(n, 0.0);
     out->exact_seconds.assign(n, 0.0);
-    const exact::ClipSolver solver(mesh);
+    if (o.rational) out->exact_rational.assign(n, Rational(0));
+    for (ObvRun& run : out->runs) run.rel_error.assign(n, std::nan(""));
+    const exact::FilteredSolver filter(mesh);
     tbb::parallel_for(size_t{0}, n, [&](size_t i) {
       const auto t0 = std::chrono::steady_clock::now();
-      out->exact[i] = solver.obv(boxes[i]);
+      ExactObv x(filter, boxes[i], o.rational);
+      out->exact[i] = x.nearest();
+      if (o.rational) out->exact_rational[i] = x.rational();
+      for (ObvRun& run : out->runs) run.rel_error[i] = x.relative_error(run.obv[i]);
       out->exact_seconds[i] = seconds_since(t0);
     });
   }
@@ -659,8 +714,7 @@ Status compare(const Mesh& mesh, const CompareOptions& co, CompareResult* r) {
   for (int i = 0; i < 2; ++i) {
     MpInterval e(0);
     for (size_t l = 0; l < r->levels; ++l)
-      e += MpInterval(layer_weight(depth, static_cast<int>(l))) *
-           r->layer(i, l).omv_enclosure;
+      e += MpInterval(layer_weight(depth, static_cast<int>(l))) * r->layer(i, l).omv_enclosure;
     if (e.nearest(&r->e[i]) && !co.rational) continue;
     if (!r->certificates[i].rational) {
       CertifyOptions again = copt;

@@ -144,6 +144,7 @@ struct EstimateOptions {
   bool gl_fallback = false;  // where GL cannot run (or m exceeds its limit): the CPU twin, noted
   std::vector<int> ms = {8, 16, 32};  // the cubemap's resolutions, each 1..4096
   bool r_bound = false;               // also R(m), the cubemap's rigorous texel bound
+  bool rational = false;  // with exact: also each exact OBV as a rational (exact_rational)
   std::function<void(const std::string&)> note;
 };
 struct ObvRun {
@@ -153,17 +154,25 @@ struct ObvRun {
   // Per box: the estimate's certified error from the polyhedral enclosure (rounded up), and
   // R(m) (min with the range bound; NaN when not asked or for poly).
   std::vector<double> bound, r_bound;
+  // Per box, with exact: |obv - exact OBV| / exact OBV, correctly rounded; NaN where the exact
+  // OBV is 0.
+  std::vector<double> rel_error;
 };
 struct ObvReport {
   std::string renderer;          // GL's, when it ran
   std::vector<PolyObv> poly;     // the enclosures, when any estimate was made
   std::vector<ObvRun> runs;      // poly first, then CPU, then GL, each in the order of ms
   std::vector<char> unresolved;  // per box: the cubemap's plan could not hold it
-  std::vector<Rational> exact;   // per box, when asked
+  // Per box, with exact: the exact OBV correctly rounded, and with rational, as a rational.
+  std::vector<double> exact;
+  std::vector<Rational> exact_rational;
   std::vector<double> exact_seconds;
 };
 // Estimates of each box's OBV. Every cubemap estimate gets its certified error from the
-// polyhedral solver's enclosure. Boxes must pass box_defect (read_boxes checks them).
+// polyhedral solver's enclosure. The exact OBV and each estimate's relative error are rounded
+// from certify's enclosures (exact/filtered_solver.h) where those decide the rounding, and from
+// the rationals elsewhere or where `rational` asks for them. Boxes must pass box_defect
+// (read_boxes checks them).
 Status estimate_obv(const Mesh& mesh, const std::vector<Obb>& boxes, const EstimateOptions& options,
                     ObvReport* report);
 

@@ -422,15 +422,29 @@ TEST(EstimateObv, CertifiedErrorsHoldAgainstTheExactValue) {
   o.exact = true;
   o.ms = {4, 16};
   o.r_bound = true;
+  o.rational = true;
   ObvReport r;
   ASSERT_TRUE(estimate_obv(mesh, {box}, o, &r).is_ok());
   ASSERT_EQ(r.runs.size(), 2u);
-  ASSERT_EQ(r.exact.size(), 1u);
+  ASSERT_EQ(r.exact_rational.size(), 1u);
+  const Rational q = r.exact_rational[0];
+  ASSERT_GT(q, 0);
+  EXPECT_EQ(r.exact[0], to_double_nearest(q));
   for (const ObvRun& run : r.runs) {
-    const Rational d = Rational(run.obv[0]) - r.exact[0];
-    EXPECT_TRUE((d < 0 ? Rational(-d) : d) <= Rational(run.bound[0])) << run.m;
-    EXPECT_TRUE((d < 0 ? Rational(-d) : d) <= Rational(run.r_bound[0])) << run.m;
+    const Rational d = Rational(run.obv[0]) - q;
+    const Rational err = d < 0 ? Rational(-d) : d;
+    EXPECT_TRUE(err <= Rational(run.bound[0])) << run.m;
+    EXPECT_TRUE(err <= Rational(run.r_bound[0])) << run.m;
+    EXPECT_EQ(run.rel_error[0], to_double_nearest(Rational(err / q))) << run.m;
   }
+  // Without the rationals, the enclosures round the same values.
+  o.rational = false;
+  ObvReport enclosed;
+  ASSERT_TRUE(estimate_obv(mesh, {box}, o, &enclosed).is_ok());
+  EXPECT_TRUE(enclosed.exact_rational.empty());
+  EXPECT_EQ(enclosed.exact, r.exact);
+  for (size_t k = 0; k < r.runs.size(); ++k)
+    EXPECT_EQ(enclosed.runs[k].rel_error, r.runs[k].rel_error) << r.runs[k].m;
   o.cpu = false;
   o.gl = true;  // no GL component, no fallback: refused
   EXPECT_FALSE(estimate_obv(mesh, {box}, o, &r).is_ok());

@@ -41,7 +41,7 @@ int main(int argc, char** argv) {
   std::vector<vobb::Obb> boxes;
   for (int32_t id : vobb::layer(tree, 2)) boxes.push_back(tree.nodes[id].box);
   vobb::EstimateOptions estimate;
-  estimate.gl = estimate.cpu = estimate.exact = true;
+  estimate.gl = estimate.cpu = estimate.exact = estimate.rational = true;
   estimate.ms = {8, 32};
   vobb::ObvReport report;
   const vobb::Status s = vobb::estimate_obv(mesh, boxes, estimate, &report);
@@ -49,7 +49,7 @@ int main(int argc, char** argv) {
   check(report.runs.size() == 4, "estimate_obv: CPU and GL at two m each");
   for (const vobb::ObvRun& run : report.runs)
     for (size_t i = 0; i < boxes.size(); ++i) {
-      vobb::Rational d = vobb::Rational(run.obv[i]) - report.exact[i];
+      vobb::Rational d = vobb::Rational(run.obv[i]) - report.exact_rational[i];
       if (d < 0) d = -d;
       check(d <= vobb::Rational(run.bound[i]),
             run.backend + " within its certified error, box " + std::to_string(i));
