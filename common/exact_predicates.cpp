@@ -110,6 +110,7 @@ Rational sum_pairwise(std::vector<Rational>& terms) {
 namespace {
 
 // x = odd 2^exp exactly, for finite x != 0 (odd below 2^53 in magnitude).
+static_assert(sizeof(long) >= 8, "odd mantissas of 53 bits go through mpz_set_si's long");
 void split_double(double x, long* odd, long* exp) {
   int e = 0;
   const auto m = static_cast<int64_t>(std::ldexp(std::frexp(x, &e), 53));  // x = m 2^(e-53)

@@ -501,7 +501,8 @@ class ExactObv {
   ExactObv(const exact::FilteredSolver& filter, const Obb& box, bool rational)
       : filter_(filter), box_(box), e_(filter.obv(box)) {
     double d;
-    if (!e_.exact && !e_.value.nearest(&d)) e_ = filter.obv(box, MpInterval::kMaxPrec);
+    if (!e_.exact && e_.bits < MpInterval::kMaxPrec && !e_.value.nearest(&d))
+      e_ = filter.obv(box, MpInterval::kMaxPrec);
     if (rational) rational_value();
   }
   double nearest() {
@@ -510,8 +511,12 @@ class ExactObv {
     return to_double_nearest(rational_value());
   }
   const Rational& rational() { return rational_value(); }
-  // |estimate - OBV| / OBV correctly rounded; NaN where the OBV is 0.
+  // |estimate - OBV| / OBV correctly rounded; NaN where the OBV is 0 (or the estimate not finite).
   double relative_error(double estimate) {
+    if (!std::isfinite(estimate)) return std::nan("");
+    // Outward ends both 0: the enclosure is [0, 0] (a positive end rounds up above 0, a negative
+    // one down below it).
+    if (!e_.exact && e_.value.inf() == 0 && e_.value.sup() == 0) return std::nan("");
     if (!e_.exact) {
       try {
         const MpInterval::Precision precision(e_.bits);

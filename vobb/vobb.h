@@ -171,7 +171,7 @@ struct ObvReport {
 // Estimates of each box's OBV. Every cubemap estimate gets its certified error from the
 // polyhedral solver's enclosure. The exact OBV and each estimate's relative error are rounded
 // from certify's enclosures (exact/filtered_solver.h) where those decide the rounding, and from
-// the rationals elsewhere or where `rational` asks for them. Boxes must pass box_defect
+// the rationals elsewhere; `rational` also returns the rationals. Boxes must pass box_defect
 // (read_boxes checks them).
 Status estimate_obv(const Mesh& mesh, const std::vector<Obb>& boxes, const EstimateOptions& options,
                     ObvReport* report);

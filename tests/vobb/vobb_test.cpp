@@ -437,7 +437,7 @@ TEST(EstimateObv, CertifiedErrorsHoldAgainstTheExactValue) {
     EXPECT_TRUE(err <= Rational(run.r_bound[0])) << run.m;
     EXPECT_EQ(run.rel_error[0], to_double_nearest(Rational(err / q))) << run.m;
   }
-  // Without the rationals, the enclosures round the same values.
+  // Without the rationals asked for, the same values.
   o.rational = false;
   ObvReport enclosed;
   ASSERT_TRUE(estimate_obv(mesh, {box}, o, &enclosed).is_ok());
@@ -445,6 +445,14 @@ TEST(EstimateObv, CertifiedErrorsHoldAgainstTheExactValue) {
   EXPECT_EQ(enclosed.exact, r.exact);
   for (size_t k = 0; k < r.runs.size(); ++k)
     EXPECT_EQ(enclosed.runs[k].rel_error, r.runs[k].rel_error) << r.runs[k].m;
+  // A box inside the solid: OBV 0 exactly, and no relative error.
+  Obb inner = box;
+  inner.center = Vec3::Zero();
+  inner.half = Vec3::Constant(0.1);
+  ObvReport zero;
+  ASSERT_TRUE(estimate_obv(mesh, {inner}, o, &zero).is_ok());
+  EXPECT_EQ(zero.exact[0], 0.0);
+  for (const ObvRun& run : zero.runs) EXPECT_TRUE(std::isnan(run.rel_error[0])) << run.m;
   o.cpu = false;
   o.gl = true;  // no GL component, no fallback: refused
   EXPECT_FALSE(estimate_obv(mesh, {box}, o, &r).is_ok());

@@ -49,6 +49,9 @@ int main(int argc, char** argv) {
   check(report.runs.size() == 4, "estimate_obv: CPU and GL at two m each");
   for (const vobb::ObvRun& run : report.runs)
     for (size_t i = 0; i < boxes.size(); ++i) {
+      check(report.exact[i] == vobb::to_double_nearest(report.exact_rational[i]),
+            "estimate_obv: the exact OBV's double is the rational's nearest, box " +
+                std::to_string(i));
       vobb::Rational d = vobb::Rational(run.obv[i]) - report.exact_rational[i];
       if (d < 0) d = -d;
       check(d <= vobb::Rational(run.bound[i]),
