@@ -27,6 +27,12 @@ Status validate_tree(const Tree& tree, const std::string& display) {
   if (n == 0) return fail("tree has no nodes");
   if (tree.arity < 2) return fail("arity must be at least 2");
   if (const std::string bad = depth_defect(tree.depth); !bad.empty()) return fail(bad);
+  // How many times each node is listed as a child (in range): a count per node, not a search of
+  // its parent's list, so a node of many children costs time in its children alone.
+  std::vector<int32_t> listed(n, 0);
+  for (const TreeNode& node : tree.nodes)
+    for (int32_t c : node.children)
+      if (c > 0 && c < n) ++listed[c];
   int max_level = 0;
   for (int32_t i = 0; i < n; ++i) {
     const TreeNode& node = tree.nodes[i];
@@ -37,8 +43,9 @@ Status validate_tree(const Tree& tree, const std::string& display) {
     if (i > 0) {
       if (node.parent < 0 || node.parent >= n || node.parent == i) return fail(at + "bad parent");
       const TreeNode& p = tree.nodes[node.parent];
-      if (std::find(p.children.begin(), p.children.end(), i) == p.children.end())
-        return fail(at + "parent does not list it as a child");
+      if (listed[i] > 1) return fail(at + "listed as a child more than once");
+      // Listed once, by a node the child loop below holds to be its parent.
+      if (listed[i] == 0) return fail(at + "parent does not list it as a child");
       if (node.level != p.level + 1) return fail(at + "level is not its parent's plus one");
     }
     if (static_cast<int>(node.children.size()) > tree.arity)

@@ -31,6 +31,21 @@ TEST(Tree, TheUnbalancedTreeIsValid) {
   EXPECT_TRUE(s) << s.message();
 }
 
+// Each node but the root is listed once, by its parent; a structure where that fails is
+// refused with the node named.
+TEST(Tree, EachChildIsListedOnceByItsParent) {
+  Tree twice = unbalanced_tree();
+  twice.nodes[3].children = {5, 5};
+  Status s = validate_tree(twice, "t.json");
+  ASSERT_FALSE(s);
+  EXPECT_EQ(s.message(), "t.json: node 5: listed as a child more than once");
+  Tree unlisted = unbalanced_tree();
+  unlisted.nodes[3].children = {5};  // node 6 still names node 3 as its parent
+  s = validate_tree(unlisted, "t.json");
+  ASSERT_FALSE(s);
+  EXPECT_EQ(s.message(), "t.json: node 6: parent does not list it as a child");
+}
+
 // Layer i: the nodes at level i and every leaf above it (DESIGN §1), ascending.
 TEST(Tree, LayersFollowTheDesignDefinition) {
   const Tree t = unbalanced_tree();
