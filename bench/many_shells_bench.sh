@@ -1,21 +1,33 @@
 #!/usr/bin/env bash
-# Loading a solid of many shells: COUNT disjoint unit tetrahedra on a grid 3 units apart (one
-# shell each), through `vobb info` (load, exact solidity, volume), against an older vobb when
-# given; new and old alternate, twice each. Prints each run's wall seconds and the verdict line.
-# Usage: bench/many_shells_bench.sh VOBB OUT_DIR COUNT [OLD_VOBB]
+# Loading a solid of many shells: COUNT disjoint tetrahedra (one shell each), through `vobb info`
+# (load, exact solidity, volume), against an older vobb when given; new and old alternate, twice
+# each. LAYOUT grid (default): unit tetrahedra on a grid 3 units apart. LAYOUT ray: tetrahedra
+# 3 units apart along the fixed direction of locate_point's first ray (common/point_in_solid.cpp),
+# turned and jittered, so that the ray from each shell's first vertex passes through the later
+# ones. Prints each run's wall seconds and the verdict line.
+# Usage: bench/many_shells_bench.sh VOBB OUT_DIR COUNT [OLD_VOBB] [LAYOUT]
 set -euo pipefail
-vobb=$1 out=$2 count=$3 old=${4:-}
+vobb=$1 out=$2 count=$3 old=${4:-} layout=${5:-grid}
 mkdir -p "$out"
-mesh="$out/tets_$count.off"
-python3 - "$mesh" "$count" <<'PY'
-import sys
-path, n = sys.argv[1], int(sys.argv[2])
+mesh="$out/tets_${layout}_$count.off"
+python3 - "$mesh" "$count" "$layout" <<'PY'
+import random, sys
+path, n, layout = sys.argv[1], int(sys.argv[2]), sys.argv[3]
+ray = (0.5773502691896258, 0.3437184391289216, 0.7404171463391124)
+rng = random.Random(1)
+vertices = []
+for k in range(n):
+    if layout == "ray":
+        o = [3 * k * ray[i] + rng.uniform(-0.02, 0.02) for i in range(3)]
+        tet = ((-0.3, -0.3, -0.3), (0.6, -0.2, -0.1), (-0.2, 0.6, -0.1), (-0.1, -0.1, 0.6))
+    else:
+        o = (3 * (k % 100), 3 * (k // 100 % 100), 3 * (k // 10000))
+        tet = ((0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1))
+    vertices += [tuple(a + b for a, b in zip(o, v)) for v in tet]
 with open(path, "w") as f:
     f.write(f"OFF\n{4 * n} {4 * n} 0\n")
-    for k in range(n):
-        o = (3 * (k % 100), 3 * (k // 100 % 100), 3 * (k // 10000))
-        for v in ((0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1)):
-            f.write("%d %d %d\n" % tuple(a + b for a, b in zip(o, v)))
+    for v in vertices:
+        f.write("%r %r %r\n" % v)
     for k in range(n):
         b = 4 * k
         f.write(f"3 {b} {b + 2} {b + 1}\n3 {b} {b + 1} {b + 3}\n3 {b} {b + 3} {b + 2}\n"

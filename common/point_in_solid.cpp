@@ -76,7 +76,12 @@ Location locate_point(const Mesh& mesh, const AabbTree& faces, const Vec3& p) {
 
 Location locate_point(const Mesh& mesh, const AabbTree& faces, const Vec3& p,
                       const std::function<bool(int32_t)>& left_out) {
-  const Aabb bb = faces.bounds();  // the tree's root: no pass over the vertices per query
+  // The tree's root: no pass over the vertices per query.
+  return locate_point(mesh, faces, p, left_out, faces.bounds());
+}
+
+Location locate_point(const Mesh& mesh, const AabbTree& faces, const Vec3& p,
+                      const std::function<bool(int32_t)>& left_out, const Aabb& bb) {
   const double reach = 2.0 * (bb.hi - bb.lo).norm() + (p - 0.5 * (bb.lo + bb.hi)).norm() + 1.0;
   // Directions with irrational-looking ratios make edge and vertex hits rare; each retry
   // turns the direction deterministically.

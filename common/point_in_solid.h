@@ -24,4 +24,9 @@ Location locate_point(const Mesh& mesh, const AabbTree& faces, const Vec3& p);
 Location locate_point(const Mesh& mesh, const AabbTree& faces, const Vec3& p,
                       const std::function<bool(int32_t)>& left_out);
 
+// The same, where every face that `left_out` keeps lies within `region`: the far point is taken
+// just beyond the region instead of the whole mesh, so the segment passes only faces near it.
+Location locate_point(const Mesh& mesh, const AabbTree& faces, const Vec3& p,
+                      const std::function<bool(int32_t)>& left_out, const Aabb& region);
+
 }  // namespace vobb

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <numeric>
 
 #include "common/bvh.h"
@@ -288,13 +289,32 @@ size_t inward_shells(const Mesh& mesh, const std::vector<std::vector<int32_t>>& 
   for (size_t s = 0; s < shell_faces.size(); ++s)
     for (int32_t f : shell_faces[s]) shell_of[f] = static_cast<int32_t>(s);
   const AabbTree faces = AabbTree::over_faces(mesh);
+  // Only a shell whose bounding box holds the vertex can enclose it: the ray is cast against
+  // those alone, and only across their boxes, so shells lined up along the ray's direction do
+  // not each meet every other.
+  std::vector<Aabb> shell_box(shell_faces.size());
+  for (size_t s = 0; s < shell_faces.size(); ++s)
+    for (int32_t f : shell_faces[s])
+      for (int k = 0; k < 3; ++k) shell_box[s].extend(mesh.corner(f, k));
+  const AabbTree shells(shell_box);
+  std::vector<size_t> stamp(shell_faces.size(), SIZE_MAX);  // == s: a candidate for shell s
   size_t wrong = 0;
   for (size_t s = 0; s < shell_faces.size(); ++s) {
     const Vec3& p = mesh.corner(shell_faces[s][0], 0);
-    // Degenerate faces (none here: they are a defect checked before) belong to no shell.
-    const Location at = locate_point(mesh, faces, p, [&](int32_t f) {
-      return shell_of[f] == static_cast<int32_t>(s) || shell_of[f] < 0;
+    Aabb point, region;
+    point.extend(p);
+    shells.for_each_overlap(point, [&](int32_t t) {
+      if (static_cast<size_t>(t) == s) return;
+      stamp[t] = s;
+      region.extend(shell_box[t]);
     });
+    // Degenerate faces (none here: they are a defect checked before) belong to no shell.
+    const Location at =
+        region.empty()
+            ? Location::kOutside
+            : locate_point(
+                  mesh, faces, p,
+                  [&](int32_t f) { return shell_of[f] < 0 || stamp[shell_of[f]] != s; }, region);
     VOBB_ASSERT(at != Location::kOnSurface, "a shell's vertex lies on no other shell");
     const int sign = sgn(shell_volume[s]);
     const bool ok = at == Location::kOutside ? sign > 0 : sign < 0;

@@ -52,6 +52,22 @@ TEST(LocatePoint, EveryPointOfALatticeAroundACubeWithACavity) {
     EXPECT_EQ(locate_point(solid.mesh, faces, far), Location::kOutside) << far.transpose();
 }
 
+// With the far point taken just beyond a region holding every face kept (here the mesh's own
+// bounds, and a region only just holding them), the same answers on the lattice.
+TEST(LocatePoint, ARegionHoldingTheFacesGivesTheSameAnswers) {
+  const analytic::AnalyticMesh solid = analytic::cube_with_cavity(4.0, 1.0, 3.0);
+  const AabbTree faces = AabbTree::over_faces(solid.mesh);
+  Aabb tight;
+  for (const Vec3& v : solid.mesh.vertices) tight.extend(v);
+  for (int i = 0; i <= 12; ++i)
+    for (int j = 0; j <= 12; ++j)
+      for (int k = 0; k <= 12; ++k) {
+        const Vec3 p(-1 + 0.5 * i, -1 + 0.5 * j, -1 + 0.5 * k);
+        ASSERT_EQ(locate_point(solid.mesh, faces, p, nullptr, tight), cavity_cube_truth(p))
+            << p.transpose();
+      }
+}
+
 // Points just off a face, by one unit in the last place on either side.
 TEST(LocatePoint, PointsOneUlpOffAFace) {
   const analytic::AnalyticMesh solid = analytic::cube_with_cavity(4.0, 1.0, 3.0);
