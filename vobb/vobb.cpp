@@ -495,15 +495,14 @@ namespace {
 
 // A box's exact OBV for estimate_obv: its enclosure from certify's filter (128 bits, then 256
 // where that does not round to one double), and the rational only where an enclosure cannot
-// decide a rounding asked of it, or where it is asked for.
+// decide a rounding asked of it, or where rational() asks for it.
 class ExactObv {
  public:
-  ExactObv(const exact::FilteredSolver& filter, const Obb& box, bool rational)
+  ExactObv(const exact::FilteredSolver& filter, const Obb& box)
       : filter_(filter), box_(box), e_(filter.obv(box)) {
     double d;
     if (!e_.exact && e_.bits < MpInterval::kMaxPrec && !e_.value.nearest(&d))
       e_ = filter.obv(box, MpInterval::kMaxPrec);
-    if (rational) rational_value();
   }
   double nearest() {
     double d;
@@ -643,7 +642,7 @@ Status estimate_obv(const Mesh& mesh, const std::vector<Obb>& boxes, const Estim
     const exact::FilteredSolver filter(mesh);
     tbb::parallel_for(size_t{0}, n, [&](size_t i) {
       const auto t0 = std::chrono::steady_clock::now();
-      ExactObv x(filter, boxes[i], o.rational);
+      ExactObv x(filter, boxes[i]);
       out->exact[i] = x.nearest();
       if (o.rational) out->exact_rational[i] = x.rational();
       for (ObvRun& run : out->runs) run.rel_error[i] = x.relative_error(run.obv[i]);
