@@ -28,26 +28,70 @@ constexpr double kOrient3dBound = 8 * kEta;
 // 1e-307 to GMP.
 const double kUnderflowSlack = std::ldexp(1.0, -1020);
 
-int sign_of(const Rational& q) { return sgn(q); }
+// x = odd 2^exp exactly, for finite x != 0 (odd below 2^53 in magnitude).
+static_assert(sizeof(long) >= 8, "odd mantissas of 53 bits go through mpz_set_si's long");
+void split_double(double x, long* odd, long* exp) {
+  int e = 0;
+  const auto m = static_cast<int64_t>(std::ldexp(std::frexp(x, &e), 53));  // x = m 2^(e-53)
+  const int tz = __builtin_ctzll(static_cast<uint64_t>(std::abs(m)));
+  *odd = static_cast<long>(m / (int64_t{1} << tz));
+  *exp = e - 53 + tz;
+}
+
+// The N finite doubles x[i] as integers z[i] in one unit 2^e0, the least of their lowest set
+// bits: x[i] = odd 2^exp with exp >= e0, so z[i] = odd 2^(exp - e0) and z[i] 2^e0 = x[i]
+// exactly. A determinant is a homogeneous polynomial in the coordinates, so its sign is the same
+// in any positive unit, and integers have no fractions to reduce. False when every x[i] is 0.
+template <int N>
+bool to_common_units(const double (&x)[N], mpz_class (&z)[N]) {
+  long odd[N], exp[N];
+  long e0 = std::numeric_limits<long>::max();
+  for (int i = 0; i < N; ++i) {
+    if (x[i] == 0) continue;
+    split_double(x[i], &odd[i], &exp[i]);
+    e0 = std::min(e0, exp[i]);
+  }
+  if (e0 == std::numeric_limits<long>::max()) return false;
+  for (int i = 0; i < N; ++i) {
+    if (x[i] == 0) {
+      z[i] = 0;
+      continue;
+    }
+    mpz_set_si(z[i].get_mpz_t(), odd[i]);
+    mpz_mul_2exp(z[i].get_mpz_t(), z[i].get_mpz_t(), static_cast<mp_bitcnt_t>(exp[i] - e0));
+  }
+  return true;
+}
 
 int orient3d_exact(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
-  Rational u[3], v[3], w[3];
-  for (int i = 0; i < 3; ++i) {
-    Rational ai(a[i]);
-    u[i] = Rational(b[i]) - ai;
-    v[i] = Rational(c[i]) - ai;
-    w[i] = Rational(d[i]) - ai;
+  const double x[12] = {a[0], a[1], a[2], b[0], b[1], b[2], c[0], c[1], c[2], d[0], d[1], d[2]};
+  // Kept per thread: the limbs are reused, not allocated per call.
+  thread_local mpz_class z[12], m, det;
+  if (!to_common_units(x, z)) return 0;  // four copies of the origin
+  mpz_class* u = z + 3;                  // b - a, c - a, d - a, in place
+  for (int r = 1; r < 4; ++r)
+    for (int i = 0; i < 3; ++i)
+      mpz_sub(z[3 * r + i].get_mpz_t(), z[3 * r + i].get_mpz_t(), z[i].get_mpz_t());
+  mpz_class* v = z + 6;
+  mpz_class* w = z + 9;
+  det = 0;
+  for (int i = 0; i < 3; ++i) {  // u_i (v_j w_k - v_k w_j), (i, j, k) cyclic
+    const int j = (i + 1) % 3, k = (i + 2) % 3;
+    mpz_mul(m.get_mpz_t(), v[j].get_mpz_t(), w[k].get_mpz_t());
+    mpz_submul(m.get_mpz_t(), v[k].get_mpz_t(), w[j].get_mpz_t());
+    mpz_addmul(det.get_mpz_t(), u[i].get_mpz_t(), m.get_mpz_t());
   }
-  Rational det = u[0] * (v[1] * w[2] - v[2] * w[1]) + u[1] * (v[2] * w[0] - v[0] * w[2]) +
-                 u[2] * (v[0] * w[1] - v[1] * w[0]);
-  return sign_of(det);
+  return mpz_sgn(det.get_mpz_t());
 }
 
 int orient2d_exact(const Vec3& a, const Vec3& b, const Vec3& c, int i, int j) {
-  Rational ax(a[i]), ay(a[j]);
-  Rational det =
-      (Rational(b[i]) - ax) * (Rational(c[j]) - ay) - (Rational(b[j]) - ay) * (Rational(c[i]) - ax);
-  return sign_of(det);
+  const double x[6] = {a[i], a[j], b[i], b[j], c[i], c[j]};
+  thread_local mpz_class z[6], det;
+  if (!to_common_units(x, z)) return 0;
+  for (int r = 2; r < 6; ++r) mpz_sub(z[r].get_mpz_t(), z[r].get_mpz_t(), z[r % 2].get_mpz_t());
+  mpz_mul(det.get_mpz_t(), z[2].get_mpz_t(), z[5].get_mpz_t());     // (b - a)_i (c - a)_j
+  mpz_submul(det.get_mpz_t(), z[3].get_mpz_t(), z[4].get_mpz_t());  // - (b - a)_j (c - a)_i
+  return mpz_sgn(det.get_mpz_t());
 }
 
 }  // namespace
@@ -57,7 +101,7 @@ int orient3d(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
   const double vx = c[0] - a[0], vy = c[1] - a[1], vz = c[2] - a[2];
   const double wx = d[0] - a[0], wy = d[1] - a[1], wz = d[2] - a[2];
   // Differences of 2^340 or more (or one that overflowed: to infinity, or to the largest
-  // double under directed rounding) go to rationals: below it no product of three overflows,
+  // double under directed rounding) go to GMP: below it no product of three overflows,
   // which the filter's bound assumes.
   constexpr double kFar = 0x1p340;
   if (!(std::max({std::abs(ux), std::abs(uy), std::abs(uz), std::abs(vx), std::abs(vy),
@@ -76,7 +120,7 @@ int orient3d(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
 }
 
 int orient2d(const Vec3& a, const Vec3& b, const Vec3& c, int i, int j) {
-  // As orient3d: differences of 2^510 or more (a product of two may overflow) go to rationals.
+  // As orient3d: differences of 2^510 or more (a product of two may overflow) go to GMP.
   constexpr double kFar = 0x1p510;
   const double bi = b[i] - a[i], cj = c[j] - a[j], bj = b[j] - a[j], ci = c[i] - a[i];
   if (!(std::max({std::abs(bi), std::abs(cj), std::abs(bj), std::abs(ci)}) < kFar))
@@ -106,20 +150,6 @@ Rational sum_pairwise(std::vector<Rational>& terms) {
   }
   return terms[0];
 }
-
-namespace {
-
-// x = odd 2^exp exactly, for finite x != 0 (odd below 2^53 in magnitude).
-static_assert(sizeof(long) >= 8, "odd mantissas of 53 bits go through mpz_set_si's long");
-void split_double(double x, long* odd, long* exp) {
-  int e = 0;
-  const auto m = static_cast<int64_t>(std::ldexp(std::frexp(x, &e), 53));  // x = m 2^(e-53)
-  const int tz = __builtin_ctzll(static_cast<uint64_t>(std::abs(m)));
-  *odd = static_cast<long>(m / (int64_t{1} << tz));
-  *exp = e - 53 + tz;
-}
-
-}  // namespace
 
 Rational exact_signed_volume(const Mesh& mesh, const std::vector<int32_t>& faces) {
   // Every coordinate is an integer multiple of 2^e0, the least unit among the faces' coordinates'

@@ -2,7 +2,8 @@
 //
 // Every input double is an exact rational; these functions decide signs of polynomials in
 // those rationals without error, in any floating-point rounding mode. A floating-point filter
-// with a static error bound answers the easy cases; the rest fall back to GMP rationals.
+// with a static error bound answers the easy cases; the rest are decided in GMP integers (the
+// inputs in units of their least set bit).
 // Preconditions: all inputs finite.
 // This is the only exactness `common/` needs (solidity, volume, containment); the CGAL-based
 // solver lives in `exact/`.

@@ -21,6 +21,8 @@ int reference_orient3d(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& 
              u[2] * (v[0] * w[1] - v[1] * w[0]));
 }
 
+int reference_orient2d(const Vec3& a, const Vec3& b, const Vec3& c, int i, int j);
+
 TEST(Orient3d, SignsOfSimpleCases) {
   const Vec3 a(0, 0, 0), b(1, 0, 0), c(0, 1, 0);
   EXPECT_EQ(orient3d(a, b, c, Vec3(0.3, 0.3, 1)), 1);
@@ -49,6 +51,29 @@ TEST(Orient3d, NearDegenerateLargeCoordinatesMatchRationalReference) {
     if (su != 0) {
       ASSERT_EQ(su, -sd);
     }
+  }
+}
+
+// The exact path takes its inputs in one integer unit, the least set bit among them: points of
+// one plane whose coordinates' scales differ by up to 2^1900 (subnormal to 2^900), on it and
+// one unit of each point's own scale off it, against the rationals.
+TEST(Orient3d, MixedScalesOnOnePlaneMatchRationalReference) {
+  std::mt19937_64 rng(19);
+  std::uniform_int_distribution<int64_t> big(-(int64_t(1) << 50), int64_t(1) << 50);
+  std::uniform_int_distribution<int> scale(-1074, 900);
+  for (int trial = 0; trial < 20000; ++trial) {
+    Vec3 p[4];
+    double unit[4];
+    for (int n = 0; n < 4; ++n) {
+      unit[n] = std::ldexp(1.0, scale(rng));
+      const double x = static_cast<double>(big(rng)) * unit[n];
+      const double y = static_cast<double>(big(rng)) * unit[n];
+      p[n] = Vec3(x, y, x + y);  // |x + y| < 2^51 units of a power of two: exact
+    }
+    ASSERT_EQ(orient3d(p[0], p[1], p[2], p[3]), 0) << trial;
+    const Vec3 off = p[3] + Vec3(0, 0, unit[3]);
+    ASSERT_EQ(orient3d(p[0], p[1], p[2], off), reference_orient3d(p[0], p[1], p[2], off)) << trial;
+    ASSERT_EQ(orient2d(p[0], p[1], off, 0, 2), reference_orient2d(p[0], p[1], off, 0, 2)) << trial;
   }
 }
 
