@@ -265,19 +265,52 @@ class ColumnFilter {
       const double mid = ctr[0] * w_[k][0] + ctr[1] * w_[k][1] + ctr[2] * w_[k][2];
       const double rad = abs_w_[k][0] * ext[0] + abs_w_[k][1] * ext[1] + abs_w_[k][2] * ext[2];
       const double scale = abs_w_[k][0] * size[0] + abs_w_[k][1] * size[1] + abs_w_[k][2] * size[2];
-      // The double sums' own rounding, relative 1e-9 of the magnitudes, and 2^-1060 absolute
-      // where they are subnormal; then the frame's: w off by w_err per component over
-      // sum |p - c| <= coords, and R by R_err.
-      const double pad =
-          1e-9 * (scale + rad + R_) + 0x1p-1060 * (1 + coords) + w_err_[k] * coords + R_err_;
+      const double pad = pad_of(k, scale, rad, coords);
       if (mid - rad > R_ + pad && k < 2) return false;  // beyond the +side
       if (mid + rad < -R_ - pad) return false;          // beyond the -side (or below)
     }
     return true;
   }
+  // The same test for a triangle: false only when its three corners, each taken as a box of no
+  // extent, lie surely beyond one side, so that the whole triangle, their convex hull, does. A
+  // face whose box the first test keeps may still miss the column this way (a sliver's box).
+  bool meets_triangle(const Vec3& a, const Vec3& b, const Vec3& c) const {
+    return (sides_beyond(a) & sides_beyond(b) & sides_beyond(c) & ~kTopSide) == 0;
+  }
+  // The same for the box alone, its top side (T_2 = R) included.
+  bool may_meet_box(const Vec3& a, const Vec3& b, const Vec3& c) const {
+    return (sides_beyond(a) & sides_beyond(b) & sides_beyond(c)) == 0;
+  }
   bool flat() const { return flat_; }  // a half extent is 0: the box has no volume
 
  private:
+  // The double sums' own rounding, relative 1e-9 of the magnitudes, and 2^-1060 absolute
+  // where they are subnormal; then the frame's: w off by w_err per component over
+  // sum |p - c| <= coords, and R by R_err.
+  double pad_of(int k, double scale, double rad, double coords) const {
+    return 1e-9 * (scale + rad + R_) + 0x1p-1060 * (1 + coords) + w_err_[k] * coords + R_err_;
+  }
+  // The sides of the box that the point [p, p] lies surely beyond, by operator()'s test: bit
+  // 2k for the +side of T_k, bit 2k + 1 for its -side. The column has no +side of T_2.
+  static constexpr unsigned kTopSide = 1u << 4;
+  unsigned sides_beyond(const Vec3& p) const {
+    double ctr[3], size[3], coords = 0;
+    for (int i = 0; i < 3; ++i) {
+      ctr[i] = p[i] - c_[i];  // the value of 0.5 (lo + hi) - c for lo = hi = p
+      size[i] = 2 * std::abs(p[i]) + abs_c_[i];
+      coords += size[i];
+    }
+    unsigned out = 0;
+    for (int k = 0; k < 3; ++k) {
+      const double mid = ctr[0] * w_[k][0] + ctr[1] * w_[k][1] + ctr[2] * w_[k][2];
+      const double scale = abs_w_[k][0] * size[0] + abs_w_[k][1] * size[1] + abs_w_[k][2] * size[2];
+      const double pad = pad_of(k, scale, 0, coords);
+      if (mid > R_ + pad) out |= 1u << (2 * k);
+      if (mid < -R_ - pad) out |= 1u << (2 * k + 1);
+    }
+    return out;
+  }
+
   double c_[3], abs_c_[3];
   double w_[3][3], abs_w_[3][3];
   double R_;
@@ -288,8 +321,20 @@ class ColumnFilter {
 
 // The same certified solid with its edge vectors relabelled ({c + sum t_k u_k} is the same set
 // in any order) so that its column (T_2 >= -R, along u_0 x u_1) leaves `bounds` (the mesh's)
-// soonest: fewer faces lie above the box. A heuristic; any order gives the same exact OBV.
+// soonest: fewer faces lie above the box, as a rule. A heuristic of no cost beyond the box's
+// six corners of `bounds`; any order gives the same exact OBV.
 Obb shortest_column(const Obb& box, const Aabb& bounds);
+
+// The same relabelling chosen by count, for callers whose work per face outweighs a traversal
+// (an enclosure, exact arithmetic). The faces of `faces` (AabbTree::over_faces(mesh)) counted
+// are those that ColumnFilter accepts, by their boxes and by meets_triangle. The first order
+// as shortest_column ranks them is kept when its column holds at most 2 n + 64 faces, n those
+// that may meet the box itself (which every column holds); otherwise the order with the fewest,
+// the first in rank among equals, counted in rounds with a doubling cap so that the search
+// costs O(that fewest) however many faces the other columns hold. Unlike shortest_column it is
+// not misled by the mesh's shape (along a solid that lies on a diagonal of its bounds, the
+// column that leaves the bounds soonest may run through most of the solid).
+Obb fewest_faces_column(const Obb& box, const Mesh& mesh, const AabbTree& faces);
 
 // The exact OBV of one box by this formula, visiting the faces that `filter` accepts through
 // `faces` (AabbTree::over_faces(mesh)). 0 for a flat box.

@@ -284,8 +284,8 @@ FilteredSolver::FilteredSolver(const Mesh& mesh)
     : mesh_(mesh), faces_(AabbTree::over_faces(mesh)), clip_(mesh) {}
 
 Enclosed FilteredSolver::obv(const Obb& box, mpfr_prec_t bits) const {
-  // Relabelled so that its column leaves the mesh soonest: the same solid, fewer faces.
-  const Obb labelled = box_clip::shortest_column(box, faces_.bounds());
+  // Relabelled so that its column meets the fewest faces: the same solid, less work.
+  const Obb labelled = box_clip::fewest_faces_column(box, mesh_, faces_);
   const box_clip::ColumnFilter filter(labelled);
   if (filter.flat()) {
     Enclosed out;
@@ -306,6 +306,8 @@ Enclosed FilteredSolver::obv(const Obb& box, mpfr_prec_t bits) const {
           return tmap.emplace(v, box_clip::to_frame(frame, mesh_.vertices[v])).first->second;
         };
         faces_.visit_accepted(filter, [&](int32_t f) {
+          if (!filter.meets_triangle(mesh_.corner(f, 0), mesh_.corner(f, 1), mesh_.corner(f, 2)))
+            return;  // adds nothing
           const Face& face = mesh_.faces[f];
           const box_clip::Point<Mp> tri[3] = {to_t(face[0]), to_t(face[1]), to_t(face[2])};
           Mp term;

@@ -92,7 +92,7 @@ PolyObv exact_result(const Rational& q, int32_t faces, std::string why) {
 PolyObvSolver::PolyObvSolver(const Mesh& mesh) : mesh_(mesh), faces_(AabbTree::over_faces(mesh)) {}
 
 PolyObv PolyObvSolver::evaluate(const Obb& box) const {
-  return evaluate_as(box_clip::shortest_column(box, faces_.bounds()));
+  return evaluate_as(box_clip::fewest_faces_column(box, mesh_, faces_));
 }
 
 double PolyObvSolver::estimate(const Obb& box) const {
@@ -122,6 +122,7 @@ PolyObv PolyObvSolver::evaluate_as(const Obb& box) const {
   int32_t visited = 0, exact_faces = 0;
   bool range_ok = true;
   faces_.visit_accepted(filter, [&](int32_t f) {
+    if (!filter.meets_triangle(mesh_.corner(f, 0), mesh_.corner(f, 1), mesh_.corner(f, 2))) return;
     ++visited;
     if (!range_ok) return;
     const Face& face = mesh_.faces[f];

@@ -4,7 +4,9 @@
 // It evaluates the box-frame clip formula (common/box_frame_clip.h, the one the exact clipping
 // path runs in rationals) on the faces whose column meets the box, found through the faces'
 // AABB tree. Each box is evaluated with its edge vectors relabelled (the same solid, the same
-// exact OBV) so that its column leaves the mesh's bounds soonest, over fewer faces.
+// exact OBV) for fewer faces: evaluate() takes the order whose column meets the fewest
+// (box_clip::fewest_faces_column), estimate() the one whose column leaves the mesh's bounds
+// soonest (box_clip::shortest_column), as a count would cost more than its faces' work.
 //  - evaluate(): in interval arithmetic (CGAL::Interval_nt, under upward rounding). The result's
 //    [lo, hi] provably contains the exact OBV of the box's certified solid. A branch the
 //    intervals cannot decide at a mesh vertex (a vertex on a box plane, within round-off, as a

@@ -4,6 +4,12 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include "common/bvh.h"
+
 namespace vobb {
 namespace {
 
@@ -69,6 +75,116 @@ TEST(BoxFrameClip, InconsistentSignsCannotOverflowThePolygon) {
   };
   const Polygon<double>* r = box_clip::detail::clip(exact, &in, 0, 1, 1, 1.0, &out);
   EXPECT_LE(r->n, box_clip::kMaxPolygon);
+}
+
+// A closed rod of `sides`-gon section (radius r) and `rings` rings along the unit direction a,
+// length L, with fan caps; faces outward.
+Mesh rod(const Vec3& a, int rings, int sides, double r, double L) {
+  const Vec3 u = a.unitOrthogonal(), w = a.cross(u);
+  Mesh m;
+  for (int i = 0; i < rings; ++i)
+    for (int j = 0; j < sides; ++j) {
+      const double t = 2 * M_PI * j / sides;
+      m.vertices.push_back(L * i / (rings - 1) * a + r * (std::cos(t) * u + std::sin(t) * w));
+    }
+  const int c0 = static_cast<int>(m.vertices.size());
+  m.vertices.push_back(Vec3::Zero());
+  m.vertices.push_back(L * a);
+  auto v = [&](int i, int j) { return i * sides + (j % sides); };
+  for (int i = 0; i + 1 < rings; ++i)
+    for (int j = 0; j < sides; ++j) {
+      m.faces.push_back({v(i, j), v(i, j + 1), v(i + 1, j + 1)});
+      m.faces.push_back({v(i, j), v(i + 1, j + 1), v(i + 1, j)});
+    }
+  for (int j = 0; j < sides; ++j) {
+    m.faces.push_back({c0, v(0, j + 1), v(0, j)});
+    m.faces.push_back({c0 + 1, v(rings - 1, j), v(rings - 1, j + 1)});
+  }
+  return m;
+}
+
+// The faces a labelling's column visits: accepted by their boxes and by meets_triangle.
+size_t visited(const Mesh& mesh, const AabbTree& faces, const Obb& box) {
+  const box_clip::ColumnFilter f(box);
+  size_t n = 0;
+  faces.visit_accepted(f, [&](int32_t i) {
+    if (f.meets_triangle(mesh.corner(i, 0), mesh.corner(i, 1), mesh.corner(i, 2))) ++n;
+  });
+  return n;
+}
+
+// A triangle that meets_triangle refuses adds nothing to the formula, decided in rationals:
+// random boxes and triangles around them, from slivers to triangles larger than the box. The
+// test refuses many triangles whose boxes the first test keeps (the slivers it is for).
+TEST(ColumnFilter, ATriangleItRefusesAddsNothing) {
+  std::mt19937_64 rng(23);
+  std::uniform_real_distribution<double> u(-1, 1), half(0.05, 1), size(-3, 0.5);
+  int refused = 0, refused_past_box = 0;
+  for (int trial = 0; trial < 3000; ++trial) {
+    Obb box;
+    box.center = Vec3(u(rng), u(rng), u(rng));
+    const Eigen::Matrix3d q =
+        Eigen::Quaterniond(Eigen::Vector4d(u(rng), u(rng), u(rng), u(rng)).normalized())
+            .toRotationMatrix();
+    for (int k = 0; k < 3; ++k) box.axes[k] = q.col(k), box.half[k] = half(rng);
+    const box_clip::ColumnFilter filter(box);
+    const box_clip::Frame<Rational> frame = box_clip::make_frame<Rational>(box);
+    const Rational R = abs(frame.det);
+    for (int t = 0; t < 20; ++t) {
+      // A long edge from p along d and a short one: slivers at every angle.
+      const Vec3 p = 2.5 * Vec3(u(rng), u(rng), u(rng));
+      const Vec3 d = std::pow(10.0, size(rng)) * Vec3(u(rng), u(rng), u(rng)) * 3;
+      const Vec3 e = std::pow(10.0, size(rng) - 1) * Vec3(u(rng), u(rng), u(rng));
+      const Vec3 tri[3] = {p, p + d, p + e};
+      if (filter.meets_triangle(tri[0], tri[1], tri[2])) continue;
+      ++refused;
+      Aabb b;
+      for (const Vec3& c : tri) b.extend(c);
+      if (filter(b)) ++refused_past_box;
+      const Point<Rational> in_frame[3] = {box_clip::to_frame(frame, tri[0]),
+                                           box_clip::to_frame(frame, tri[1]),
+                                           box_clip::to_frame(frame, tri[2])};
+      Rational term;
+      if (box_clip::face_term6(in_frame, R, &term)) ASSERT_EQ(term, 0) << trial << " " << t;
+    }
+  }
+  EXPECT_GT(refused, 10000);
+  EXPECT_GT(refused_past_box, 1000);
+}
+
+// A rod along a diagonal of its bounds: for a box a quarter of the way along it, the column
+// that leaves the bounds soonest runs along the rod to its near end (a quarter of its faces);
+// fewest_faces_column takes the fewest of the six, a column across the rod, and the exact OBV
+// is the same in every labelling.
+TEST(FewestFacesColumn, ADiagonalRodIsCutAcrossNotAlong) {
+  const Vec3 a = Vec3(1, 1, 1).normalized();
+  const double L = 1.7, r = 0.02;
+  const int rings = 257, sides = 8;
+  const Mesh mesh = rod(a, rings, sides, r, L);
+  const AabbTree faces = AabbTree::over_faces(mesh);
+  Obb box;
+  const double step = L / (rings - 1);
+  box.center = (64 + 2) * step * a;  // rings 64 to 68
+  box.axes = {a, a.unitOrthogonal(), a.cross(a.unitOrthogonal())};
+  box.half = Vec3(2 * step, r, r) * 1.001;
+  const Obb chosen = box_clip::fewest_faces_column(box, mesh, faces);
+  const Obb first = box_clip::shortest_column(box, faces.bounds());
+  const size_t n_chosen = visited(mesh, faces, chosen), n_first = visited(mesh, faces, first);
+  EXPECT_GE(n_first, 64u * 2 * sides);  // the 64 rings before the box, at least
+  EXPECT_LT(8 * n_chosen, n_first);
+  // The fewest of the six labellings (the ones shortest_column chooses among).
+  size_t fewest = SIZE_MAX;
+  const int orders[6][3] = {{0, 1, 2}, {1, 0, 2}, {1, 2, 0}, {2, 1, 0}, {2, 0, 1}, {0, 2, 1}};
+  for (const auto& o : orders) {
+    Obb b = box;
+    for (int n = 0; n < 3; ++n) b.axes[n] = box.axes[o[n]], b.half[n] = box.half[o[n]];
+    fewest = std::min(fewest, visited(mesh, faces, b));
+  }
+  EXPECT_EQ(n_chosen, fewest);
+  const Rational obv = box_clip::box_obv_rational(mesh, faces, chosen);
+  EXPECT_GT(obv, 0);
+  EXPECT_EQ(obv, box_clip::box_obv_rational(mesh, faces, first));
+  EXPECT_EQ(obv, box_clip::box_obv_rational(mesh, faces, box));
 }
 
 }  // namespace
