@@ -82,59 +82,100 @@ Obb shortest_column(const Obb& box, const Aabb& bounds) {
   return relabelled(box, ranked(box, bounds)[0]);
 }
 
-Obb fewest_faces_column(const Obb& box, const Mesh& mesh, const AabbTree& faces) {
-  const std::array<int, 6> order = ranked(box, faces.bounds());
-  std::array<std::optional<ColumnFilter>, 6> filter;
-  for (int o = 0; o < 6; ++o) filter[o].emplace(relabelled(box, order[o]));
-  if (filter[0]->flat()) return box;  // no volume in any order: no face is visited
-  // The faces of `faces` in column o, counted until they reach `cap`.
-  auto count = [&](int o, size_t cap) {
-    const ColumnFilter& f = *filter[o];
-    size_t n = 0;
-    faces.visit_accepted(
-        [&](const Aabb& b) { return n < cap && f(b); },
-        [&](int32_t i) {
-          if (f.meets_triangle(mesh.corner(i, 0), mesh.corner(i, 1), mesh.corner(i, 2))) ++n;
-        });
-    return n;
-  };
-  // The faces that may meet the box itself, which every column holds: the first in rank is
-  // taken when its column holds few more.
-  Aabb reach;
-  for (int i = 0; i < 3; ++i) {
-    double e = 0;
-    for (int k = 0; k < 3; ++k) e += box.half[k] * std::abs(box.axes[k][i]);
-    e += 1e-9 * (e + std::abs(box.center[i]));  // the sums' rounding, with room
-    reach.lo[i] = box.center[i] - e;
-    reach.hi[i] = box.center[i] + e;
-  }
-  size_t in_box = 0;
-  faces.visit_accepted(
-      [&](const Aabb& b) { return reach.overlaps(b); },
-      [&](int32_t i) {
-        if (filter[0]->may_meet_box(mesh.corner(i, 0), mesh.corner(i, 1), mesh.corner(i, 2)))
-          ++in_box;
-      });
-  const size_t enough = 2 * in_box + 64;
-  if (count(0, enough + 1) <= enough) return relabelled(box, order[0]);
-  // Otherwise the fewest, in rounds that count every order up to a cap doubled each round: once
-  // an order's count ends below the cap, the fewest is among those that ended (the others
-  // reached it), the first in rank among equals. A round costs at most six caps of faces, so
-  // the search costs O(the fewest), however many faces the other columns hold.
-  for (size_t cap = enough;; cap *= 2) {
-    int best = -1;
-    size_t fewest = cap;
-    for (int o = 0; o < 6; ++o) {
-      const size_t n = count(o, fewest);
-      if (n < fewest) fewest = n, best = o;
+namespace {
+
+// Calls visit(i, place) for every position i in faces.order() whose face `f` places in its
+// column (ColumnFilter::place > 0), descending only into nodes whose boxes f accepts, while
+// more() holds (tested at each node). Left children first, so that positions come in
+// increasing order, or with `near` the child whose box's centre is nearer *near first.
+template <class More, class Visit>
+void walk(const Mesh& mesh, const AabbTree& faces, const ColumnFilter& f, const Vec3* near,
+          const More& more, const Visit& visit) {
+  const std::vector<AabbTree::Node>& nodes = faces.nodes();
+  const std::vector<int32_t>& prim = faces.order();
+  if (nodes.empty()) return;
+  int32_t stack[128];  // median splits: depth below 64, one waiting sibling per level
+  int top = 0;
+  stack[top++] = 0;
+  while (top > 0 && more()) {
+    const AabbTree::Node& n = nodes[stack[--top]];
+    if (!f(n.bounds)) continue;
+    if (n.count > 0) {
+      for (int32_t i = n.first; i < n.first + n.count; ++i) {
+        const int32_t g = prim[i];
+        const int p = f.place(faces.primitive_bounds(g), mesh.corner(g, 0), mesh.corner(g, 1),
+                              mesh.corner(g, 2));
+        if (p > 0) visit(i, p);
+      }
+    } else {
+      bool left_first = true;
+      if (near != nullptr) {
+        const Aabb &l = nodes[n.first].bounds, &r = nodes[n.first + 1].bounds;
+        left_first =
+            (l.lo + l.hi - 2 * *near).squaredNorm() <= (r.lo + r.hi - 2 * *near).squaredNorm();
+      }
+      stack[top++] = left_first ? n.first + 1 : n.first;  // popped second
+      stack[top++] = left_first ? n.first : n.first + 1;
     }
-    if (best >= 0) return relabelled(box, order[best]);
   }
 }
 
+}  // namespace
+
+Column fewest_faces_column(const Obb& box, const Mesh& mesh, const AabbTree& faces) {
+  const std::array<int, 6> order = ranked(box, faces.bounds());
+  std::array<std::optional<ColumnFilter>, 6> filter;
+  for (int o = 0; o < 6; ++o) filter[o].emplace(relabelled(box, order[o]));
+  Column out{relabelled(box, order[0]), {}};
+  if (filter[0]->flat()) return out;  // no volume in any order: no face is visited
+  // The first column's faces as positions in faces.order() (sorted, they are visit_accepted's
+  // order), gathered nearest the box first, until they outnumber those that may meet the box
+  // more than allowed.
+  std::vector<int32_t> pos;
+  size_t in_box = 0;
+  bool kept = true;
+  walk(
+      mesh, faces, *filter[0], &box.center, [&] { return kept; },
+      [&](int32_t i, int p) {
+        pos.push_back(i);
+        in_box += p == 2;
+        kept = pos.size() <= 4 * in_box + 256;
+      });
+  if (kept) {
+    std::sort(pos.begin(), pos.end());
+    out.faces.reserve(pos.size());
+    for (int32_t i : pos) out.faces.push_back(faces.order()[i]);
+    return out;
+  }
+  // Rounds that count every order's faces up to a cap doubled each round: once an order's
+  // count ends below the cap, the fewest is among those that ended (the others reached it),
+  // the first in rank among equals. A round costs at most six caps of faces.
+  int best = -1;
+  for (size_t cap = 256; best < 0; cap *= 2) {
+    size_t fewest = cap;
+    for (int o = 0; o < 6; ++o) {
+      size_t n = 0;
+      walk(
+          mesh, faces, *filter[o], nullptr, [&] { return n < fewest; }, [&](int32_t, int) { ++n; });
+      if (n < fewest) fewest = n, best = o;
+    }
+  }
+  return column_of(relabelled(box, order[best]), mesh, faces);
+}
+
+Column column_of(const Obb& box, const Mesh& mesh, const AabbTree& faces) {
+  Column out{box, {}};
+  const ColumnFilter f(box);
+  if (f.flat()) return out;
+  walk(
+      mesh, faces, f, nullptr, [] { return true; },
+      [&](int32_t i, int) { out.faces.push_back(faces.order()[i]); });
+  return out;
+}
+
 Rational box_obv_rational(const Mesh& mesh, const AabbTree& faces, const Obb& box) {
-  const ColumnFilter filter(box);
-  if (filter.flat()) return Rational(0);  // a flat box has no volume, inside or out
+  if (ColumnFilter(box).flat()) return Rational(0);  // a flat box has no volume, inside or out
+  const Column column = column_of(box, mesh, faces);
   const Frame<Rational> frame = make_frame<Rational>(box);
   if (sgn(frame.det) == 0) return Rational(0);
   const Rational R = abs(frame.det);
@@ -145,13 +186,12 @@ Rational box_obv_rational(const Mesh& mesh, const AabbTree& faces, const Obb& bo
     return tmap.emplace(v, to_frame(frame, mesh.vertices[v])).first->second;
   };
   std::vector<Rational> terms;
-  faces.visit_accepted(filter, [&](int32_t f) {
-    if (!filter.meets_triangle(mesh.corner(f, 0), mesh.corner(f, 1), mesh.corner(f, 2))) return;
+  for (const int32_t f : column.faces) {
     const Point<Rational> tri[3] = {to_t(mesh.faces[f][0]), to_t(mesh.faces[f][1]),
                                     to_t(mesh.faces[f][2])};
     Rational t;
     if (face_term6(tri, R, &t) && sgn(t) != 0) terms.push_back(std::move(t));
-  });
+  }
   return obv_from_sum6(sum_pairwise(terms), R);
 }
 

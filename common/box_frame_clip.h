@@ -271,15 +271,42 @@ class ColumnFilter {
     }
     return true;
   }
-  // The same test for a triangle: false only when its three corners, each taken as a box of no
-  // extent, lie surely beyond one side, so that the whole triangle, their convex hull, does. A
-  // face whose box the first test keeps may still miss the column this way (a sliver's box).
-  bool meets_triangle(const Vec3& a, const Vec3& b, const Vec3& c) const {
-    return (sides_beyond(a) & sides_beyond(b) & sides_beyond(c) & ~kTopSide) == 0;
-  }
-  // The same for the box alone, its top side (T_2 = R) included.
-  bool may_meet_box(const Vec3& a, const Vec3& b, const Vec3& c) const {
-    return (sides_beyond(a) & sides_beyond(b) & sides_beyond(c)) == 0;
+  // Where a triangle that `b` holds (its box) may lie: 0 surely outside the column (b is, by
+  // the test above, or the three corners lie surely beyond one side, so that the whole
+  // triangle, their convex hull, does), 1 in it but surely beyond the box's top side (T_2 = R),
+  // 2 possibly in the box itself. A sliver's box may meet the column where the sliver does not.
+  // The corners are tested with b's pads, which bound every point of b.
+  int place(const Aabb& b, const Vec3& p0, const Vec3& p1, const Vec3& p2) const {
+    if (b.empty()) return 0;
+    double ctr[3], ext[3], size[3], coords = 0;
+    for (int i = 0; i < 3; ++i) {
+      ctr[i] = 0.5 * (b.lo[i] + b.hi[i]) - c_[i];
+      ext[i] = 0.5 * (b.hi[i] - b.lo[i]);
+      size[i] = std::abs(b.lo[i]) + std::abs(b.hi[i]) + abs_c_[i];
+      coords += size[i];
+    }
+    double pad[3];
+    for (int k = 0; k < 3; ++k) {
+      const double mid = ctr[0] * w_[k][0] + ctr[1] * w_[k][1] + ctr[2] * w_[k][2];
+      const double rad = abs_w_[k][0] * ext[0] + abs_w_[k][1] * ext[1] + abs_w_[k][2] * ext[2];
+      const double scale = abs_w_[k][0] * size[0] + abs_w_[k][1] * size[1] + abs_w_[k][2] * size[2];
+      pad[k] = pad_of(k, scale, rad, coords);
+      if (mid - rad > R_ + pad[k] && k < 2) return 0;
+      if (mid + rad < -R_ - pad[k]) return 0;
+    }
+    unsigned beyond = ~0u;  // the sides every corner so far lies surely beyond
+    for (const Vec3* p : {&p0, &p1, &p2}) {
+      const double d[3] = {(*p)[0] - c_[0], (*p)[1] - c_[1], (*p)[2] - c_[2]};
+      unsigned m = 0;
+      for (int k = 0; k < 3; ++k) {
+        const double t = d[0] * w_[k][0] + d[1] * w_[k][1] + d[2] * w_[k][2];
+        if (t > R_ + pad[k]) m |= 1u << (2 * k);
+        if (t < -R_ - pad[k]) m |= 1u << (2 * k + 1);
+      }
+      beyond &= m;
+      if (beyond == 0) return 2;
+    }
+    return (beyond & ~kTopSide) != 0 ? 0 : 1;
   }
   bool flat() const { return flat_; }  // a half extent is 0: the box has no volume
 
@@ -290,26 +317,7 @@ class ColumnFilter {
   double pad_of(int k, double scale, double rad, double coords) const {
     return 1e-9 * (scale + rad + R_) + 0x1p-1060 * (1 + coords) + w_err_[k] * coords + R_err_;
   }
-  // The sides of the box that the point [p, p] lies surely beyond, by operator()'s test: bit
-  // 2k for the +side of T_k, bit 2k + 1 for its -side. The column has no +side of T_2.
-  static constexpr unsigned kTopSide = 1u << 4;
-  unsigned sides_beyond(const Vec3& p) const {
-    double ctr[3], size[3], coords = 0;
-    for (int i = 0; i < 3; ++i) {
-      ctr[i] = p[i] - c_[i];  // the value of 0.5 (lo + hi) - c for lo = hi = p
-      size[i] = 2 * std::abs(p[i]) + abs_c_[i];
-      coords += size[i];
-    }
-    unsigned out = 0;
-    for (int k = 0; k < 3; ++k) {
-      const double mid = ctr[0] * w_[k][0] + ctr[1] * w_[k][1] + ctr[2] * w_[k][2];
-      const double scale = abs_w_[k][0] * size[0] + abs_w_[k][1] * size[1] + abs_w_[k][2] * size[2];
-      const double pad = pad_of(k, scale, 0, coords);
-      if (mid > R_ + pad) out |= 1u << (2 * k);
-      if (mid < -R_ - pad) out |= 1u << (2 * k + 1);
-    }
-    return out;
-  }
+  static constexpr unsigned kTopSide = 1u << 4;  // the +side of T_2: the box's, not the column's
 
   double c_[3], abs_c_[3];
   double w_[3][3], abs_w_[3][3];
@@ -325,19 +333,28 @@ class ColumnFilter {
 // six corners of `bounds`; any order gives the same exact OBV.
 Obb shortest_column(const Obb& box, const Aabb& bounds);
 
-// The same relabelling chosen by count, for callers whose work per face outweighs a traversal
-// (an enclosure, exact arithmetic). The faces of `faces` (AabbTree::over_faces(mesh)) counted
-// are those that ColumnFilter accepts, by their boxes and by meets_triangle. The first order
-// as shortest_column ranks them is kept when its column holds at most 2 n + 64 faces, n those
-// that may meet the box itself (which every column holds); otherwise the order with the fewest,
-// the first in rank among equals, counted in rounds with a doubling cap so that the search
-// costs O(that fewest) however many faces the other columns hold. Unlike shortest_column it is
-// not misled by the mesh's shape (along a solid that lies on a diagonal of its bounds, the
-// column that leaves the bounds soonest may run through most of the solid).
-Obb fewest_faces_column(const Obb& box, const Mesh& mesh, const AabbTree& faces);
+// A box labelled for its column, and the faces of that column: those that ColumnFilter::place
+// puts in it, in the order AabbTree::visit_accepted gives them. A flat box has none.
+struct Column {
+  Obb box;
+  std::vector<int32_t> faces;
+};
 
-// The exact OBV of one box by this formula, visiting the faces that `filter` accepts through
-// `faces` (AabbTree::over_faces(mesh)). 0 for a flat box.
+// The column of the box as labelled.
+Column column_of(const Obb& box, const Mesh& mesh, const AabbTree& faces);
+
+// The same relabelling chosen by the faces its column holds, for callers that visit those
+// faces (returned with it). The first order as shortest_column ranks them is kept unless its
+// faces, gathered nearest the box first, come to outnumber 4 n + 256, n those among them that
+// may meet the box itself (which every column holds). Otherwise the order whose column holds the
+// fewest, the first in rank among equals, counted in rounds with a doubling cap, so that the search
+// costs O(that fewest) however many faces the other columns hold. Unlike shortest_column it is not
+// misled by the mesh's shape (along a solid that lies on a diagonal of its bounds, the column that
+// leaves the bounds soonest may run through most of the solid).
+Column fewest_faces_column(const Obb& box, const Mesh& mesh, const AabbTree& faces);
+
+// The exact OBV of one box by this formula, over the faces of its column (column_of) in `faces`
+// (AabbTree::over_faces(mesh)). 0 for a flat box.
 Rational box_obv_rational(const Mesh& mesh, const AabbTree& faces, const Obb& box);
 
 }  // namespace vobb::box_clip

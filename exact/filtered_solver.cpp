@@ -284,10 +284,10 @@ FilteredSolver::FilteredSolver(const Mesh& mesh)
     : mesh_(mesh), faces_(AabbTree::over_faces(mesh)), clip_(mesh) {}
 
 Enclosed FilteredSolver::obv(const Obb& box, mpfr_prec_t bits) const {
-  // Relabelled so that its column meets the fewest faces: the same solid, less work.
-  const Obb labelled = box_clip::fewest_faces_column(box, mesh_, faces_);
-  const box_clip::ColumnFilter filter(labelled);
-  if (filter.flat()) {
+  // Relabelled so that its column meets few faces: the same solid, less work.
+  const box_clip::Column column = box_clip::fewest_faces_column(box, mesh_, faces_);
+  const Obb& labelled = column.box;
+  if (box_clip::ColumnFilter(labelled).flat()) {
     Enclosed out;
     out.exact = true;  // no volume: 0, exactly
     return out;
@@ -305,14 +305,12 @@ Enclosed FilteredSolver::obv(const Obb& box, mpfr_prec_t bits) const {
           if (it != tmap.end()) return it->second;
           return tmap.emplace(v, box_clip::to_frame(frame, mesh_.vertices[v])).first->second;
         };
-        faces_.visit_accepted(filter, [&](int32_t f) {
-          if (!filter.meets_triangle(mesh_.corner(f, 0), mesh_.corner(f, 1), mesh_.corner(f, 2)))
-            return;  // adds nothing
+        for (const int32_t f : column.faces) {
           const Face& face = mesh_.faces[f];
           const box_clip::Point<Mp> tri[3] = {to_t(face[0]), to_t(face[1]), to_t(face[2])};
           Mp term;
           if (box_clip::face_term6(tri, R, &term)) sum += term;
-        });
+        }
         return box_clip::obv_from_sum6(sum, R);
       },
       [&] { return clip_.obv(box); });

@@ -103,7 +103,8 @@ Rational PolyObvSolver::exact(const Obb& box) const {
   return box_clip::box_obv_rational(mesh_, faces_, box);
 }
 
-PolyObv PolyObvSolver::evaluate_as(const Obb& box) const {
+PolyObv PolyObvSolver::evaluate_as(const box_clip::Column& column) const {
+  const Obb& box = column.box;
   const ColumnFilter filter(box);
   if (filter.flat()) return PolyObv{};  // no volume: [0, 0]
   Interval::Protector upward;
@@ -121,25 +122,24 @@ PolyObv PolyObvSolver::evaluate_as(const Obb& box) const {
   Interval sum(0);
   int32_t visited = 0, exact_faces = 0;
   bool range_ok = true;
-  faces_.visit_accepted(filter, [&](int32_t f) {
-    if (!filter.meets_triangle(mesh_.corner(f, 0), mesh_.corner(f, 1), mesh_.corner(f, 2))) return;
+  for (const int32_t f : column.faces) {
     ++visited;
-    if (!range_ok) return;
+    if (!range_ok) continue;
     const Face& face = mesh_.faces[f];
     Point<Interval> tri[3];
     for (int i = 0; i < 3; ++i) {
       tri[i] = box_clip::to_frame(frame, mesh_.vertices[face[i]], face[i]);
       for (const Interval& x : tri[i].x) range_ok &= in_range(x);
     }
-    if (!range_ok) return;
+    if (!range_ok) continue;
     Interval term(0);
     try {
-      if (!box_clip::face_term6(tri, R, &term, decide)) return;
+      if (!box_clip::face_term6(tri, R, &term, decide)) continue;
     } catch (const CGAL::Uncertain_conversion_exception&) {
       // A sign at a point that a clip made: the whole face in the box's exact frame.
       ++exact_faces;
       Rational t;
-      if (!exact_box.face_term6(face, &t)) return;
+      if (!exact_box.face_term6(face, &t)) continue;
       double lo, hi;
       enclose(t, &lo, &hi);
       term = Interval(lo, hi);
@@ -150,7 +150,7 @@ PolyObv PolyObvSolver::evaluate_as(const Obb& box) const {
       term = Interval(lo, hi);
     }
     sum += term;
-  });
+  }
   if (!range_ok)
     return exact_result(exact(box), visited, "coordinates beyond the intervals' safe range");
   const Interval obv = box_clip::obv_from_sum6(sum, R);
@@ -191,12 +191,12 @@ double PolyObvSolver::estimate_as(const Obb& box) const {
         if (box_clip::face_term6(tri, R, &term)) sum += term;
       });
     } catch (const box_clip::PolygonOverflow&) {  // rounded signs contradicted each other
-      return evaluate_as(box).estimate;
+      return evaluate_as(box_clip::column_of(box, mesh_, faces_)).estimate;
     }
   }
   const double obv = R > 0 ? box_clip::obv_from_sum6(sum, R) : 0.0;
   // Beyond double's range (or a nearly flat box): the certified evaluation's midpoint.
-  if (!std::isfinite(obv)) return evaluate_as(box).estimate;
+  if (!std::isfinite(obv)) return evaluate_as(box_clip::column_of(box, mesh_, faces_)).estimate;
   return obv;
 }
 

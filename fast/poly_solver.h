@@ -36,6 +36,9 @@
 #include "common/obb.h"
 
 namespace vobb {
+namespace box_clip {
+struct Column;
+}
 
 // How one box's OBV was enclosed.
 struct PolyObv {
@@ -72,8 +75,9 @@ class PolyObvSolver {
   void set_damage_for_tests(Damage d) { damage_ = d; }
 
  private:
-  // The same, for the box as labelled (evaluate and estimate first choose its labelling).
-  PolyObv evaluate_as(const Obb& box) const;
+  // The same, for a box as labelled and the faces of its column (evaluate and estimate first
+  // choose its labelling).
+  PolyObv evaluate_as(const box_clip::Column& column) const;
   double estimate_as(const Obb& box) const;
 
   const Mesh& mesh_;

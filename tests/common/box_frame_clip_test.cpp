@@ -103,19 +103,20 @@ Mesh rod(const Vec3& a, int rings, int sides, double r, double L) {
   return m;
 }
 
-// The faces a labelling's column visits: accepted by their boxes and by meets_triangle.
+// The faces a labelling's column visits: those ColumnFilter::place puts in it.
 size_t visited(const Mesh& mesh, const AabbTree& faces, const Obb& box) {
   const box_clip::ColumnFilter f(box);
   size_t n = 0;
   faces.visit_accepted(f, [&](int32_t i) {
-    if (f.meets_triangle(mesh.corner(i, 0), mesh.corner(i, 1), mesh.corner(i, 2))) ++n;
+    n += f.place(faces.primitive_bounds(i), mesh.corner(i, 0), mesh.corner(i, 1),
+                 mesh.corner(i, 2)) > 0;
   });
   return n;
 }
 
-// A triangle that meets_triangle refuses adds nothing to the formula, decided in rationals:
-// random boxes and triangles around them, from slivers to triangles larger than the box. The
-// test refuses many triangles whose boxes the first test keeps (the slivers it is for).
+// A triangle that ColumnFilter::place puts outside the column adds nothing to the formula, decided
+// in rationals: random boxes and triangles around them, from slivers to triangles larger than the
+// box. The test refuses many triangles whose boxes the first test keeps (the slivers it is for).
 TEST(ColumnFilter, ATriangleItRefusesAddsNothing) {
   std::mt19937_64 rng(23);
   std::uniform_real_distribution<double> u(-1, 1), half(0.05, 1), size(-3, 0.5);
@@ -136,10 +137,10 @@ TEST(ColumnFilter, ATriangleItRefusesAddsNothing) {
       const Vec3 d = std::pow(10.0, size(rng)) * Vec3(u(rng), u(rng), u(rng)) * 3;
       const Vec3 e = std::pow(10.0, size(rng) - 1) * Vec3(u(rng), u(rng), u(rng));
       const Vec3 tri[3] = {p, p + d, p + e};
-      if (filter.meets_triangle(tri[0], tri[1], tri[2])) continue;
-      ++refused;
       Aabb b;
       for (const Vec3& c : tri) b.extend(c);
+      if (filter.place(b, tri[0], tri[1], tri[2]) > 0) continue;
+      ++refused;
       if (filter(b)) ++refused_past_box;
       const Point<Rational> in_frame[3] = {box_clip::to_frame(frame, tri[0]),
                                            box_clip::to_frame(frame, tri[1]),
@@ -167,7 +168,10 @@ TEST(FewestFacesColumn, ADiagonalRodIsCutAcrossNotAlong) {
   box.center = (64 + 2) * step * a;  // rings 64 to 68
   box.axes = {a, a.unitOrthogonal(), a.cross(a.unitOrthogonal())};
   box.half = Vec3(2 * step, r, r) * 1.001;
-  const Obb chosen = box_clip::fewest_faces_column(box, mesh, faces);
+  const box_clip::Column column = box_clip::fewest_faces_column(box, mesh, faces);
+  const Obb& chosen = column.box;
+  // Its faces are the column's, in visit order.
+  EXPECT_EQ(column.faces, box_clip::column_of(chosen, mesh, faces).faces);
   const Obb first = box_clip::shortest_column(box, faces.bounds());
   const size_t n_chosen = visited(mesh, faces, chosen), n_first = visited(mesh, faces, first);
   EXPECT_GE(n_first, 64u * 2 * sides);  // the 64 rings before the box, at least
@@ -185,6 +189,15 @@ TEST(FewestFacesColumn, ADiagonalRodIsCutAcrossNotAlong) {
   EXPECT_GT(obv, 0);
   EXPECT_EQ(obv, box_clip::box_obv_rational(mesh, faces, first));
   EXPECT_EQ(obv, box_clip::box_obv_rational(mesh, faces, box));
+  // A box at the rod's end keeps the first labelling, whose column leaves the rod at once, and
+  // the faces it gathered nearest first come in visit order too.
+  Obb end = box;
+  end.center = 2 * step * a;
+  const box_clip::Column at_end = box_clip::fewest_faces_column(end, mesh, faces);
+  const Obb first_at_end = box_clip::shortest_column(end, faces.bounds());
+  EXPECT_EQ(at_end.box.axes, first_at_end.axes);
+  EXPECT_EQ(at_end.faces, box_clip::column_of(first_at_end, mesh, faces).faces);
+  EXPECT_FALSE(at_end.faces.empty());
 }
 
 }  // namespace
