@@ -126,8 +126,9 @@ class CompareCommand final : public Command {
     LoadedMesh loaded;
     Status s = load_input_solid(mesh_, &loaded);
     if (!s) return refuse(s);
+    std::unique_ptr<FigureContext> figure_context;
     if (!figure_.empty()) {  // before the run, not after it
-      s = check_figure_context();
+      s = FigureContext::create(&figure_context);
       if (!s) return refuse(Status::error(figure_ + ": " + s.message()));
     }
     CompareOptions o;
@@ -152,7 +153,8 @@ class CompareCommand final : public Command {
     if (!figure_.empty()) {
       CompareFigure fig;
       RgbaImage image;
-      s = draw_compare_figure(loaded.mesh, r, figure_up_, o.build.note, &image, &fig);
+      s = draw_compare_figure(loaded.mesh, r, figure_up_, o.build.note, &image, &fig,
+                              figure_context.get());
       if (!s) return could_not_finish(Status::error(figure_ + ": " + s.message()));
       s = write_png(figure_, image);
       if (!s) return could_not_finish(s);  // its folder took a file when the run started

@@ -44,9 +44,21 @@ Status make_gl_backend(const Mesh& mesh, bool device_only,
 
 void enable_gl() { detail::set_gl_factory(&make_gl_backend); }
 
+FigureContext::FigureContext(std::unique_ptr<GlContext> gl) : gl_(std::move(gl)) {}
+FigureContext::~FigureContext() = default;
+
+Status FigureContext::create(std::unique_ptr<FigureContext>* out) {
+  std::unique_ptr<GlContext> gl;
+  const Status s = GlContext::create(&gl);
+  if (!s) return Status::error("cannot draw the figure: " + s.message());
+  gl->release();  // made current on this thread; bound again for each draw
+  out->reset(new FigureContext(std::move(gl)));
+  return Status::ok();
+}
+
 Status draw_compare_figure(const Mesh& mesh, const CompareResult& result, const std::string& up,
                            const std::function<void(const std::string&)>& note, RgbaImage* image,
-                           CompareFigure* figure) {
+                           CompareFigure* figure, const FigureContext* context) {
   FigureOptions fo;
   Status s = set_figure_up(up, &fo);
   if (!s) return s;
@@ -57,23 +69,20 @@ Status draw_compare_figure(const Mesh& mesh, const CompareResult& result, const 
                         k == 0 ? "the obbtree tree" : "the variational tree");
     if (!s) return s;
   }
-  std::unique_ptr<GlContext> gl;
-  s = GlContext::create(&gl);
-  if (!s) return Status::error("cannot draw the figure: " + s.message());
-  if (note) note(describe(*gl));
+  std::unique_ptr<FigureContext> own;
+  if (context == nullptr) {
+    s = FigureContext::create(&own);
+    if (!s) return s;
+    context = own.get();
+  }
+  const GlContext& gl = context->gl();
+  if (note) note(describe(gl));
   const std::vector<FigureRow> rows = {{"obbtree", &result.trees[0]},
                                        {"variational", &result.trees[1]}};
   fo.levels = default_figure_levels(rows);
-  s = render_tree_figure(*gl, mesh, rows, fo, image);
+  s = render_tree_figure(gl, mesh, rows, fo, image);
   if (!s) return s;
   *figure = {image->width, image->height, fo.levels.front(), fo.levels.back()};
-  return Status::ok();
-}
-
-Status check_figure_context() {
-  std::unique_ptr<GlContext> gl;
-  const Status s = GlContext::create(&gl);
-  if (!s) return Status::error("cannot draw the figure: " + s.message());
   return Status::ok();
 }
 

@@ -9,6 +9,7 @@
 
 #include <cstdio>
 #include <fstream>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -69,6 +70,17 @@ int main(int argc, char** argv) {
   check(vobb::draw_compare_figure(mesh, result, "y", nullptr, &image, &figure).is_ok() &&
             vobb::write_png(argv[3], image).is_ok(),
         "figure drawn and written");
+  // In a context made ahead (compare --figure's way), twice: the same pixels.
+  std::unique_ptr<vobb::FigureContext> context;
+  check(vobb::FigureContext::create(&context).is_ok(), "figure context made ahead");
+  for (int k = 0; k < 2; ++k) {
+    vobb::RgbaImage again;
+    vobb::CompareFigure f;
+    check(
+        vobb::draw_compare_figure(mesh, result, "y", nullptr, &again, &f, context.get()).is_ok() &&
+            again.width == image.width && again.height == image.height && again.rgba == image.rgba,
+        "figure drawn in a context made ahead, the same pixels");
+  }
   vobb::CompareResult spoiled = result;  // a child that is no node: refused, not drawn
   spoiled.trees[1].nodes[0].children[0] = 100000000;
   const vobb::Status refused =
