@@ -155,6 +155,8 @@ constexpr int32_t kSmallFan = 24;
 constexpr size_t kSmallEdge = 8;
 // Nodes get a slab volume where their box is this many times wider (see add_slab_boxes).
 constexpr double kLooseBox = 4.0;
+// ... or this many times wider than their spread along their least axis.
+constexpr double kThinSlice = 64.0;
 // triangles_may_meet is used where no coordinate exceeds kPairFilterLimit (its projections
 // are cubic in the coordinates), slab volumes where the largest coordinate S lies in
 // [1 / kSlabLimit, kSlabLimit] (their projections are linear in S, and their covariances are
@@ -264,20 +266,49 @@ bool triangles_may_meet(const Vec3* t, const Vec3* s, double S) {
 // [lo, hi] is widened by kFilterSlack |A|_1 S + kFilterFloor, over 700 times 2e (the axes are
 // unit vectors up to rounding, so |A|_1 is about sqrt(3); the widening uses the computed
 // |A|_1, not that).
-// These are the volume's three face normals as separating axes. A full separating-axis test
-// of T against the parallelepiped (T's normal and the cross products of edges as well)
-// pruned about 1% more nodes on a rim-fan cylinder with 10,000-gon caps, and cost more per
-// node than that saved.
+// The volume's three face normals are tried first as separating axes, then, where they do not
+// separate, the cross products of A T's edges with them, in slab coordinates (any axis there is
+// a valid one: if the images A T and A x miss each other, so do T and x). Their projections
+// are linear in the slab coordinates, whose magnitudes are within |A|_1 S (`scale`, plus the
+// widening): the computed corners of A T are within e of the exact ones, the projection of a
+// corner and the box's centre and radius each lose about 3 u |b|_1 scale more, so a gap over
+// kFilterSlack |b|_1 scale plus the floor is a true gap. These axes separate a fan's face from
+// nodes of side faces at other angles, which the face's centre, on every such node's slab
+// through the axis, keeps the normals from doing (a cap fanned from its centre). On a rim-fan
+// cylinder the edge axes had pruned about 1% more nodes and cost more per node than that
+// saved, so they are tried only on slices (nodes loose along their least axis), and there only
+// where the normals fail.
 struct SlabBox {
   Vec3 axis[3];         // a_k
   double lo[3], hi[3];  // widened as above
+  double scale;         // |A|_1 S
+  bool edges;           // a slice (loose along its least axis): the edge axes are tried too
 };
 
 // Conservative: false only where triangle t misses every face below the box's node.
 bool may_meet_slabs(const Vec3* t, const SlabBox& box) {
+  Vec3 y[3];  // t's corners in slab coordinates
   for (int k = 0; k < 3; ++k) {
     const double p0 = box.axis[k].dot(t[0]), p1 = box.axis[k].dot(t[1]), p2 = box.axis[k].dot(t[2]);
     if (std::max({p0, p1, p2}) < box.lo[k] || std::min({p0, p1, p2}) > box.hi[k]) return false;
+    y[0][k] = p0, y[1][k] = p1, y[2][k] = p2;
+  }
+  if (!box.edges) return true;
+  const Vec3 lo(box.lo[0], box.lo[1], box.lo[2]), hi(box.hi[0], box.hi[1], box.hi[2]);
+  const Vec3 c = 0.5 * (lo + hi), h = 0.5 * (hi - lo);
+  for (int j = 0; j < 3; ++j) {
+    // The axes E x u_k for edge E = y[j+1] - y[j] and each unit vector u_k: a point p projects
+    // to (E x u_k) . p = (p x E)_k, and y[j], y[j+1] project alike.
+    const Vec3 E = y[(j + 1) % 3] - y[j];
+    const Vec3 q0 = y[j].cross(E), q2 = y[(j + 2) % 3].cross(E), pc = c.cross(E);
+    const Vec3 a = E.cwiseAbs();
+    for (int k = 0; k < 3; ++k) {
+      const int k1 = (k + 1) % 3, k2 = (k + 2) % 3;  // E x u_k has |E_k2|, |E_k1| there
+      const double r = a[k2] * h[k1] + a[k1] * h[k2];
+      const double tol = kFilterSlack * (a[k1] + a[k2]) * box.scale + kFilterFloor;
+      if (std::min(q0[k], q2[k]) > pc[k] + r + tol || std::max(q0[k], q2[k]) < pc[k] - r - tol)
+        return false;
+    }
   }
   return true;
 }
@@ -449,28 +480,36 @@ class FaceTree {
     }
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen;
     for (size_t k = 0; k < nodes.size(); ++k) {
-      // Only where the box is far looser than the slab volume can be: its middle extent over
-      // kLooseBox times the spread of the vertices along the middle axis (a uniform spread of
-      // length l has variance l^2 / 12). Elsewhere (most nodes of most meshes) the test would
-      // cost more than it saves. The middle eigenvalue is at least the smaller one of each
-      // 2 x 2 block on the diagonal (Courant-Fischer), which is cheaper to find and rules out
-      // most nodes first.
+      // Only where the box is far looser than the slab volume can be, along the middle axis or
+      // the least one: its middle extent over kLooseBox times the spread of the vertices along
+      // the middle axis (a uniform spread of length l has variance l^2 / 12), as a fan's faces
+      // from a rim vertex are; or its least extent over kThinSlice times their spread along the
+      // least axis, as a slice along a diagonal is (the faces of a fan from a centre and the
+      // side faces beside them, in a box from the centre to the rim). Elsewhere (most nodes of
+      // most meshes) the test would cost more than it saves. The middle eigenvalue is at least
+      // the smaller one of each 2 x 2 block on the diagonal (Courant-Fischer), and the least at
+      // least 4 det / trace^2 (the other two multiply to at most (trace / 2)^2): cheaper to
+      // find, they rule out most nodes first.
       const Eigen::Matrix3d& C = moments[k].scatter;
       Vec3 extent = inv * (nodes[k].bounds.hi - nodes[k].bounds.lo);
       std::sort(extent.data(), extent.data() + 3);
-      // Loose: the spread along the middle axis is less than `spread`, that is, the middle
-      // eigenvalue of the scatter matrix (variance times count) less than `bound`.
-      const double spread = extent[1] / kLooseBox;
+      // Loose: the middle eigenvalue of the scatter matrix (variance times count) less than
+      // `bound`, or the least less than `bound_least`.
+      const double spread = extent[1] / kLooseBox, spread_least = extent[0] / kThinSlice;
       const double bound = spread * spread * moments[k].n / 12.0;
+      const double bound_least = spread_least * spread_least * moments[k].n / 12.0;
       bool loose = true;
       for (int i = 0; i < 3 && loose; ++i) {
         const int j = (i + 1) % 3;
         const double mean = 0.5 * (C(i, i) + C(j, j)), half = 0.5 * (C(i, i) - C(j, j));
         loose = mean - std::sqrt(half * half + C(i, j) * C(i, j)) < bound;
       }
-      if (!loose) continue;
-      eigen.computeDirect(C, Eigen::EigenvaluesOnly);
-      if (!(eigen.eigenvalues()[1] < bound)) continue;  // ascending: [1] is the middle one
+      const double trace = C.trace();
+      const bool thin = bound_least > 0 && !(4 * C.determinant() >= bound_least * trace * trace);
+      if (!loose && !thin) continue;
+      eigen.computeDirect(C, Eigen::EigenvaluesOnly);  // ascending
+      const bool slice = thin && eigen.eigenvalues()[0] < bound_least;
+      if (!(slice || (loose && eigen.eigenvalues()[1] < bound))) continue;
       eigen.computeDirect(C);
       // Any axes are valid (see SlabBox); a failed or non-finite solve gets no slab volume.
       if (eigen.info() != Eigen::Success || !eigen.eigenvectors().allFinite()) continue;
@@ -481,6 +520,8 @@ class FaceTree {
       const double norm1 = A.cwiseAbs().rowwise().sum().maxCoeff();  // |A|_1
       const double widen = kFilterSlack * norm1 * S + kFilterFloor;
       SlabBox b;
+      b.scale = norm1 * S;
+      b.edges = slice;
       for (int a = 0; a < 3; ++a) {
         b.axis[a] = A.row(a).transpose();
         b.lo[a] = slabs.lo[a] - widen;

@@ -6,6 +6,7 @@
 #include <random>
 #include <string>
 
+#include "common/bvh.h"
 #include "common/exact_predicates.h"
 #include "test_common.h"
 
@@ -222,6 +223,20 @@ Mesh fan_capped_cylinder(int k) {
   return m;
 }
 
+// The same with a star outline, radii alternating 1 and 1/2 (k even; a gear's outline): each
+// side face runs nearly radially, so its box holds the cap faces of a wide arc, and the cap
+// faces' boxes, from the centre out, hold the side faces of a wide arc too.
+Mesh gear_prism(int k) {
+  Mesh m = fan_capped_cylinder(k);
+  for (int i = 1; i < k; i += 2)
+    for (int c = 0; c < 2; ++c) {
+      Vec3& v = m.vertices[2 + 2 * i + c];
+      v[0] *= 0.5;
+      v[1] *= 0.5;
+    }
+  return m;
+}
+
 // A closed cylinder whose caps are fans around a vertex on their rims, as a CAD export or the
 // OFF reader's fan triangulation of a k-gon makes them: each cap is k - 2 long thin faces
 // (r0, rj, rj+1). Their boxes are as large as the cap, so each holds O(k) of the side faces
@@ -291,6 +306,58 @@ TEST(FindSelfIntersections, AgreesWithEveryPairOnRimFanCylinders) {
   }
 }
 
+// The reference for larger meshes: every pair of faces whose boxes overlap (faces whose boxes
+// miss each other cannot meet; boxes are exact minima and maxima), decided exactly.
+size_t box_pairs(const Mesh& m, const std::vector<char>& skip) {
+  const AabbTree tree = AabbTree::over_faces(m);
+  size_t pairs = 0;
+  for (size_t f = 0; f < m.faces.size(); ++f) {
+    if (skip[f]) continue;
+    tree.for_each_overlap(tree.primitive_bounds(static_cast<int32_t>(f)), [&](int32_t g) {
+      if (static_cast<size_t>(g) > f && !skip[g] && faces_intersect(m, f, g)) ++pairs;
+    });
+  }
+  return pairs;
+}
+
+// Gear prisms of 1,500 and 2,000 points, fine enough that the tree's nodes of cap and side
+// faces get slab volumes along their least axis, with some top rim vertices moved: through the
+// bottom cap, onto its plane inside it, one ulp below that plane, or turned within the top cap
+// to another angle (its side faces then cross cap faces, coplanar along their top edges, and
+// other side faces). Against every pair of faces whose boxes overlap.
+TEST(FindSelfIntersections, AgreesWithEveryPairOnGearPrisms) {
+  std::mt19937 rng(29);
+  std::uniform_real_distribution<double> depth(0.0, 1.0), shrink(0.05, 0.95), turn(0.05, 0.5);
+  for (int trial = 0; trial < 2; ++trial) {
+    const int k = trial == 0 ? 1500 : 2000;
+    Mesh m = gear_prism(k);
+    std::uniform_int_distribution<int> rim(0, k - 1);
+    for (int moved = 0; moved < 4; ++moved) {
+      Vec3& t = m.vertices[2 + 2 * rim(rng)];  // a top rim vertex
+      const double r = shrink(rng);
+      switch (moved) {
+        case 0:
+          t = Vec3(r * t.x(), r * t.y(), -1.0 - depth(rng));
+          break;
+        case 1:
+          t = Vec3(r * t.x(), r * t.y(), -1.0);
+          break;
+        case 2:
+          t = Vec3(r * t.x(), r * t.y(), std::nextafter(-1.0, -2.0));
+          break;
+        default: {
+          const double a = std::atan2(t.y(), t.x()) + turn(rng), len = std::hypot(t.x(), t.y());
+          t = Vec3(len * std::cos(a), len * std::sin(a), 1.0);
+        }
+      }
+    }
+    const std::vector<char> skip = degenerate_faces(m);
+    const size_t expected = box_pairs(m, skip);
+    EXPECT_GE(expected, 1u) << "trial " << trial;
+    EXPECT_EQ(find_self_intersections(m, skip).pairs, expected) << "trial " << trial;
+  }
+}
+
 // k faces on one edge, their third vertices on a circle around it: a non-manifold edge
 // whose faces pairwise meet only along the edge.
 Mesh crowded_edge(int k) {
@@ -307,7 +374,9 @@ Mesh crowded_edge(int k) {
 // vertex or on an edge must not quadruple the filter steps and exact tests, as a search whose
 // candidates are all pairs of faces around a vertex would (every face's box holds the apex),
 // or one that prunes the faces sharing no vertex by their boxes alone would on the rim-fan
-// cylinder (each box of a cap's faces holds the side faces along an arc of the rim).
+// cylinder (each box of a cap's faces holds the side faces along an arc of the rim), or one
+// that prunes them by slab volumes' own axes alone would on the gear prism (a cap face holds
+// the centre, which lies in the slab of every node of side faces).
 // Work proportional to n log2 n grows by 2 (log2 n + 1) / log2 n <= 2.2 from n >= 1,024 faces
 // to twice as many; k^2 grows by 4. The bound 3 lies between, with room on both sides.
 TEST(FindSelfIntersections, WorkAroundHighValenceVerticesGrowsLikeNLogN) {
@@ -317,7 +386,8 @@ TEST(FindSelfIntersections, WorkAroundHighValenceVerticesGrowsLikeNLogN) {
   };
   for (const Shape& s :
        {Shape{"double cone", double_cone}, Shape{"fan-capped cylinder", fan_capped_cylinder},
-        Shape{"rim-fan cylinder", rim_fan_cylinder}, Shape{"crowded edge", crowded_edge}}) {
+        Shape{"rim-fan cylinder", rim_fan_cylinder}, Shape{"gear prism", gear_prism},
+        Shape{"crowded edge", crowded_edge}}) {
     size_t work[2];
     for (int i = 0; i < 2; ++i) {
       const Mesh m = s.make(1024 << i);
