@@ -13,8 +13,13 @@ rim-fan-cylinder K: a closed cylinder of radius 1 and height 1, K quads around, 
 written as K-gons; the reader fan-triangulates each from its first vertex, on the rim, into
 K - 2 long thin faces whose boxes each hold the side faces along an arc of the rim (a search
 that prunes faces sharing no vertex by their boxes alone is quadratic).
+gear-prism K: a prism of height 1 over a K-point star (a gear's outline: radii alternating 1
+and 1/2, K even), its caps fanned from their centres: the side faces run nearly radially, so
+their boxes hold cap faces of a wide arc, and every cap face holds the centre (a search that
+separates faces from its tree's slab volumes by their own axes alone is quadratic).
+gear-dome K: the same with the caps' centres lifted 0.3 out of the caps' planes.
 Used by vobb-bench-self-intersections.
-Usage: fan_meshes.py double-cone|crowded-edge|spikes|rim-fan-cylinder K OUT.off
+Usage: fan_meshes.py double-cone|crowded-edge|spikes|rim-fan-cylinder|gear-prism|gear-dome K OUT.off
 """
 import math
 import random
@@ -69,13 +74,28 @@ def rim_fan_cylinder(k):
     return verts, faces
 
 
+def gear_prism(k, lift=0.0):
+    verts = [(0.0, 0.0, 1.0 + lift), (0.0, 0.0, -lift)]
+    for i in range(k):
+        t = 2 * math.pi * i / k
+        r = 1.0 if i % 2 == 0 else 0.5
+        verts += [(r * math.cos(t), r * math.sin(t), 1.0), (r * math.cos(t), r * math.sin(t), 0.0)]
+    faces = []
+    for i in range(k):
+        a, c = 2 + 2 * i, 3 + 2 * i
+        b, d = 2 + 2 * ((i + 1) % k), 3 + 2 * ((i + 1) % k)
+        faces += [(0, a, b), (1, d, c), (a, c, d), (a, d, b)]
+    return verts, faces
+
+
 def cross(p, q):
     return (p[1] * q[2] - p[2] * q[1], p[2] * q[0] - p[0] * q[2], p[0] * q[1] - p[1] * q[0])
 
 
 def main():
     shapes = {"double-cone": double_cone, "crowded-edge": crowded_edge, "spikes": spikes,
-              "rim-fan-cylinder": rim_fan_cylinder}
+              "rim-fan-cylinder": rim_fan_cylinder, "gear-prism": gear_prism,
+              "gear-dome": lambda k: gear_prism(k, 0.3)}
     if len(sys.argv) != 4 or sys.argv[1] not in shapes:
         sys.exit(__doc__)
     verts, faces = shapes[sys.argv[1]](int(sys.argv[2]))
