@@ -253,23 +253,8 @@ class ColumnFilter {
  public:
   explicit ColumnFilter(const Obb& box);
   bool operator()(const Aabb& b) const {
-    if (b.empty()) return false;
-    double ctr[3], ext[3], size[3], coords = 0;
-    for (int i = 0; i < 3; ++i) {
-      ctr[i] = 0.5 * (b.lo[i] + b.hi[i]) - c_[i];
-      ext[i] = 0.5 * (b.hi[i] - b.lo[i]);
-      size[i] = std::abs(b.lo[i]) + std::abs(b.hi[i]) + abs_c_[i];
-      coords += size[i];
-    }
-    for (int k = 0; k < 3; ++k) {
-      const double mid = ctr[0] * w_[k][0] + ctr[1] * w_[k][1] + ctr[2] * w_[k][2];
-      const double rad = abs_w_[k][0] * ext[0] + abs_w_[k][1] * ext[1] + abs_w_[k][2] * ext[2];
-      const double scale = abs_w_[k][0] * size[0] + abs_w_[k][1] * size[1] + abs_w_[k][2] * size[2];
-      const double pad = pad_of(k, scale, rad, coords);
-      if (mid - rad > R_ + pad && k < 2) return false;  // beyond the +side
-      if (mid + rad < -R_ - pad) return false;          // beyond the -side (or below)
-    }
-    return true;
+    double pad[3];
+    return meets(b, pad);
   }
   // Where a triangle that `b` holds (its box) may lie: 0 surely outside the column (b is, by
   // the test above, or the three corners lie surely beyond one side, so that the whole
@@ -277,23 +262,8 @@ class ColumnFilter {
   // 2 possibly in the box itself. A sliver's box may meet the column where the sliver does not.
   // The corners are tested with b's pads, which bound every point of b.
   int place(const Aabb& b, const Vec3& p0, const Vec3& p1, const Vec3& p2) const {
-    if (b.empty()) return 0;
-    double ctr[3], ext[3], size[3], coords = 0;
-    for (int i = 0; i < 3; ++i) {
-      ctr[i] = 0.5 * (b.lo[i] + b.hi[i]) - c_[i];
-      ext[i] = 0.5 * (b.hi[i] - b.lo[i]);
-      size[i] = std::abs(b.lo[i]) + std::abs(b.hi[i]) + abs_c_[i];
-      coords += size[i];
-    }
     double pad[3];
-    for (int k = 0; k < 3; ++k) {
-      const double mid = ctr[0] * w_[k][0] + ctr[1] * w_[k][1] + ctr[2] * w_[k][2];
-      const double rad = abs_w_[k][0] * ext[0] + abs_w_[k][1] * ext[1] + abs_w_[k][2] * ext[2];
-      const double scale = abs_w_[k][0] * size[0] + abs_w_[k][1] * size[1] + abs_w_[k][2] * size[2];
-      pad[k] = pad_of(k, scale, rad, coords);
-      if (mid - rad > R_ + pad[k] && k < 2) return 0;
-      if (mid + rad < -R_ - pad[k]) return 0;
-    }
+    if (!meets(b, pad)) return 0;
     unsigned beyond = ~0u;  // the sides every corner so far lies surely beyond
     for (const Vec3* p : {&p0, &p1, &p2}) {
       const double d[3] = {(*p)[0] - c_[0], (*p)[1] - c_[1], (*p)[2] - c_[2]};
@@ -311,11 +281,29 @@ class ColumnFilter {
   bool flat() const { return flat_; }  // a half extent is 0: the box has no volume
 
  private:
-  // The double sums' own rounding, relative 1e-9 of the magnitudes, and 2^-1060 absolute
-  // where they are subnormal; then the frame's: w off by w_err per component over
-  // sum |p - c| <= coords, and R by R_err.
-  double pad_of(int k, double scale, double rad, double coords) const {
-    return 1e-9 * (scale + rad + R_) + 0x1p-1060 * (1 + coords) + w_err_[k] * coords + R_err_;
+  // operator()'s test, with the pad of each T_k over b in pad[k] (those up to the side that
+  // rejects b, where one does).
+  bool meets(const Aabb& b, double* pad) const {
+    if (b.empty()) return false;
+    double ctr[3], ext[3], size[3], coords = 0;
+    for (int i = 0; i < 3; ++i) {
+      ctr[i] = 0.5 * (b.lo[i] + b.hi[i]) - c_[i];
+      ext[i] = 0.5 * (b.hi[i] - b.lo[i]);
+      size[i] = std::abs(b.lo[i]) + std::abs(b.hi[i]) + abs_c_[i];
+      coords += size[i];
+    }
+    for (int k = 0; k < 3; ++k) {
+      const double mid = ctr[0] * w_[k][0] + ctr[1] * w_[k][1] + ctr[2] * w_[k][2];
+      const double rad = abs_w_[k][0] * ext[0] + abs_w_[k][1] * ext[1] + abs_w_[k][2] * ext[2];
+      const double scale = abs_w_[k][0] * size[0] + abs_w_[k][1] * size[1] + abs_w_[k][2] * size[2];
+      // The double sums' own rounding, relative 1e-9 of the magnitudes, and 2^-1060 absolute
+      // where they are subnormal; then the frame's: w off by w_err per component over
+      // sum |p - c| <= coords, and R by R_err.
+      pad[k] = 1e-9 * (scale + rad + R_) + 0x1p-1060 * (1 + coords) + w_err_[k] * coords + R_err_;
+      if (mid - rad > R_ + pad[k] && k < 2) return false;  // beyond the +side
+      if (mid + rad < -R_ - pad[k]) return false;          // beyond the -side (or below)
+    }
+    return true;
   }
   static constexpr unsigned kTopSide = 1u << 4;  // the +side of T_2: the box's, not the column's
 

@@ -146,7 +146,9 @@ TEST(ColumnFilter, ATriangleItRefusesAddsNothing) {
                                            box_clip::to_frame(frame, tri[1]),
                                            box_clip::to_frame(frame, tri[2])};
       Rational term;
-      if (box_clip::face_term6(in_frame, R, &term)) ASSERT_EQ(term, 0) << trial << " " << t;
+      if (box_clip::face_term6(in_frame, R, &term)) {
+        ASSERT_EQ(term, 0) << trial << " " << t;
+      }
     }
   }
   EXPECT_GT(refused, 10000);

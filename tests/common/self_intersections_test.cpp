@@ -260,6 +260,13 @@ Mesh rim_fan_cylinder(int k) {
   return m;
 }
 
+// A top rim vertex t moved toward the axis by the factor r and down to the bottom cap (the
+// plane z = -1): through it by `depth` (how = 0), onto it (1) or one ulp below it (2).
+void sink_to_bottom_cap(Vec3* t, int how, double r, double depth) {
+  const double z = how == 0 ? -1.0 - depth : how == 1 ? -1.0 : std::nextafter(-1.0, -2.0);
+  *t = Vec3(r * t->x(), r * t->y(), z);
+}
+
 // Rim-fan cylinders with some top rim vertices moved: through the bottom cap (the faces around
 // them pierce its long thin faces), onto its plane inside it (they touch them), one ulp below
 // that plane (they cross them by one ulp, where the slab volumes' rounding decides) or onto a
@@ -287,20 +294,11 @@ TEST(FindSelfIntersections, AgreesWithEveryPairOnRimFanCylinders) {
     for (int moved = 0; moved < 3; ++moved) {
       Vec3& t = m.vertices[2 * rim(rng) + 1];
       const double r = shrink(rng);
-      switch ((trial + moved) % 4) {
-        case 0:
-          t = Vec3(r * t.x(), r * t.y(), -1.0 - depth(rng));
-          break;
-        case 1:
-          t = Vec3(r * t.x(), r * t.y(), -1.0);
-          break;
-        case 2:
-          t = Vec3(r * t.x(), r * t.y(), std::nextafter(-1.0, -2.0));
-          break;
-        default:
-          t = m.vertices[2 * rim(rng)];
-          break;
-      }
+      const int how = (trial + moved) % 4;
+      if (how < 3)
+        sink_to_bottom_cap(&t, how, r, how == 0 ? depth(rng) : 0.0);
+      else
+        t = m.vertices[2 * rim(rng)];
     }
     expect_agrees_with_every_pair(m, "trial " + std::to_string(trial));
   }
@@ -335,20 +333,11 @@ TEST(FindSelfIntersections, AgreesWithEveryPairOnGearPrisms) {
     for (int moved = 0; moved < 4; ++moved) {
       Vec3& t = m.vertices[2 + 2 * rim(rng)];  // a top rim vertex
       const double r = shrink(rng);
-      switch (moved) {
-        case 0:
-          t = Vec3(r * t.x(), r * t.y(), -1.0 - depth(rng));
-          break;
-        case 1:
-          t = Vec3(r * t.x(), r * t.y(), -1.0);
-          break;
-        case 2:
-          t = Vec3(r * t.x(), r * t.y(), std::nextafter(-1.0, -2.0));
-          break;
-        default: {
-          const double a = std::atan2(t.y(), t.x()) + turn(rng), len = std::hypot(t.x(), t.y());
-          t = Vec3(len * std::cos(a), len * std::sin(a), 1.0);
-        }
+      if (moved < 3) {
+        sink_to_bottom_cap(&t, moved, r, moved == 0 ? depth(rng) : 0.0);
+      } else {
+        const double a = std::atan2(t.y(), t.x()) + turn(rng), len = std::hypot(t.x(), t.y());
+        t = Vec3(len * std::cos(a), len * std::sin(a), 1.0);
       }
     }
     const std::vector<char> skip = degenerate_faces(m);
