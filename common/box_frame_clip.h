@@ -317,8 +317,8 @@ class ColumnFilter {
 
 // The same certified solid with its edge vectors relabelled ({c + sum t_k u_k} is the same set
 // in any order) so that its column (T_2 >= -R, along u_0 x u_1) leaves `bounds` (the mesh's)
-// soonest: fewer faces lie above the box, as a rule. A heuristic of no cost beyond the box's
-// six corners of `bounds`; any order gives the same exact OBV.
+// soonest: fewer faces lie above the box, as a rule. A heuristic that costs the eight corners
+// of `bounds` for each of the six orders; any order gives the same exact OBV.
 Obb shortest_column(const Obb& box, const Aabb& bounds);
 
 // A box labelled for its column, and the faces of that column: those that ColumnFilter::place
