@@ -103,7 +103,8 @@ Mesh rod(const Vec3& a, int rings, int sides, double r, double L) {
   return m;
 }
 
-// The faces a labelling's column visits: those ColumnFilter::place puts in it.
+// The faces a labelling's column visits: those ColumnFilter::place puts in it, counted through
+// visit_accepted, apart from column_of's own walk.
 size_t visited(const Mesh& mesh, const AabbTree& faces, const Obb& box) {
   const box_clip::ColumnFilter f(box);
   size_t n = 0;
