@@ -352,6 +352,160 @@ Aabb cone_box(const Vec3& u, const Vec3& a, const Vec3& b) {
   return box;
 }
 
+// ---- fans ordered by azimuth ------------------------------------------------------------
+//
+// The faces around a vertex v, each with its arc of directions from v (cone_box), ordered by
+// the angle at which a linear map L : R^3 -> R^2 sends those directions. L sends the arc from
+// p to q (less than 180 degrees) onto positive multiples of the segment L p -> L q, so the
+// angles of the arc's images form the arc of the circle swept by that segment, the shorter
+// way round, unless the segment passes through 0. Two faces whose cones share a direction w
+// both hold the angle of L w (or, where L w = 0, both segments pass through 0). So faces whose
+// angle intervals are disjoint do not meet beyond v, for any L. With L the projection across
+// the fan's axis (its summed normal, or along a sharp cone its summed directions), the faces
+// of a cone's or dome's apex span short intervals around it. Boxes of the arcs cannot show
+// that where the arcs run in and out along a zigzag rim (a gear's outline fanned from its
+// lifted centre): each box then spans an arc of the rim as wide as its radial extent, O(k)
+// boxes overlap each, and the search is quadratic. Intervals of k faces that overlap are
+// listed in k log k plus their number.
+//
+// Angles are pseudo-angles in [0, 4): (a, b) in the quadrant s = 0..3 maps to s plus the
+// share of its second coordinate in that quadrant's frame, e.g. b / (a + b) for a > 0 <= b.
+// They increase with the angle, opposite vectors lie exactly 2 apart, and their derivative
+// in the angle is 1 / (cos t + sin t)^2, in [1/2, 1], so they move no more than the angle.
+// Rounding (u = 2^-53): with d = x - v rounded (componentwise within u |d_i|) and L's rows
+// e1, e2 rounded (any rows define a valid L), each computed coordinate of L d is within
+// eta = 4.02 u |d|_inf E of the exact one, E = max(|e1|_1, |e2|_1), plus 3 * 2^-1074 where
+// products underflow. With m = |a| + |b| computed, the vector moves by at most
+// sqrt(2) eta <= 2 eta / m times its length, so its angle by at most pi eta / m (for
+// 2 eta / m <= 1), and the pseudo-angle's own rounding adds at most 8u. The pad
+// kFilterSlack (|d|_inf E + kFilterFloor) / m + kFilterSlack exceeds that by over 300 times;
+// where it exceeds kWideArc, or m is not a finite positive number, the face is "wide".
+constexpr double kWideArc = 0.25;  // in pseudo-angle units (a quarter turn is 1)
+
+double pseudo_angle(double a, double b) {
+  if (a > 0 && b >= 0) return b / (a + b);
+  if (a <= 0 && b > 0) return 1.0 + (-a) / (b - a);
+  if (a < 0 && b <= 0) return 2.0 + (-b) / (-a - b);
+  return 3.0 + a / (a - b);  // a >= 0 > b (a = b = 0 is excluded by the caller)
+}
+
+// The pseudo-angle of L (x - v) and its pad; false where the face must count as wide.
+bool azimuth(const Vec3& d, const Vec3& e1, const Vec3& e2, double E, double* angle, double* pad) {
+  const double a = d.dot(e1), b = d.dot(e2);
+  const double m = std::abs(a) + std::abs(b);
+  *pad = kFilterSlack * (max_abs(d) * E + kFilterFloor) / m + kFilterSlack;
+  if (!(m > 0) || !(*pad <= kWideArc)) return false;  // also catches inf and NaN
+  *angle = pseudo_angle(a, b);
+  return true;
+}
+
+// Calls visit(i, j) once for each pair i < j of the fan's faces (indices into `fan`) whose
+// cones may share a direction (conservative: every pair that meets beyond v is visited),
+// stopping early when stop() turns true. `fan` lists the faces around v (none skipped, none
+// degenerate). Returns false, having visited nothing, where the fan suits this search badly:
+// an edge at v on more than two of its faces (a non-manifold edge of c faces makes c^2 / 2
+// candidates that the tree search skips by subtree), no usable axis, or more than
+// kMaxWide wide faces (each is visited against every other).
+constexpr int32_t kMaxWide = 16;
+
+template <typename Visit, typename Stop>
+bool visit_fan_by_azimuth(const Mesh& mesh, int32_t v, const int32_t* fan, int32_t k, Visit visit,
+                          Stop stop) {
+  std::vector<int32_t> others;  // the fan's other vertices, each on two faces at most
+  others.reserve(2 * k);
+  // The axis: the faces' summed unit normals (oriented as listed) across a flat or shallow
+  // fan, the edges' summed unit directions along a sharp cone, whichever is longer per term.
+  Vec3 normals = Vec3::Zero(), directions = Vec3::Zero();
+  auto unit = [](const Vec3& x) {  // scaled first, so that nothing overflows or underflows
+    const Vec3 y = x / max_abs(x);
+    return y.norm() > 0 ? Vec3(y.normalized()) : Vec3::Zero();
+  };
+  std::vector<std::array<Vec3, 2>> dirs(k);
+  for (int32_t i = 0; i < k; ++i) {
+    const Face& F = mesh.faces[fan[i]];
+    const int c = F[0] == v ? 0 : F[1] == v ? 1 : 2;
+    const int32_t a = F[(c + 1) % 3], b = F[(c + 2) % 3];
+    others.push_back(a);
+    others.push_back(b);
+    dirs[i] = {mesh.vertices[a] - mesh.vertices[v], mesh.vertices[b] - mesh.vertices[v]};
+    const Vec3 p = unit(dirs[i][0]), q = unit(dirs[i][1]);
+    normals += unit(p.cross(q));
+    directions += p + q;
+  }
+  std::sort(others.begin(), others.end());
+  for (size_t i = 2; i < others.size(); ++i)
+    if (others[i] == others[i - 2]) return false;
+  const double by_normals = max_abs(normals) / k, by_directions = max_abs(directions) / (2 * k);
+  const Vec3 axis = by_normals >= by_directions ? normals : directions;
+  if (!(std::max(by_normals, by_directions) > 1e-3)) return false;  // both nearly cancel (or NaN)
+  // L's rows: two vectors across the axis (their rounding does not matter, see above).
+  int least = 0;
+  for (int i = 1; i < 3; ++i)
+    if (std::abs(axis[i]) < std::abs(axis[least])) least = i;
+  const Vec3 e1 = unit(axis.cross(Vec3::Unit(least)));
+  const Vec3 e2 = unit(axis.cross(e1));
+  const double E = std::max(e1.cwiseAbs().sum(), e2.cwiseAbs().sum());
+
+  struct Interval {
+    double start, width;  // start in [0, 4), width < 2
+    int32_t face;
+  };
+  std::vector<Interval> narrow;
+  std::vector<int32_t> wide;
+  std::vector<char> is_wide(k, 0);
+  narrow.reserve(k);
+  for (int32_t i = 0; i < k; ++i) {
+    double ap, pp, aq, pq;
+    bool ok = azimuth(dirs[i][0], e1, e2, E, &ap, &pp) && azimuth(dirs[i][1], e1, e2, E, &aq, &pq);
+    if (ok) {
+      // The exact pseudo-angles lie within pp of ap and pq of aq, and their difference within
+      // pad of diff (taken in [0, 4); the extra kFilterSlack covers its rounding). Where the
+      // shorter way round, padded, is under 2 (half the circle), diff lies over pad from 2, so
+      // the exact shorter way is the same; otherwise the segment may pass through 0, and the
+      // face is wide.
+      const double pad = pp + pq + kFilterSlack;
+      double diff = aq - ap;
+      if (diff < 0) diff += 4.0;
+      const double width = std::min(diff, 4.0 - diff) + pad;
+      ok = width < 2.0;
+      if (ok) {
+        double start = diff < 2.0 ? ap - pp : aq - pq;
+        if (start < 0) start += 4.0;
+        if (start >= 4.0) start = 0.0;  // a tiny negative start rounds up to 4, the same point
+        narrow.push_back({start, width, i});
+      }
+    }
+    if (!ok) {
+      if (static_cast<int32_t>(wide.size()) == kMaxWide) return false;
+      wide.push_back(i);
+      is_wide[i] = 1;
+    }
+  }
+  // Wide faces against every other face (pairs of wide faces once).
+  for (int32_t i : wide)
+    for (int32_t j = 0; j < k && !stop(); ++j)
+      if (j != i && (!is_wide[j] || j > i)) visit(std::min(i, j), std::max(i, j));
+  // Two circular intervals each narrower than half the circle overlap exactly when one's
+  // start lies in the other, and not both ways round (that would take widths summing to 4);
+  // with equal starts, the pair is met from whichever comes first in the sorted order. So
+  // scanning forward from each start, round the circle, lists each overlapping pair once.
+  std::sort(narrow.begin(), narrow.end(), [](const Interval& x, const Interval& y) {
+    return x.start != y.start ? x.start < y.start : x.face < y.face;
+  });
+  const size_t count = narrow.size();
+  for (size_t x = 0; x < count && !stop(); ++x) {
+    const double end = narrow[x].start + narrow[x].width;
+    for (size_t step = 1; step < count && !stop(); ++step) {
+      const size_t y = (x + step) % count;
+      const double start = narrow[y].start + (x + step >= count ? 4.0 : 0.0);
+      if (start > end) break;
+      const int32_t i = narrow[x].face, j = narrow[y].face;
+      visit(std::min(i, j), std::max(i, j));
+    }
+  }
+  return true;
+}
+
 // Faces (u, v, w) on edge uv meet beyond it exactly when their third vertices lie in the
 // same half-plane bounded by the line uv (faces_intersect: coplanar, same side). Sorting the
 // third vertices by their half-plane's angle around uv, exactly, puts each class of equal
@@ -713,6 +867,16 @@ SelfIntersectionSearch find_self_intersections(const Mesh& mesh, const std::vect
           }
         continue;
       }
+      if (visit_fan_by_azimuth(
+              mesh, static_cast<int32_t>(v), fan, k,
+              [&](int32_t i, int32_t j) {
+                ++out.filter_steps;
+                if (cones[i].overlaps(cones[j]) &&
+                    shared_vertices(mesh.faces[fan[i]], mesh.faces[fan[j]]) == 1)
+                  decide(fan[i], fan[j]);
+              },
+              done))
+        continue;
       // Faces that share an edge with fan[i] as well are left to the edge lists: subtrees
       // whose faces all list another vertex of fan[i] are skipped (on a non-manifold edge of c
       // faces, the c^2 / 2 such pairs would otherwise all pass the cone filter).

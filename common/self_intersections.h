@@ -13,9 +13,12 @@
 // holds that vertex; and an edge shared by c faces (non-manifold when c > 2) costs c log c:
 //   - two (an edge): the faces listed on that edge, sorted exactly by the half-plane of their
 //     third vertex around it (two meet exactly when those half-planes are the same);
-//   - one (a vertex v): faces around v whose cones of directions from v share a direction,
-//     found through boxes around each cone's arc on the unit sphere, skipping subtrees of
-//     faces that share an edge with the query as well;
+//   - one (a vertex v): faces around v whose cones of directions from v may share a
+//     direction: where no edge at v is non-manifold, those whose arcs' angles around the fan's
+//     axis overlap (sorted intervals, so a cone's or dome's apex costs k log k even where its
+//     rim zigzags); otherwise, or where more than a few arcs pass near that axis, through a
+//     tree of boxes around each cone's arc on the unit sphere, skipping subtrees of faces that
+//     share an edge with the query as well; each candidate pair's boxes are compared too;
 //   - none: a tree over the faces, descended only into boxes that the query triangle may meet
 //     (a separating-axis test) and, where a node's box is much looser than its faces (long
 //     thin faces running diagonally), into a parallelepiped along their covariance axes that
