@@ -527,31 +527,51 @@ TEST(FindSelfIntersections, WorkAroundHighValenceVerticesGrowsLikeNLogN) {
   }
 }
 
+// k faces around one vertex, all in the plane z = 0 and turning the same way, each from an
+// angle in [0, 0.1] to one in [1, 1.1]: every two overlap beyond the vertex they share, and
+// the fan's angle intervals all overlap (k (k - 1) / 2 candidates, listed in several batches).
+Mesh overlapping_fan(int k) {
+  std::mt19937 rng(43);
+  std::uniform_real_distribution<double> jitter(0.0, 0.1), radius(0.5, 2.0);
+  Mesh m;
+  m.vertices = {Vec3(0, 0, 0)};
+  for (int32_t i = 0; i < k; ++i) {
+    const double a = jitter(rng), b = 1.0 + jitter(rng);
+    m.vertices.push_back(radius(rng) * Vec3(std::cos(a), std::sin(a), 0));
+    m.vertices.push_back(radius(rng) * Vec3(std::cos(b), std::sin(b), 0));
+    m.faces.push_back({0, 2 * i + 1, 2 * i + 2});
+  }
+  return m;
+}
+
 // A caller that only needs "many" stops the search at stop_at pairs. Every pair of the
-// pinwheel meets, so a search that stops where it should has made exactly stop_at exact tests.
+// pinwheel (sharing no vertex) and of the overlapping fan (sharing one) meets, so a search
+// that stops where it should has made exactly stop_at exact tests.
 TEST(FindSelfIntersections, StopsAtTheGivenNumberOfPairs) {
   const int k = 200;
   const size_t all = k * (k - 1) / 2;  // 19,900
-  const Mesh m = test::pinwheel(k);
-  const std::vector<char> skip(m.faces.size(), 0);
-  const SelfIntersectionSearch full = find_self_intersections(m, skip);
-  EXPECT_EQ(full.pairs, all);
-  EXPECT_FALSE(full.stopped);
-  const SelfIntersectionSearch cut = find_self_intersections(m, skip, 1000);
-  EXPECT_TRUE(cut.stopped);
-  EXPECT_EQ(cut.pairs, 1000u);
-  EXPECT_EQ(cut.exact_tests, 1000u);
-  EXPECT_LT(cut.filter_steps, full.filter_steps);
-  const SelfIntersectionSearch again = find_self_intersections(m, skip, 1000);  // deterministic
-  EXPECT_EQ(again.exact_tests, cut.exact_tests);
-  EXPECT_EQ(again.filter_steps, cut.filter_steps);
-  // A limit the mesh does not reach changes nothing; one it just reaches stops there.
-  const SelfIntersectionSearch above = find_self_intersections(m, skip, all + 1);
-  EXPECT_FALSE(above.stopped);
-  EXPECT_EQ(above.pairs, all);
-  const SelfIntersectionSearch at = find_self_intersections(m, skip, all);
-  EXPECT_TRUE(at.stopped);
-  EXPECT_EQ(at.pairs, all);
+  for (const Mesh& m : {test::pinwheel(k), overlapping_fan(k)}) {
+    const std::vector<char> skip(m.faces.size(), 0);
+    const SelfIntersectionSearch full = find_self_intersections(m, skip);
+    EXPECT_EQ(full.pairs, all);
+    EXPECT_EQ(every_pair(m, skip), all);
+    EXPECT_FALSE(full.stopped);
+    const SelfIntersectionSearch cut = find_self_intersections(m, skip, 1000);
+    EXPECT_TRUE(cut.stopped);
+    EXPECT_EQ(cut.pairs, 1000u);
+    EXPECT_EQ(cut.exact_tests, 1000u);
+    EXPECT_LT(cut.filter_steps, full.filter_steps);
+    const SelfIntersectionSearch again = find_self_intersections(m, skip, 1000);  // deterministic
+    EXPECT_EQ(again.exact_tests, cut.exact_tests);
+    EXPECT_EQ(again.filter_steps, cut.filter_steps);
+    // A limit the mesh does not reach changes nothing; one it just reaches stops there.
+    const SelfIntersectionSearch above = find_self_intersections(m, skip, all + 1);
+    EXPECT_FALSE(above.stopped);
+    EXPECT_EQ(above.pairs, all);
+    const SelfIntersectionSearch at = find_self_intersections(m, skip, all);
+    EXPECT_TRUE(at.stopped);
+    EXPECT_EQ(at.pairs, all);
+  }
 }
 
 }  // namespace
