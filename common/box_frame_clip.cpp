@@ -126,8 +126,8 @@ Column fewest_faces_column(const Obb& box, const Mesh& mesh, const AabbTree& fac
   const std::array<int, 6> order = ranked(box, faces.bounds());
   std::array<std::optional<ColumnFilter>, 6> filter;
   for (int o = 0; o < 6; ++o) filter[o].emplace(relabelled(box, order[o]));
-  Column out{relabelled(box, order[0]), {}};
-  if (filter[0]->flat()) return out;  // no volume in any order: no face is visited
+  Column out{relabelled(box, order[0]), {}, filter[0]->flat()};
+  if (out.flat) return out;  // no volume in any order: no face is visited
   // The first column's faces as positions in faces.order() (sorted, they are visit_accepted's
   // order), gathered nearest the box first, until they outnumber those that may meet the box
   // more than allowed.
@@ -164,9 +164,9 @@ Column fewest_faces_column(const Obb& box, const Mesh& mesh, const AabbTree& fac
 }
 
 Column column_of(const Obb& box, const Mesh& mesh, const AabbTree& faces) {
-  Column out{box, {}};
   const ColumnFilter f(box);
-  if (f.flat()) return out;
+  Column out{box, {}, f.flat()};
+  if (out.flat) return out;
   walk(
       mesh, faces, f, nullptr, [] { return true; },
       [&](int32_t i, int) { out.faces.push_back(faces.order()[i]); });
@@ -174,8 +174,8 @@ Column column_of(const Obb& box, const Mesh& mesh, const AabbTree& faces) {
 }
 
 Rational box_obv_rational(const Mesh& mesh, const AabbTree& faces, const Obb& box) {
-  if (ColumnFilter(box).flat()) return Rational(0);  // a flat box has no volume, inside or out
   const Column column = column_of(box, mesh, faces);
+  if (column.flat) return Rational(0);  // a flat box has no volume, inside or out
   const Frame<Rational> frame = make_frame<Rational>(box);
   if (sgn(frame.det) == 0) return Rational(0);
   const Rational R = abs(frame.det);

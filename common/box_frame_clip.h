@@ -326,6 +326,7 @@ Obb shortest_column(const Obb& box, const Aabb& bounds);
 struct Column {
   Obb box;
   std::vector<int32_t> faces;
+  bool flat = false;  // a half extent is 0: no volume, inside or out
 };
 
 // The column of the box as labelled.

@@ -287,7 +287,7 @@ Enclosed FilteredSolver::obv(const Obb& box, mpfr_prec_t bits) const {
   // Relabelled so that its column meets few faces: the same solid, less work.
   const box_clip::Column column = box_clip::fewest_faces_column(box, mesh_, faces_);
   const Obb& labelled = column.box;
-  if (box_clip::ColumnFilter(labelled).flat()) {
+  if (column.flat) {
     Enclosed out;
     out.exact = true;  // no volume: 0, exactly
     return out;

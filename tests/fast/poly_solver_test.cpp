@@ -248,6 +248,7 @@ TEST(PolySolver, DegenerateAndOutOfRangeBoxes) {
   EXPECT_EQ(f.lo, 0.0);
   EXPECT_EQ(f.hi, 0.0);
   EXPECT_EQ(poly.estimate(flat), 0.0);
+  EXPECT_TRUE(poly.exact(flat) == Rational(0));
   // Half extents of 2^110: R = |det U| = 2^330 lies beyond the safe range 2^300.
   const Obb huge = rotated_box(Vec3(0.5, 0.5, 0.5), Vec3(0x1p110, 0x1p110, 0x1p110), 0.4);
   const PolyObv h = poly.evaluate(huge);
