@@ -355,31 +355,14 @@ Aabb cone_box(const Vec3& u, const Vec3& a, const Vec3& b) {
 // ---- fans ordered by azimuth ------------------------------------------------------------
 //
 // The faces around a vertex v, each with its arc of directions from v (cone_box), ordered by
-// the angle at which a linear map L : R^3 -> R^2 sends those directions. L sends the arc from
-// p to q (less than 180 degrees) onto positive multiples of the segment L p -> L q, so the
-// angles of the arc's images form the arc of the circle swept by that segment, the shorter
-// way round, unless the segment passes through 0. Two faces whose cones share a direction w
-// both hold the angle of L w (or, where L w = 0, both segments pass through 0). So faces whose
-// angle intervals are disjoint do not meet beyond v, for any L. With L the projection across
-// the fan's axis (its summed normal, or along a sharp cone its summed directions), the faces
-// of a cone's or dome's apex span short intervals around it. Boxes of the arcs cannot show
-// that where the arcs run in and out along a zigzag rim (a gear's outline fanned from its
-// lifted centre): each box then spans an arc of the rim as wide as its radial extent, O(k)
-// boxes overlap each, and the search is quadratic. Intervals of k faces that overlap are
-// listed in k log k plus their number.
-//
-// Angles are pseudo-angles in [0, 4): (a, b) in the quadrant s = 0..3 maps to s plus the
-// share of its second coordinate in that quadrant's frame, e.g. b / (a + b) for a > 0 <= b.
-// They increase with the angle, opposite vectors lie exactly 2 apart, and their derivative
-// in the angle is 1 / (cos t + sin t)^2, in [1/2, 1], so they move no more than the angle.
-// Rounding (u = 2^-53): with d = x - v rounded (componentwise within u |d_i|) and L's rows
-// e1, e2 rounded (any rows define a valid L), each computed coordinate of L d is within
-// eta = 4.02 u |d|_inf E of the exact one, E = max(|e1|_1, |e2|_1), plus 3 * 2^-1074 where
-// products underflow. With m = |a| + |b| computed, the vector moves by at most
-// sqrt(2) eta <= 2 eta / m times its length, so its angle by at most pi eta / m (for
-// 2 eta / m <= 1), and the pseudo-angle's own rounding adds at most 8u. The pad
-// kFilterSlack (|d|_inf E + kFilterFloor) / m + kFilterSlack exceeds that by over 300 times;
-// where it exceeds kWideArc, or m is not a finite positive number, the face is "wide".
+// the angle at which a linear map L : R^3 -> R^2 (the projection across the fan's axis) sends
+// those directions: faces whose angle intervals are disjoint do not meet beyond v, for any L,
+// and the overlapping intervals of k faces are listed in k log k plus their number. Angles
+// are pseudo-angles in [0, 4) (a quarter turn is 1), each padded for its rounding by
+// kFilterSlack (|d|_inf E + kFilterFloor) / m + kFilterSlack, for d = x - v, m = |L d|_1 as
+// computed, E the larger 1-norm of L's rows; a face whose pad exceeds kWideArc, or whose
+// interval may reach half the circle, is "wide". Derivation: docs/derivations.md, "Fans
+// ordered by angle".
 constexpr double kWideArc = 0.25;  // in pseudo-angle units (a quarter turn is 1)
 
 double pseudo_angle(double a, double b) {
