@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 
 #include "common/bvh.h"
 #include "common/exact_predicates.h"
@@ -363,7 +364,9 @@ Aabb cone_box(const Vec3& u, const Vec3& a, const Vec3& b) {
 // computed, E the larger 1-norm of L's rows; a face whose pad exceeds kWideArc, or whose
 // interval may reach half the circle, is "wide". Derivation: docs/derivations.md, "Fans
 // ordered by angle".
-constexpr double kWideArc = 0.25;  // in pseudo-angle units (a quarter turn is 1)
+constexpr double kWideArc = 0.25;
+constexpr double kInfinity =
+    std::numeric_limits<double>::infinity();  // in pseudo-angle units (a quarter turn is 1)
 
 double pseudo_angle(double a, double b) {
   if (a > 0 && b >= 0) return b / (a + b);
@@ -377,7 +380,7 @@ bool azimuth(const Vec3& d, const Vec3& e1, const Vec3& e2, double E, double* an
   const double a = d.dot(e1), b = d.dot(e2);
   const double m = std::abs(a) + std::abs(b);
   *pad = kFilterSlack * (max_abs(d) * E + kFilterFloor) / m + kFilterSlack;
-  if (!(m > 0) || !(*pad <= kWideArc)) return false;  // also catches inf and NaN
+  if (!(m > 0) || !(m < kInfinity) || !(*pad <= kWideArc)) return false;  // also NaN
   *angle = pseudo_angle(a, b);
   return true;
 }
@@ -459,18 +462,19 @@ class FanSweep {
     double ap, pp, aq, pq;
     bool ok = azimuth(dirs[i][0], e1, e2, E, &ap, &pp) && azimuth(dirs[i][1], e1, e2, E, &aq, &pq);
     if (ok) {
-      // The exact pseudo-angles lie within pp of ap and pq of aq, and their difference within
-      // pad of diff (taken in [0, 4); the extra kFilterSlack covers its rounding). Where the
-      // shorter way round, padded, is under 2 (half the circle), diff lies over pad from 2, so
-      // the exact shorter way is the same; otherwise the segment may pass through 0, and the
-      // face is wide.
+      // The exact pseudo-angles lie within pp of ap and pq of aq, so both lie in the range
+      // from the nearer way round's first end less pad to its other end plus pad (pad also
+      // covers the rounding of diff and of the sums below); where that range is under half the
+      // circle, the exact arc between them, the shorter way round, lies in it. Otherwise the
+      // segment may pass through 0, and the face is wide. The margin below 2 keeps two widths'
+      // rounded sums from both reaching the other's start (each pair is listed once).
       const double pad = pp + pq + kFilterSlack;
       double diff = aq - ap;
       if (diff < 0) diff += 4.0;
-      const double width = std::min(diff, 4.0 - diff) + pad;
-      ok = width < 2.0;
+      const double width = std::min(diff, 4.0 - diff) + 2 * pad;
+      ok = width < 2.0 - kFilterSlack;
       if (ok) {
-        double start = diff < 2.0 ? ap - pp : aq - pq;
+        double start = (diff < 2.0 ? ap : aq) - pad;
         if (start < 0) start += 4.0;
         if (start >= 4.0) start = 0.0;  // a tiny negative start rounds up to 4, the same point
         narrow_.push_back({start, width, i});

@@ -477,6 +477,33 @@ TEST(FindSelfIntersections, AgreesWithEveryPairOnFansWithSharedRaysAtOtherScales
   }
 }
 
+// A cone of 30 faces around the origin, plus a face F whose far corners lie near 1.7e308
+// (finite, but the 1-norm of their projection across the axis overflows) and a small face
+// through F's plane near the origin, sharing a direction with it. A search that took the
+// overflowed projections' angles at face value (every quotient 0) would put F's interval far
+// from the small face's and miss the pair.
+TEST(FindSelfIntersections, AgreesWithEveryPairOnAFanWithCornersNearTheLargestDouble) {
+  Mesh m;
+  m.vertices = {Vec3(0, 0, 0)};
+  const int k = 30;
+  for (int i = 0; i < k; ++i) {
+    const double a = 2 * M_PI * i / k;
+    m.vertices.push_back(Vec3(std::cos(a), std::sin(a), -0.3));
+  }
+  for (int32_t i = 0; i < k; ++i) m.faces.push_back({0, 1 + i, 1 + (i + 1) % k});
+  const Vec3 p(0.7, 0.7, -0.2), q(0.75, 0.65, -0.2);
+  const Vec3 n = p.cross(q).normalized(), mid = 0.5 * (p + q);
+  m.vertices.push_back(1.7e308 * p);
+  m.vertices.push_back(1.7e308 * q);
+  m.vertices.push_back(1e-3 * (mid + 0.1 * n));
+  m.vertices.push_back(1e-3 * (mid - 0.1 * n));
+  m.faces.push_back({0, k + 1, k + 2});
+  m.faces.push_back({0, k + 3, k + 4});
+  ASSERT_TRUE(std::isfinite(m.vertices[k + 1].x()));
+  ASSERT_TRUE(faces_intersect(m, k, k + 1));
+  expect_agrees_with_every_pair(m, "corners near 1.7e308");
+}
+
 // k faces on one edge, their third vertices on a circle around it: a non-manifold edge
 // whose faces pairwise meet only along the edge.
 Mesh crowded_edge(int k) {
