@@ -364,9 +364,8 @@ Aabb cone_box(const Vec3& u, const Vec3& a, const Vec3& b) {
 // computed, E the larger 1-norm of L's rows; a face whose pad exceeds kWideArc, or whose
 // interval may reach half the circle, is "wide". Derivation: docs/derivations.md, "Fans
 // ordered by angle".
-constexpr double kWideArc = 0.25;
-constexpr double kInfinity =
-    std::numeric_limits<double>::infinity();  // in pseudo-angle units (a quarter turn is 1)
+constexpr double kWideArc = 0.25;  // in pseudo-angle units (a quarter turn is 1)
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
 double pseudo_angle(double a, double b) {
   if (a > 0 && b >= 0) return b / (a + b);
@@ -444,7 +443,7 @@ class FanSweep {
   const double by_normals = max_abs(normals) / k, by_directions = max_abs(directions) / (2 * k);
   const Vec3 axis = by_normals >= by_directions ? normals : directions;
   if (!(std::max(by_normals, by_directions) > 1e-3)) return false;  // both nearly cancel (or NaN)
-  // L's rows: two vectors across the axis (their rounding does not matter, see above).
+  // L's rows: two vectors across the axis (any rows are valid, so their rounding is harmless).
   int least = 0;
   for (int i = 1; i < 3; ++i)
     if (std::abs(axis[i]) < std::abs(axis[least])) least = i;
@@ -456,7 +455,10 @@ class FanSweep {
   narrow_.clear();
   wide_.clear();
   is_wide_.assign(k, 0);
-  wide_at_ = 0, other_ = 0, at_ = 0, step_ = 1;
+  wide_at_ = 0;
+  other_ = 0;
+  at_ = 0;
+  step_ = 1;
   narrow_.reserve(k);
   for (int32_t i = 0; i < k; ++i) {
     double ap, pp, aq, pq;
