@@ -174,6 +174,14 @@ int shared_vertices(const Face& F, const Face& G) {
 
 double max_abs(const Vec3& v) { return v.cwiseAbs().maxCoeff(); }
 
+// x / |x|, scaled by its largest component first so that nothing overflows or underflows;
+// 0 for x = 0.
+Vec3 unit(const Vec3& x) {
+  const Vec3 s = x / max_abs(x);
+  const double n = s.norm();
+  return n > 0 ? Vec3(s / n) : Vec3::Zero();
+}
+
 // Rejects boxes that a triangle certainly misses. Boxes whose intervals do not overlap the
 // triangle's bounding box are rejected first, exactly (bounds are minima and maxima of
 // coordinates, so no rounding is involved). The remaining separating axes of a triangle and a
@@ -326,11 +334,7 @@ bool may_meet_slabs(const Vec3* t, const SlabBox& box) {
 // padded by the slack, 1e-12. An arc so close to 180 degrees that |p + q| < 1/8 (wider than
 // about 173 degrees) gets the whole cube.
 Aabb cone_box(const Vec3& u, const Vec3& a, const Vec3& b) {
-  auto direction = [&](const Vec3& x) {
-    const Vec3 d = x - u;
-    const Vec3 s = d / max_abs(d);
-    return Vec3(s / s.norm());
-  };
+  auto direction = [&](const Vec3& x) { return unit(x - u); };
   Aabb box;
   auto add_arc = [&](const Vec3& p, const Vec3& q) {  // precondition: 1 + p.q >= 1/2
     box.extend(p);
@@ -421,10 +425,6 @@ class FanSweep {
   // The axis: the faces' summed unit normals (oriented as listed) across a flat or shallow
   // fan, the edges' summed unit directions along a sharp cone, whichever is longer per term.
   Vec3 normals = Vec3::Zero(), directions = Vec3::Zero();
-  auto unit = [](const Vec3& x) {  // scaled first, so that nothing overflows or underflows
-    const Vec3 y = x / max_abs(x);
-    return y.norm() > 0 ? Vec3(y.normalized()) : Vec3::Zero();
-  };
   std::vector<std::array<Vec3, 2>> dirs(k);
   for (int32_t i = 0; i < k; ++i) {
     const Face& F = mesh.faces[fan[i]];

@@ -371,7 +371,7 @@ TEST(FindSelfIntersections, AgreesWithEveryPairOnGearDomes) {
   for (int trial = 0; trial < 8; ++trial) {
     const int k = 2 * std::uniform_int_distribution<int>(30, 60)(rng);
     Mesh m = gear_dome(k);
-    std::uniform_int_distribution<int> rim(0, k - 1), how(0, 3);
+    std::uniform_int_distribution<int> rim(0, k - 1);
     auto top = [&](int i) -> Vec3& { return m.vertices[2 + 2 * i]; };
     for (int moved = 0; moved < 4; ++moved) {
       const int i = rim(rng);
