@@ -1,8 +1,7 @@
 #include "common/point_in_solid.h"
 
-#include <algorithm>
 #include <cmath>
-#include <utility>
+#include <cstddef>
 
 #include "common/exact_predicates.h"
 #include "common/status.h"
@@ -10,115 +9,182 @@
 namespace vobb {
 namespace {
 
-enum class Hit { kNone, kProper, kDegenerate, kOnFace };
+// The ray from p + si eps e_i + sj eps^2 e_j (eps > 0 infinitesimal) along s e_k, (k, i, j) a
+// cyclic order of the axes, s, si, sj = +-1: docs/derivations.md, "Locating a point".
+struct AxisRay {
+  Vec3 p;
+  int k, i, j, s, si, sj;
+};
 
-// Segment p -> q against the closed triangle abc, exactly.
-Hit segment_vs_triangle(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b, const Vec3& c) {
-  const int op = orient3d(a, b, c, p), oq = orient3d(a, b, c, q);
-  if (op == 0) {
-    // p in the triangle's plane: on the face if inside the triangle (coplanar 2D test).
-    const Vec3 n = (b - a).cross(c - a);
-    int i = 0, j = 1;
-    if (std::abs(n[0]) >= std::abs(n[1]) && std::abs(n[0]) >= std::abs(n[2]))
-      i = 1, j = 2;
-    else if (std::abs(n[1]) >= std::abs(n[2]))
-      i = 2, j = 0;
-    const int s = orient2d(a, b, c, i, j);
-    if (s == 0) {  // the double normal picked a degenerate projection: try the others
-      for (int k = 0; k < 3 && s == 0; ++k) {
-        i = k;
-        j = (k + 1) % 3;
-        if (orient2d(a, b, c, i, j) != 0) break;
-      }
-    }
-    const int t = orient2d(a, b, c, i, j);
-    const int e0 = orient2d(a, b, p, i, j) * t, e1 = orient2d(b, c, p, i, j) * t,
-              e2 = orient2d(c, a, p, i, j) * t;
-    if (e0 >= 0 && e1 >= 0 && e2 >= 0) return Hit::kOnFace;
-    return oq == 0 ? Hit::kDegenerate : Hit::kNone;  // a segment in the plane: retry
-  }
-  if (oq == 0) return Hit::kDegenerate;  // the far point should not lie on a face's plane
-  if (op == oq) return Hit::kNone;
-  const int s1 = orient3d(p, q, a, b), s2 = orient3d(p, q, b, c), s3 = orient3d(p, q, c, a);
-  if ((s1 > 0 && s2 > 0 && s3 > 0) || (s1 < 0 && s2 < 0 && s3 < 0)) return Hit::kProper;
-  if ((s1 >= 0 && s2 >= 0 && s3 >= 0) || (s1 <= 0 && s2 <= 0 && s3 <= 0)) return Hit::kDegenerate;
-  return Hit::kNone;
+constexpr int kRays = kLocateRays;
+
+// Ray r of kRays: along +x, -x, +y, ..., each moved four ways; ray 0 runs along +x.
+AxisRay axis_ray(const Vec3& p, int r) {
+  const int k = r / 8;
+  return {p, k, (k + 1) % 3, (k + 2) % 3, r & 4 ? -1 : 1, r & 1 ? -1 : 1, r & 2 ? -1 : 1};
 }
 
-// Whether the segment p -> q may meet the closed box: conservative (true whenever it does).
-// The box is widened by 2^-30 of the largest coordinate or extent involved, far above the few
-// roundings of the slab parameters (each within a few u relative, i.e. a few u times that
-// scale in position); the parameter interval is widened by 2^-30 too.
-bool segment_may_meet(const Vec3& p, const Vec3& q, const Aabb& box) {
-  const double scale = std::max({p.cwiseAbs().maxCoeff(), q.cwiseAbs().maxCoeff(),
-                                 box.lo.cwiseAbs().maxCoeff(), box.hi.cwiseAbs().maxCoeff()});
-  const double pad = 0x1p-30 * scale;
-  double t0 = 0, t1 = 1;
-  for (int k = 0; k < 3; ++k) {
-    const double lo = box.lo[k] - pad, hi = box.hi[k] + pad, d = q[k] - p[k];
-    if (d == 0) {  // parallel to the slab: inside it or not at all
-      if (p[k] < lo || p[k] > hi) return false;
-      continue;
-    }
-    double a = (lo - p[k]) / d, b = (hi - p[k]) / d;
-    if (a > b) std::swap(a, b);
-    t0 = std::max(t0, a);
-    t1 = std::min(t1, b);
+// Whether the moved coordinate p + sign eps lies in [lo, hi].
+bool moved_within(double lo, double p, double hi, int sign) {
+  return sign > 0 ? lo <= p && p < hi : lo < p && p <= hi;
+}
+
+// Whether the ray meets the closed box b, exactly. Along its axis it needs a point of b
+// strictly ahead of p, where every crossing lies (a face through p itself is found by
+// on_triangle).
+inline bool ray_meets(const AxisRay& r, const Aabb& b) {
+  return moved_within(b.lo[r.i], r.p[r.i], b.hi[r.i], r.si) &&
+         moved_within(b.lo[r.j], r.p[r.j], b.hi[r.j], r.sj) &&
+         (r.s > 0 ? r.p[r.k] < b.hi[r.k] : b.lo[r.k] < r.p[r.k]);
+}
+
+bool holds(const Aabb& b, const Vec3& p) {
+  return (b.lo.array() <= p.array()).all() && (p.array() <= b.hi.array()).all();
+}
+
+// The side of the directed edge a -> b, projected on (i, j), where the moved start lies: the
+// sign of orient2d(a, b, p + si eps e_i + sj eps^2 e_j), whose terms in eps and eps^2 are
+// si (a_j - b_j) and sj (b_i - a_i). 0 only where a and b project to one point.
+int moved_side(const Vec3& a, const Vec3& b, const AxisRay& r) {
+  const int d = orient2d(a, b, r.p, r.i, r.j);
+  if (d != 0) return d;
+  if (a[r.j] != b[r.j]) return a[r.j] > b[r.j] ? r.si : -r.si;
+  return b[r.i] > a[r.i] ? r.sj : b[r.i] < a[r.i] ? -r.sj : 0;
+}
+
+enum class Cross { kNo, kYes, kFromFace };
+
+// Whether the ray crosses the triangle abc ahead of its start (kFromFace: p lies on it).
+Cross crosses(const AxisRay& r, const Vec3& a, const Vec3& b, const Vec3& c) {
+  const int t = orient2d(a, b, c, r.i, r.j);  // the sign of the normal's k component
+  if (t == 0) return Cross::kNo;              // projects to a segment: the moved line misses it
+  if (moved_side(a, b, r) != t || moved_side(b, c, r) != t || moved_side(c, a, r) != t)
+    return Cross::kNo;
+  const int o = orient3d(a, b, c, r.p);  // sign of n . (p - a)
+  if (o == 0) return Cross::kFromFace;
+  return o * r.s * t < 0 ? Cross::kYes : Cross::kNo;  // the plane lies ahead along s e_k
+}
+
+// Whether p lies on the closed triangle abc, exactly (false for a degenerate one).
+bool on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+  if (orient3d(a, b, c, p) != 0) return false;
+  for (int k = 0; k < 3; ++k) {  // a projection in which abc has area
+    const int i = (k + 1) % 3, j = (k + 2) % 3;
+    const int t = orient2d(a, b, c, i, j);
+    if (t == 0) continue;
+    return orient2d(a, b, p, i, j) * t >= 0 && orient2d(b, c, p, i, j) * t >= 0 &&
+           orient2d(c, a, p, i, j) * t >= 0;
   }
-  return !(t0 > t1 + 0x1p-30);  // NaN (an empty box) keeps the box
+  return false;
+}
+
+// Calls visit(f) for each face f not left out whose box the ray meets (and, with find_surface,
+// whose box holds r.p) while more() holds, tested at each node.
+template <class More, class Visit>
+void walk(const AabbTree& faces, const AxisRay& r, bool find_surface,
+          const std::function<bool(int32_t)>& left_out, const More& more, const Visit& visit) {
+  const std::vector<AabbTree::Node>& nodes = faces.nodes();
+  if (nodes.empty()) return;
+  auto accept = [&](const Aabb& b) { return ray_meets(r, b) || (find_surface && holds(b, r.p)); };
+  int32_t stack[128];  // median splits: depth below 64, one waiting sibling per level
+  int top = 0;
+  stack[top++] = 0;
+  while (top > 0 && more()) {
+    const AabbTree::Node& n = nodes[stack[--top]];
+    if (!accept(n.bounds)) continue;
+    if (n.count > 0) {
+      for (int32_t i = n.first; i < n.first + n.count; ++i) {
+        const int32_t f = faces.order()[i];
+        if (accept(faces.primitive_bounds(f)) && !(left_out && left_out(f))) visit(f);
+      }
+    } else {
+      stack[top++] = n.first + 1;
+      stack[top++] = n.first;
+    }
+  }
+}
+
+// The ray's faces (those not left out whose boxes it meets), counted up to `limit`.
+size_t count_faces(const AabbTree& faces, const AxisRay& r,
+                   const std::function<bool(int32_t)>& left_out, size_t limit) {
+  size_t n = 0;
+  walk(
+      faces, r, false, left_out, [&] { return n < limit; }, [&](int32_t) { ++n; });
+  return n;
+}
+
+// Casts the ray: where p lies.
+void cast(const Mesh& mesh, const AabbTree& faces, const AxisRay& r, bool find_surface,
+          const std::function<bool(int32_t)>& left_out, Location* out) {
+  bool odd = false, on_surface = false;
+  walk(
+      faces, r, find_surface, left_out, [&] { return !on_surface; },
+      [&](int32_t f) {
+        if (on_surface) return;
+        const Vec3 &a = mesh.corner(f, 0), &b = mesh.corner(f, 1), &c = mesh.corner(f, 2);
+        if (find_surface && holds(faces.primitive_bounds(f), r.p) && on_triangle(r.p, a, b, c)) {
+          on_surface = true;
+          return;
+        }
+        if (!ray_meets(r, faces.primitive_bounds(f))) return;
+        switch (crosses(r, a, b, c)) {
+          case Cross::kYes:
+            odd = !odd;
+            break;
+          case Cross::kFromFace:
+            on_surface = true;
+            break;
+          case Cross::kNo:
+            break;
+        }
+      });
+  *out = on_surface ? Location::kOnSurface : odd ? Location::kInside : Location::kOutside;
+}
+
+// Ray 0 is cast where it meets at most this many faces.
+constexpr size_t kFirstLimit = 16;
+
+Location locate(const Mesh& mesh, const AabbTree& faces, const Vec3& p, bool find_surface,
+                const std::function<bool(int32_t)>& left_out) {
+  // Counted first, so that no predicate is spent on a ray that is not cast.
+  int best = count_faces(faces, axis_ray(p, 0), left_out, kFirstLimit + 1) <= kFirstLimit ? 0 : -1;
+  // Rounds that count each ray's faces up to a cap doubled each round: once a ray's count ends
+  // below the cap, the fewest is among those that ended, so a round costs at most kRays caps.
+  // Ray 0, known to meet more than kFirstLimit, comes last.
+  for (size_t cap = 2 * kFirstLimit; best < 0; cap *= 2) {
+    size_t fewest = cap;
+    for (int q = 1; q <= kRays && fewest > 0; ++q) {
+      const int r = q % kRays;
+      const size_t n = count_faces(faces, axis_ray(p, r), left_out, fewest);
+      if (n < fewest) fewest = n, best = r;
+    }
+  }
+  Location at = Location::kOnSurface;
+  cast(mesh, faces, axis_ray(p, best), find_surface, left_out, &at);
+  return at;
 }
 
 }  // namespace
 
+Location locate_point_by_ray(const Mesh& mesh, const AabbTree& faces, const Vec3& p, int ray) {
+  VOBB_ASSERT(ray >= 0 && ray < kRays, "locate_point_by_ray: a ray of kLocateRays");
+  Location at = Location::kOnSurface;
+  cast(mesh, faces, axis_ray(p, ray), true, nullptr, &at);
+  return at;
+}
+
 Location locate_point(const Mesh& mesh, const AabbTree& faces, const Vec3& p) {
-  return locate_point(mesh, faces, p, nullptr);
+  return locate(mesh, faces, p, true, nullptr);
 }
 
 Location locate_point(const Mesh& mesh, const AabbTree& faces, const Vec3& p,
                       const std::function<bool(int32_t)>& left_out) {
-  // The tree's root: no pass over the vertices per query.
-  return locate_point(mesh, faces, p, left_out, faces.bounds());
+  return locate(mesh, faces, p, true, left_out);
 }
 
-Location locate_point(const Mesh& mesh, const AabbTree& faces, const Vec3& p,
-                      const std::function<bool(int32_t)>& left_out, const Aabb& bb) {
-  const double reach = 2.0 * (bb.hi - bb.lo).norm() + (p - 0.5 * (bb.lo + bb.hi)).norm() + 1.0;
-  // Directions with irrational-looking ratios make edge and vertex hits rare; each retry
-  // turns the direction deterministically.
-  Vec3 dir(0.5773502691896258, 0.3437184391289216, 0.7404171463391124);
-  for (int attempt = 0; attempt < 64; ++attempt) {
-    const Vec3 q = p + reach * dir;
-    int crossings = 0;
-    bool degenerate = false, on_face = false;
-    // Only faces whose box the segment may meet are tested: a face it misses cannot be
-    // crossed or touched, and the parity over the others is the answer (any segment gives the
-    // same exact answer; a plane merely containing q or the segment no longer forces a retry
-    // when its face is far away). The segment's own bounding box would accept most of the
-    // mesh for a long diagonal segment; the slab test accepts only the boxes along it.
-    faces.for_each_accepted([&](const Aabb& box) { return segment_may_meet(p, q, box); },
-                            [&](int32_t f) {
-                              if (degenerate || on_face || (left_out && left_out(f))) return;
-                              switch (segment_vs_triangle(p, q, mesh.corner(f, 0),
-                                                          mesh.corner(f, 1), mesh.corner(f, 2))) {
-                                case Hit::kProper:
-                                  ++crossings;
-                                  break;
-                                case Hit::kDegenerate:
-                                  degenerate = true;
-                                  break;
-                                case Hit::kOnFace:
-                                  on_face = true;
-                                  break;
-                                case Hit::kNone:
-                                  break;
-                              }
-                            });
-    if (on_face) return Location::kOnSurface;
-    if (!degenerate) return crossings % 2 ? Location::kInside : Location::kOutside;
-    dir = Vec3(dir[1] + 0.1234567, dir[2] - 0.3141593, dir[0] + 0.2718282).normalized();
-  }
-  VOBB_ASSERT(false, "locate_point: every ray was degenerate");
-  return Location::kOnSurface;
+Location locate_point_off_surface(const Mesh& mesh, const AabbTree& faces, const Vec3& p,
+                                  const std::function<bool(int32_t)>& left_out) {
+  return locate(mesh, faces, p, false, left_out);
 }
 
 }  // namespace vobb

@@ -280,8 +280,9 @@ size_t pinched_vertices(const Mesh& mesh, const std::vector<char>& degenerate, D
 // the others enclose must bound its solid from outside (positive volume), one that an odd
 // number enclose a cavity (negative), given the shells' exact signed volumes and their sum.
 // The shells must be closed, manifold, consistently oriented and disjoint. Decided exactly, a
-// vertex of each shell located against the others' faces by one ray each (point_in_solid.h):
-// a vertex of one shell lies on no other.
+// vertex of each shell located against the other shells' faces by one axis ray
+// (point_in_solid.h): a vertex of one shell lies on no other, and a shell that does not
+// enclose it is crossed an even number of times, so every other shell may be kept.
 size_t inward_shells(const Mesh& mesh, const std::vector<std::vector<int32_t>>& shell_faces,
                      const std::vector<Rational>& shell_volume, const Rational& total) {
   if (shell_faces.size() == 1) return sgn(total) > 0 ? 0 : 1;
@@ -289,32 +290,13 @@ size_t inward_shells(const Mesh& mesh, const std::vector<std::vector<int32_t>>& 
   for (size_t s = 0; s < shell_faces.size(); ++s)
     for (int32_t f : shell_faces[s]) shell_of[f] = static_cast<int32_t>(s);
   const AabbTree faces = AabbTree::over_faces(mesh);
-  // Only a shell whose bounding box holds the vertex can enclose it: the ray is cast against
-  // those alone, and only across their boxes, so shells lined up along the ray's direction do
-  // not each meet every other.
-  std::vector<Aabb> shell_box(shell_faces.size());
-  for (size_t s = 0; s < shell_faces.size(); ++s)
-    for (int32_t f : shell_faces[s])
-      for (int k = 0; k < 3; ++k) shell_box[s].extend(mesh.corner(f, k));
-  const AabbTree shells(shell_box);
-  std::vector<size_t> stamp(shell_faces.size(), SIZE_MAX);  // == s: a candidate for shell s
   size_t wrong = 0;
   for (size_t s = 0; s < shell_faces.size(); ++s) {
     const Vec3& p = mesh.corner(shell_faces[s][0], 0);
-    Aabb point, region;
-    point.extend(p);
-    shells.for_each_overlap(point, [&](int32_t t) {
-      if (static_cast<size_t>(t) == s) return;
-      stamp[t] = s;
-      region.extend(shell_box[t]);
-    });
     // Degenerate faces (none here: they are a defect checked before) belong to no shell.
-    const Location at =
-        region.empty()
-            ? Location::kOutside
-            : locate_point(
-                  mesh, faces, p,
-                  [&](int32_t f) { return shell_of[f] < 0 || stamp[shell_of[f]] != s; }, region);
+    const Location at = locate_point_off_surface(mesh, faces, p, [&](int32_t f) {
+      return shell_of[f] < 0 || shell_of[f] == static_cast<int32_t>(s);
+    });
     VOBB_ASSERT(at != Location::kOnSurface, "a shell's vertex lies on no other shell");
     const int sign = sgn(shell_volume[s]);
     const bool ok = at == Location::kOutside ? sign > 0 : sign < 0;

@@ -106,6 +106,50 @@ TEST(Solidity, NestedShellsEachFaceTheWayTheirDepthSays) {
   }
 }
 
+// The same three shells moved to 2^52, where a unit apart is all the doubles there have: the
+// nesting is decided without forming any point off the shells' vertices.
+TEST(Solidity, NestedShellsAtTheCoordinatesLastUnit) {
+  Mesh nested = append(analytic::cube_with_cavity(4, 1, 3).mesh, cube(1, Vec3(1.5, 1.5, 1.5)).mesh);
+  for (Vec3& v : nested.vertices) v = Vec3::Constant(0x1p52) + 2.0 * v;
+  const SolidityReport r = check_solidity(nested);
+  EXPECT_TRUE(r.solid()) << r.verdict();
+  EXPECT_EQ(r.shells, 3u);
+  EXPECT_EQ(r.volume, Rational(8 * (64 - 8 + 1)));
+  for (size_t f = 24; f < 36; ++f) std::swap(nested.faces[f][1], nested.faces[f][2]);
+  const DefectCount d = only_defect(nested);
+  EXPECT_EQ(d.defect, Defect::kInwardOriented);
+  EXPECT_EQ(d.count, 1u);
+}
+
+// Thin parallel tetrahedra stacked along z on the plane z = c - x, each shell's first vertex on
+// the boundary of every other's bounding box: every axis ray from it but one meets the shells
+// above or below. One turned inside out is the one found.
+TEST(Solidity, ThinShellsStackedSoThatRaysMeetTheOthers) {
+  Mesh m;
+  const int n = 300;
+  for (int k = 0; k < n; ++k) {
+    const double c = k * 0x1p-10, d = 0x1p-12;
+    const int32_t b = static_cast<int32_t>(m.vertices.size());
+    for (const Vec3& v : {Vec3(0, 0, c), Vec3(1, 0, c - 1), Vec3(0.5, 1, c - 0.5),
+                          Vec3(0.5 + d, 1.0 / 3, c - 0.5 + d)})
+      m.vertices.push_back(v);
+    for (const Face& f : {Face{b, b + 2, b + 1}, Face{b, b + 1, b + 3}, Face{b, b + 3, b + 2},
+                          Face{b + 1, b + 2, b + 3}})
+      m.faces.push_back(f);
+  }
+  SolidityReport r = check_solidity(m);
+  if (r.volume_known && sgn(r.volume) < 0) {  // built the other way round: turn every one
+    for (Face& f : m.faces) std::swap(f[1], f[2]);
+    r = check_solidity(m);
+  }
+  EXPECT_TRUE(r.solid()) << r.verdict();
+  EXPECT_EQ(r.shells, static_cast<size_t>(n));
+  for (size_t f = 4 * 123; f < 4 * 124; ++f) std::swap(m.faces[f][1], m.faces[f][2]);
+  const DefectCount d = only_defect(m);
+  EXPECT_EQ(d.defect, Defect::kInwardOriented);
+  EXPECT_EQ(d.count, 1u);
+}
+
 // Many shells: 1,000 disjoint tetrahedra on a grid, one of them turned inside out.
 TEST(Solidity, ManyDisjointShellsAreLocatedEachAgainstTheOthers) {
   Mesh m;
