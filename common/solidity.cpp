@@ -290,13 +290,44 @@ size_t inward_shells(const Mesh& mesh, const std::vector<std::vector<int32_t>>& 
   for (size_t s = 0; s < shell_faces.size(); ++s)
     for (int32_t f : shell_faces[s]) shell_of[f] = static_cast<int32_t>(s);
   const AabbTree faces = AabbTree::over_faces(mesh);
+  // A shell whose bounding box does not hold the vertex cannot enclose it: where no other
+  // shell's box holds it, it lies outside them all, with no ray.
+  std::vector<Aabb> shell_box(shell_faces.size());
+  for (size_t s = 0; s < shell_faces.size(); ++s)
+    for (int32_t f : shell_faces[s]) shell_box[s].extend(mesh.face_bounds(f));
+  const AabbTree shells(shell_box);
+  auto other_box_holds = [&](const Vec3& p, size_t s) {
+    auto holds = [&](const Aabb& b) {
+      return (b.lo.array() <= p.array()).all() && (p.array() <= b.hi.array()).all();
+    };
+    const std::vector<AabbTree::Node>& nodes = shells.nodes();
+    int32_t stack[128];  // median splits: depth below 64, one waiting sibling per level
+    int top = 0;
+    stack[top++] = 0;
+    while (top > 0) {  // stops at the first such box: many may hold it
+      const AabbTree::Node& n = nodes[stack[--top]];
+      if (!holds(n.bounds)) continue;
+      if (n.count == 0) {
+        stack[top++] = n.first + 1;
+        stack[top++] = n.first;
+        continue;
+      }
+      for (int32_t i = n.first; i < n.first + n.count; ++i) {
+        const int32_t t = shells.order()[i];
+        if (static_cast<size_t>(t) != s && holds(shell_box[t])) return true;
+      }
+    }
+    return false;
+  };
   size_t wrong = 0;
   for (size_t s = 0; s < shell_faces.size(); ++s) {
     const Vec3& p = mesh.corner(shell_faces[s][0], 0);
     // Degenerate faces (none here: they are a defect checked before) belong to no shell.
-    const Location at = locate_point_off_surface(mesh, faces, p, [&](int32_t f) {
-      return shell_of[f] < 0 || shell_of[f] == static_cast<int32_t>(s);
-    });
+    const Location at = !other_box_holds(p, s)
+                            ? Location::kOutside
+                            : locate_point_off_surface(mesh, faces, p, [&](int32_t f) {
+                                return shell_of[f] < 0 || shell_of[f] == static_cast<int32_t>(s);
+                              });
     VOBB_ASSERT(at != Location::kOnSurface, "a shell's vertex lies on no other shell");
     const int sign = sgn(shell_volume[s]);
     const bool ok = at == Location::kOutside ? sign > 0 : sign < 0;
