@@ -114,7 +114,7 @@ class ObvCommand final : public Command {
       nlohmann::ordered_json est = nlohmann::ordered_json::array();
       for (const ObvRun& run : r.runs) {
         nlohmann::ordered_json e = {{"backend", run.backend}};
-        if (run.m > 0) e["m"] = run.m;
+        e["m"] = run.m > 0 ? nlohmann::ordered_json(run.m) : nlohmann::ordered_json(nullptr);
         e["obv"] = run.obv[i];
         e["bound"] = run.bound[i];
         if (r_bound_ && run.m > 0) e["r_bound"] = run.r_bound[i];
