@@ -31,7 +31,15 @@ class AabbTree {
   // The same, with both calls inlined (for inner loops).
   template <class Accept, class Visit>
   void visit_accepted(const Accept& accept, Visit&& visit) const {
-    if (nodes_.empty()) return;
+    visit_accepted_until(accept, [&](int32_t i) {
+      visit(i);
+      return true;
+    });
+  }
+  // The same, until visit (which returns bool) returns false; false if it did.
+  template <class Accept, class Visit>
+  bool visit_accepted_until(const Accept& accept, Visit&& visit) const {
+    if (nodes_.empty()) return true;
     int32_t stack[128];
     int top = 0;
     stack[top++] = 0;
@@ -40,12 +48,13 @@ class AabbTree {
       if (!accept(n.bounds)) continue;
       if (n.count > 0) {
         for (int32_t i = n.first; i < n.first + n.count; ++i)
-          if (accept(boxes_[order_[i]])) visit(order_[i]);
+          if (accept(boxes_[order_[i]]) && !visit(order_[i])) return false;
       } else {
         stack[top++] = n.first + 1;
         stack[top++] = n.first;
       }
     }
+    return true;
   }
   const Aabb& primitive_bounds(int32_t i) const { return boxes_[i]; }
   size_t size() const { return boxes_.size(); }

@@ -79,37 +79,20 @@ bool on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
 }
 
 // Calls visit(f) for each face f not left out whose box the ray meets (and, with find_surface,
-// whose box holds r.p) while more() holds, tested at each node.
-template <class More, class Visit>
+// whose box holds r.p) until it returns false.
+template <class Visit>
 void walk(const AabbTree& faces, const AxisRay& r, bool find_surface,
-          const std::function<bool(int32_t)>& left_out, const More& more, const Visit& visit) {
-  const std::vector<AabbTree::Node>& nodes = faces.nodes();
-  if (nodes.empty()) return;
-  auto accept = [&](const Aabb& b) { return ray_meets(r, b) || (find_surface && holds(b, r.p)); };
-  int32_t stack[128];  // median splits: depth below 64, one waiting sibling per level
-  int top = 0;
-  stack[top++] = 0;
-  while (top > 0 && more()) {
-    const AabbTree::Node& n = nodes[stack[--top]];
-    if (!accept(n.bounds)) continue;
-    if (n.count > 0) {
-      for (int32_t i = n.first; i < n.first + n.count; ++i) {
-        const int32_t f = faces.order()[i];
-        if (accept(faces.primitive_bounds(f)) && !(left_out && left_out(f))) visit(f);
-      }
-    } else {
-      stack[top++] = n.first + 1;
-      stack[top++] = n.first;
-    }
-  }
+          const std::function<bool(int32_t)>& left_out, const Visit& visit) {
+  faces.visit_accepted_until(
+      [&](const Aabb& b) { return ray_meets(r, b) || (find_surface && holds(b, r.p)); },
+      [&](int32_t f) { return (left_out && left_out(f)) || visit(f); });
 }
 
 // The ray's faces (those not left out whose boxes it meets), counted up to `limit`.
 size_t count_faces(const AabbTree& faces, const AxisRay& r,
                    const std::function<bool(int32_t)>& left_out, size_t limit) {
   size_t n = 0;
-  walk(
-      faces, r, false, left_out, [&] { return n < limit; }, [&](int32_t) { ++n; });
+  if (limit > 0) walk(faces, r, false, left_out, [&](int32_t) { return ++n < limit; });
   return n;
 }
 
@@ -117,27 +100,25 @@ size_t count_faces(const AabbTree& faces, const AxisRay& r,
 void cast(const Mesh& mesh, const AabbTree& faces, const AxisRay& r, bool find_surface,
           const std::function<bool(int32_t)>& left_out, Location* out) {
   bool odd = false, on_surface = false;
-  walk(
-      faces, r, find_surface, left_out, [&] { return !on_surface; },
-      [&](int32_t f) {
-        if (on_surface) return;
-        const Vec3 &a = mesh.corner(f, 0), &b = mesh.corner(f, 1), &c = mesh.corner(f, 2);
-        if (find_surface && holds(faces.primitive_bounds(f), r.p) && on_triangle(r.p, a, b, c)) {
-          on_surface = true;
-          return;
-        }
-        if (!ray_meets(r, faces.primitive_bounds(f))) return;
-        switch (crosses(r, a, b, c)) {
-          case Cross::kYes:
-            odd = !odd;
-            break;
-          case Cross::kFromFace:
-            on_surface = true;
-            break;
-          case Cross::kNo:
-            break;
-        }
-      });
+  walk(faces, r, find_surface, left_out, [&](int32_t f) {
+    const Vec3 &a = mesh.corner(f, 0), &b = mesh.corner(f, 1), &c = mesh.corner(f, 2);
+    if (find_surface && holds(faces.primitive_bounds(f), r.p) && on_triangle(r.p, a, b, c)) {
+      on_surface = true;
+      return false;
+    }
+    if (!ray_meets(r, faces.primitive_bounds(f))) return true;
+    switch (crosses(r, a, b, c)) {
+      case Cross::kYes:
+        odd = !odd;
+        break;
+      case Cross::kFromFace:
+        on_surface = true;
+        return false;
+      case Cross::kNo:
+        break;
+    }
+    return true;
+  });
   *out = on_surface ? Location::kOnSurface : odd ? Location::kInside : Location::kOutside;
 }
 

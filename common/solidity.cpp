@@ -300,24 +300,9 @@ size_t inward_shells(const Mesh& mesh, const std::vector<std::vector<int32_t>>& 
     auto holds = [&](const Aabb& b) {
       return (b.lo.array() <= p.array()).all() && (p.array() <= b.hi.array()).all();
     };
-    const std::vector<AabbTree::Node>& nodes = shells.nodes();
-    int32_t stack[128];  // median splits: depth below 64, one waiting sibling per level
-    int top = 0;
-    stack[top++] = 0;
-    while (top > 0) {  // stops at the first such box: many may hold it
-      const AabbTree::Node& n = nodes[stack[--top]];
-      if (!holds(n.bounds)) continue;
-      if (n.count == 0) {
-        stack[top++] = n.first + 1;
-        stack[top++] = n.first;
-        continue;
-      }
-      for (int32_t i = n.first; i < n.first + n.count; ++i) {
-        const int32_t t = shells.order()[i];
-        if (static_cast<size_t>(t) != s && holds(shell_box[t])) return true;
-      }
-    }
-    return false;
+    // Stops at the first such box: many may hold it.
+    return !shells.visit_accepted_until(holds,
+                                        [&](int32_t t) { return static_cast<size_t>(t) == s; });
   };
   size_t wrong = 0;
   for (size_t s = 0; s < shell_faces.size(); ++s) {

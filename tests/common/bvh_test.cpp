@@ -33,6 +33,42 @@ TEST(AabbTree, OverlapQueriesMatchBruteForce) {
   }
 }
 
+// visit_accepted_until reports the overlaps in visit_accepted's order and stops at the first
+// visit that returns false: the first k of that order, and false; all of them, and true, where
+// no visit stops it.
+TEST(AabbTree, VisitsUntilTheVisitStops) {
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(0, 10), s(0, 1);
+  std::vector<Aabb> boxes(300);
+  for (Aabb& b : boxes) {
+    b.lo = Vec3(u(rng), u(rng), u(rng));
+    b.hi = b.lo + Vec3(s(rng), s(rng), s(rng));
+  }
+  const AabbTree tree(boxes);
+  for (int q = 0; q < 50; ++q) {
+    Aabb query;
+    query.lo = Vec3(u(rng), u(rng), u(rng));
+    query.hi = query.lo + 4 * Vec3(s(rng), s(rng), s(rng));
+    auto overlaps = [&](const Aabb& b) { return b.overlaps(query); };
+    std::vector<int32_t> all;
+    tree.visit_accepted(overlaps, [&](int32_t i) { all.push_back(i); });
+    std::vector<int32_t> got;
+    EXPECT_TRUE(tree.visit_accepted_until(overlaps, [&](int32_t i) {
+      got.push_back(i);
+      return true;
+    }));
+    ASSERT_EQ(got, all);
+    for (size_t k = 1; k <= all.size(); ++k) {
+      got.clear();
+      EXPECT_FALSE(tree.visit_accepted_until(overlaps, [&](int32_t i) {
+        got.push_back(i);
+        return got.size() < k;
+      }));
+      ASSERT_EQ(got, std::vector<int32_t>(all.begin(), all.begin() + k));
+    }
+  }
+}
+
 // Empty boxes among the primitives (the certify path passes the empty cell of a flat box):
 // they are never reported, and the others are found as without them.
 TEST(AabbTree, EmptyBoxesAmongThePrimitivesAreNeverReported) {
