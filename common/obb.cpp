@@ -85,9 +85,11 @@ double fit_slack(const Obb& box, double mesh_scale) {
   // Rounding in one projection p.a (3 products, 2 sums) is below 3 eps |p|; rebuilding the
   // centre from the projected mid-points adds 3 eps |c|; the stored axes are orthonormal to
   // about 2 eps, which moves a parallelepiped coordinate by 2 eps |p - c|. 16 eps times the
-  // largest of those lengths covers their sum with room to spare.
+  // largest of those lengths covers their sum with room to spare. Where that is below the
+  // least normal double (tiny coordinates, whose products round by up to 2^-1074 absolute), it
+  // is raised to it: no half extent fit_obb pads is then subnormal (obb.h, box_defect).
   const double scale = std::max(mesh_scale, box.center.cwiseAbs().maxCoeff());
-  return 16.0 * kEps * scale;
+  return std::max(16.0 * kEps * scale, std::numeric_limits<double>::min());
 }
 
 Obb fit_obb(const Mesh& mesh, const std::vector<int32_t>& faces,
@@ -115,7 +117,6 @@ Obb fit_obb(const Mesh& mesh, const std::vector<int32_t>& faces,
     box.half[k] = 0.5 * (hi[k] - lo[k]);
   }
   double pad = fit_slack(box, scale);
-  if (pad == 0.0) pad = std::numeric_limits<double>::min();  // all vertices at the origin
   const Vec3 tight = box.half;
   // The padding is derived to suffice; the exact check makes sure of it. Should a vertex still
   // fall outside (it never has), the padding doubles until the check passes.

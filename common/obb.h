@@ -69,7 +69,8 @@ std::array<Vec3, 3> orthonormalize(const std::array<Vec3, 3>& axes);
 Obb fit_obb(const Mesh& mesh, const std::vector<int32_t>& faces, const std::array<Vec3, 3>& axes);
 
 // Upper bound on the distance by which fit_obb's faces may stand off the nearest vertex:
-// the padding that makes the box exactly conservative despite double rounding.
+// the padding that makes the box exactly conservative despite double rounding, and at least
+// 2^-1022, so that every padded half extent is a normal double.
 double fit_slack(const Obb& box, double mesh_scale);
 
 // The certified solid's frame in exact rationals: centre c, edge vectors u_k = h_k a_k, and

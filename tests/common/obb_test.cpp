@@ -169,6 +169,35 @@ TEST(FitObb, BoxesAroundTheWholeCoordinateRangePassBoxDefect) {
   EXPECT_GT(furthest, 2.8 * r);  // the case the derivation's bound is about
 }
 
+// At the small end: faces of a solid's tiny shell (its coordinates near 2^-1000, or subnormal)
+// get boxes whose half extents are normal doubles, so box_defect and the tree files take them,
+// and whose solids still hold every vertex exactly. A flat face's box is as thin as allowed.
+TEST(FitObb, BoxesAroundTinyFacesPassBoxDefect) {
+  std::mt19937_64 rng(12);
+  for (const double s : {0x1p-970, 0x1p-1000, 0x1p-1026, 0x1p-1040, 0x1p-1070}) {
+    const Mesh m = analytic::tetrahedron(s).mesh;
+    for (int t = 0; t < 50; ++t) {
+      const std::array<Vec3, 3> axes =
+          t == 0 ? std::array<Vec3, 3>{Vec3::UnitX(), Vec3::UnitY(), Vec3::UnitZ()}
+                 : random_axes(rng);
+      for (const std::vector<int32_t>& faces : {std::vector<int32_t>{0}, {0, 1, 2, 3}}) {
+        const Obb box = fit_obb(m, faces, axes);
+        EXPECT_EQ(box_defect(box), "") << s << " " << t;
+        ExactBoxContainment inside(box);
+        for (int32_t f : faces)
+          for (int j = 0; j < 3; ++j) EXPECT_TRUE(inside.contains(m.corner(f, j))) << s;
+      }
+    }
+    // The corner face lies in z = 0: along z only the padding remains, the least normal double
+    // from 2^-1026 down (16 eps s is below it there).
+    const Obb flat = fit_obb(m, {0}, {Vec3::UnitX(), Vec3::UnitY(), Vec3::UnitZ()});
+    EXPECT_EQ(flat.half[2], fit_slack(flat, s)) << s;
+    if (s <= 0x1p-1026) {
+      EXPECT_EQ(flat.half[2], std::numeric_limits<double>::min()) << s;
+    }
+  }
+}
+
 TEST(BoxDefect, RefusesABoxReachingBeyondTheLimitInAnyCoordinate) {
   for (int j = 0; j < 3; ++j) {
     Obb box;
