@@ -110,10 +110,14 @@ int run_collide_command(const CollideFlags& f) {
   recorded.mesh_sha256 = sha;
   uint64_t seen = 0;
   bool too_many = false;
+  std::string unreadable;  // why the first query a query file cannot hold was refused
   if (!f.record_queries.empty())
     opt.on_query = [&](const collision::Collider& c) {
-      if (seen++ % static_cast<uint64_t>(f.record_every) != 0) return;
-      if (recorded.colliders.size() < collision::kMaxRecordedQueries)
+      if (seen++ % static_cast<uint64_t>(f.record_every) != 0 || !unreadable.empty()) return;
+      const std::string defect = collision::collider_defect(c);
+      if (!defect.empty())
+        unreadable = "query " + std::to_string(seen - 1) + ": " + defect;
+      else if (recorded.colliders.size() < collision::kMaxRecordedQueries)
         recorded.colliders.push_back(c);
       else
         too_many = true;
@@ -145,6 +149,9 @@ int run_collide_command(const CollideFlags& f) {
     return refuse(Status::error("--record-queries: the run made more than " +
                                 std::to_string(collision::kMaxRecordedQueries) +
                                 " queries to record, so none were written; raise --record-every"));
+  if (!unreadable.empty())
+    return refuse(Status::error("--record-queries: " + unreadable +
+                                ", which a query file cannot hold, so none were written"));
   if (!f.record_queries.empty()) {
     s = collision::write_query_stream(recorded, f.record_queries);
     if (!s) return could_not_finish(s);  // its folder took a file when the run started

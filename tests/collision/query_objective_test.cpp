@@ -462,5 +462,27 @@ TEST(QueryObjectiveCli, RecordBuildCollideAndRefusals) {
     std::remove(p.c_str());
 }
 
+// A mesh reaching the coordinate limit: colliders around it stray beyond 2^240, which no query
+// file may hold (collider_defect). The recording is refused, exit 2 in one line, with no file
+// written, rather than written for build --queries to refuse; the report itself is written.
+TEST(QueryObjectiveCli, QueriesBeyondTheLimitAreNotRecorded) {
+  const double t = 0x1p240;
+  const Mesh big = analytic::cube(t / 2, Vec3::Constant(t / 2)).mesh;  // [2^239, 2^240]^3
+  const std::string mesh_path = test::temp_path("q_big.off"), tree = test::temp_path("q_big.json"),
+                    q = test::temp_path("q_big_q.json"), report = test::temp_path("q_big_r.txt");
+  ASSERT_TRUE(save_mesh(big, mesh_path, MeshFormat::kOff));
+  CliRun r = vobb_cli("build " + mesh_path + " -o " + tree + " --method obbtree --depth 2");
+  ASSERT_EQ(r.code, 0) << r.err;
+  r = vobb_cli("collide " + mesh_path + " " + tree + " --static --colliders 20 --no-fcl -o " +
+               report + " --record-queries " + q);
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_EQ(lines_of(r.err), 1u) << r.err;
+  EXPECT_NE(r.err.find("centre beyond 2^240, which a query file cannot hold"), std::string::npos)
+      << r.err;
+  EXPECT_FALSE(test::exists(q));
+  EXPECT_TRUE(test::exists(report));
+  for (const std::string& p : {mesh_path, tree, q, report}) std::remove(p.c_str());
+}
+
 }  // namespace
 }  // namespace vobb::collision
