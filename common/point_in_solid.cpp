@@ -1,6 +1,5 @@
 #include "common/point_in_solid.h"
 
-#include <cmath>
 #include <cstddef>
 
 #include "common/exact_predicates.h"
