@@ -29,6 +29,10 @@ struct Aabb {
     hi = hi.cwiseMax(b.hi);
   }
   bool empty() const { return !(lo.array() <= hi.array()).all(); }
+  // Closed: a point on the boundary is held.
+  bool holds(const Vec3& p) const {
+    return (lo.array() <= p.array()).all() && (p.array() <= hi.array()).all();
+  }
   // Closed-interval overlap: boxes that only touch do overlap.
   bool overlaps(const Aabb& b) const {
     return (lo.array() <= b.hi.array()).all() && (b.lo.array() <= hi.array()).all();

@@ -37,10 +37,6 @@ inline bool ray_meets(const AxisRay& r, const Aabb& b) {
          (r.s > 0 ? r.p[r.k] < b.hi[r.k] : b.lo[r.k] < r.p[r.k]);
 }
 
-bool holds(const Aabb& b, const Vec3& p) {
-  return (b.lo.array() <= p.array()).all() && (p.array() <= b.hi.array()).all();
-}
-
 // The side of the directed edge a -> b, projected on (i, j), where the moved start lies: the
 // sign of orient2d(a, b, p + si eps e_i + sj eps^2 e_j), whose terms in eps and eps^2 are
 // si (a_j - b_j) and sj (b_i - a_i). 0 only where a and b project to one point.
@@ -83,7 +79,7 @@ template <class Visit>
 void walk(const AabbTree& faces, const AxisRay& r, bool find_surface,
           const std::function<bool(int32_t)>& left_out, const Visit& visit) {
   faces.visit_accepted_until(
-      [&](const Aabb& b) { return ray_meets(r, b) || (find_surface && holds(b, r.p)); },
+      [&](const Aabb& b) { return ray_meets(r, b) || (find_surface && b.holds(r.p)); },
       [&](int32_t f) { return (left_out && left_out(f)) || visit(f); });
 }
 
@@ -101,7 +97,7 @@ void cast(const Mesh& mesh, const AabbTree& faces, const AxisRay& r, bool find_s
   bool odd = false, on_surface = false;
   walk(faces, r, find_surface, left_out, [&](int32_t f) {
     const Vec3 &a = mesh.corner(f, 0), &b = mesh.corner(f, 1), &c = mesh.corner(f, 2);
-    if (find_surface && holds(faces.primitive_bounds(f), r.p) && on_triangle(r.p, a, b, c)) {
+    if (find_surface && faces.primitive_bounds(f).holds(r.p) && on_triangle(r.p, a, b, c)) {
       on_surface = true;
       return false;
     }

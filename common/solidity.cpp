@@ -296,12 +296,9 @@ size_t inward_shells(const Mesh& mesh, const std::vector<std::vector<int32_t>>& 
   for (size_t s = 0; s < shell_faces.size(); ++s)
     for (int32_t f : shell_faces[s]) shell_box[s].extend(mesh.face_bounds(f));
   const AabbTree shells(shell_box);
+  // The search ends at the first such box: many may hold p.
   auto other_box_holds = [&](const Vec3& p, size_t s) {
-    auto holds = [&](const Aabb& b) {
-      return (b.lo.array() <= p.array()).all() && (p.array() <= b.hi.array()).all();
-    };
-    // Stops at the first such box: many may hold it.
-    return !shells.visit_accepted_until(holds,
+    return !shells.visit_accepted_until([&](const Aabb& b) { return b.holds(p); },
                                         [&](int32_t t) { return static_cast<size_t>(t) == s; });
   };
   size_t wrong = 0;
