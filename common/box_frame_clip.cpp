@@ -78,6 +78,15 @@ std::array<int, 6> ranked(const Obb& box, const Aabb& bounds) {
 
 }  // namespace
 
+int frame_exponent(const Obb& box) {
+  int sum = 0;
+  for (int k = 0; k < 3; ++k) {
+    if (!(box.half[k] > 0)) return 0;
+    sum += std::ilogb(box.half[k]);
+  }
+  return sum >= 0 ? sum / 3 : -((-sum + 2) / 3);  // floor(sum / 3)
+}
+
 Obb shortest_column(const Obb& box, const Aabb& bounds) {
   return relabelled(box, ranked(box, bounds)[0]);
 }

@@ -64,21 +64,40 @@ struct Polygon {
 
 // The box's frame in NT: centre c, edge vectors u_k = h_k a_k, Cramer rows
 // w_k = u_{k+1} x u_{k+2} and det = det[u0 u1 u2] (ExactBoxFrame is the Rational one).
+//
+// A frame may be made in units scaled by 2^-e (make_frame's `e`): u_k = (2^-e h_k) a_k and
+// to_frame takes 2^-e (p - c). Every T-coordinate and R then come out multiplied by 2^-3e,
+// every face term by 2^-9e and the OBV by 2^-3e, exactly in rationals; in floating point the
+// same numbers are rounded at the same places, so the results are the unscaled ones times
+// those powers, bit for bit, wherever neither lies outside the normal range. frame_exponent()
+// picks the e that brings R near 1, so that a box's evaluation does not depend on how far its
+// size lies from 1 (docs/derivations.md, "Interval range").
 template <class NT>
 struct Frame {
   NT c[3];
   NT u[3][3];
   NT w[3][3];
   NT det;
+  int e = 0;    // the units' exponent: lengths in units of 2^e
+  NT scale{1};  // 2^-e
 };
 
+// The e of the box's scaled frame: the floor of the mean of the half extents' binary
+// exponents, so that the scaled half extents' product lies in [1, 32) and R is that times
+// |det[a0 a1 a2]| (about 1). For a box that passes box_defect (each half extent's exponent
+// within [-1022, 242]) every scaled half extent lies within [2^-842, 2^844), so scaling is
+// exact. 0 for a flat box.
+int frame_exponent(const Obb& box);
+
 template <class NT>
-Frame<NT> make_frame(const Obb& box) {
+Frame<NT> make_frame(const Obb& box, int e = 0) {
   Frame<NT> f;
+  f.e = e;
+  f.scale = NT(std::ldexp(1.0, -e));
   auto& u = f.u;
   for (int k = 0; k < 3; ++k) {
     f.c[k] = NT(box.center[k]);
-    for (int i = 0; i < 3; ++i) u[k][i] = NT(box.half[k]) * NT(box.axes[k][i]);
+    for (int i = 0; i < 3; ++i) u[k][i] = NT(std::ldexp(box.half[k], -e)) * NT(box.axes[k][i]);
   }
   for (int k = 0; k < 3; ++k) {
     const NT* a = u[(k + 1) % 3];
@@ -91,10 +110,12 @@ Frame<NT> make_frame(const Obb& box) {
   return f;
 }
 
-// T(p) for a mesh vertex p (its index `origin`, or -1).
+// T(p) for a mesh vertex p (its index `origin`, or -1), in the frame's units.
 template <class NT>
 Point<NT> to_frame(const Frame<NT>& f, const Vec3& p, int32_t origin = -1) {
-  const NT d[3] = {NT(p[0]) - f.c[0], NT(p[1]) - f.c[1], NT(p[2]) - f.c[2]};
+  NT d[3] = {NT(p[0]) - f.c[0], NT(p[1]) - f.c[1], NT(p[2]) - f.c[2]};
+  if (f.e != 0)
+    for (NT& x : d) x = x * f.scale;
   Point<NT> q;
   for (int k = 0; k < 3; ++k) q.x[k] = d[0] * f.w[k][0] + d[1] * f.w[k][1] + d[2] * f.w[k][2];
   q.origin = origin;

@@ -197,14 +197,32 @@ void ExactBoxFrame::corner(int index, Rational out[3]) const {
   }
 }
 
+namespace {
+// x * 2^s, rounded toward zero to a double (off by under 2 eps of it where it is normal).
+double scaled_shadow(const Rational& x, long s) {
+  Rational y;
+  if (s >= 0)
+    mpq_mul_2exp(y.get_mpq_t(), x.get_mpq_t(), static_cast<mp_bitcnt_t>(s));
+  else
+    mpq_div_2exp(y.get_mpq_t(), x.get_mpq_t(), static_cast<mp_bitcnt_t>(-s));
+  return y.get_d();
+}
+}  // namespace
+
 ExactBoxContainment::ExactBoxContainment(const Obb& box) : frame_(box) {
+  const long e = box_clip::frame_exponent(box);
+  scale_ = std::ldexp(1.0, static_cast<int>(-e));
   for (int k = 0; k < 3; ++k) {
     cd_[k] = box.center[k];
-    for (int i = 0; i < 3; ++i) wd_[k][i] = frame_.w[k][i].get_d();
+    wd_abs_sum_[k] = 0;
+    for (int i = 0; i < 3; ++i) {
+      wd_[k][i] = scaled_shadow(frame_.w[k][i], -2 * e);
+      wd_abs_sum_[k] += std::abs(wd_[k][i]);
+    }
   }
   det_sign_ = sgn(frame_.det);
   abs_det_ = abs(frame_.det);
-  abs_det_d_ = abs_det_.get_d();
+  abs_det_d_ = scaled_shadow(abs_det_, -3 * e);
   if (det_sign_ == 0)
     for (int k = 0; k < 3; ++k)
       if (box.half[k] != 0 && !box.axes[k].isZero()) spans_[span_count_++] = k;
@@ -253,15 +271,18 @@ bool ExactBoxContainment::contains_flat(const Vec3& p) const {
 
 bool ExactBoxContainment::contains(const Vec3& p) const {
   if (det_sign_ == 0) return contains_flat(p);
-  // Filter: t_k det = (p - c) . w_k. In double, the difference p - c is off by eps|p - c|,
-  // the stored w is off by 2 eps |w| (rounded from exact), the dot product adds 3 eps: the
-  // result is off by at most 8 eps sum_i |p_i - c_i| |w_i|; the determinant shadow by 2 eps.
-  // The filter's relative bounds fail where values underflow; tiny boxes go exact.
+  // Filter, in the shadows' units: t_k det = (p - c) . w_k. In double, the difference p - c
+  // is off by eps|p - c| (its scaling by a power of two is exact where it stays normal), the
+  // stored w is off by 2 eps |w| (rounded from exact), the dot product adds 3 eps: the result
+  // is off by at most 8 eps sum_i |p_i - c_i| |w_i|; the determinant shadow by 2 eps. Where a
+  // scaled difference or a product is subnormal it is off by at most 2^-1075 more, times |w_i|
+  // for the difference: the last term. Non-finite shadows (a needle box's) fail every test.
+  // Relative bounds fail where values underflow further; such cases go exact.
   bool certain = abs_det_d_ > kFilterFloor;
   for (int k = 0; k < 3 && certain; ++k) {
     double dot = 0.0, mag = 0.0;
     for (int i = 0; i < 3; ++i) {
-      const double d = p[i] - cd_[i];
+      const double d = (p[i] - cd_[i]) * scale_;
       dot += d * wd_[k][i];
       mag += std::abs(d * wd_[k][i]);
     }
@@ -269,7 +290,8 @@ bool ExactBoxContainment::contains(const Vec3& p) const {
       certain = false;
       break;
     }
-    const double err = 8.0 * kEps * mag + 2.0 * kEps * abs_det_d_;
+    const double err =
+        8.0 * kEps * mag + 2.0 * kEps * abs_det_d_ + 0x1p-1072 * (wd_abs_sum_[k] + 1.0);
     if (std::abs(dot) + err < abs_det_d_) continue;      // surely inside slab k
     if (std::abs(dot) - err > abs_det_d_) return false;  // surely outside
     certain = false;

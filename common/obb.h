@@ -108,10 +108,14 @@ class ExactBoxContainment {
   int det_sign_ = 0;
   int spans_[3] = {-1, -1, -1};  // flat box: the axes with nonzero extent, in order
   int span_count_ = 0;
-  // Double shadows of the above for a filter.
+  // Double shadows of the above for a filter, in units of 2^e (box_clip::frame_exponent):
+  // lengths times scale_ = 2^-e, w times 2^-2e, det times 2^-3e, so that a box's filter does
+  // not depend on how far its size lies from 1.
   double wd_[3][3];
+  double wd_abs_sum_[3];
   double cd_[3];
   double abs_det_d_;
+  double scale_;
 };
 
 // The separating-axis test's candidates for two boxes (anything with `axes`, a std::array of

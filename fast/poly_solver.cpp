@@ -30,7 +30,8 @@ bool in_range(const Interval& x) { return x.inf() >= -kSafe && x.sup() <= kSafe;
 // intervals cannot decide are settled here.
 class ExactBox {
  public:
-  ExactBox(const Mesh& mesh, const Obb& box) : mesh_(mesh), box_(box) {}
+  // In the units of the interval frame (scaled by 2^-e), so that its terms add to that sum.
+  ExactBox(const Mesh& mesh, const Obb& box, int e) : mesh_(mesh), box_(box), e_(e) {}
   // sign(side T_axis(v) - bound R) for mesh vertex v, exactly.
   int sign(int32_t v, int axis, int side, int bound) {
     make();
@@ -50,11 +51,12 @@ class ExactBox {
  private:
   void make() {
     if (frame_) return;
-    frame_ = box_clip::make_frame<Rational>(box_);
+    frame_ = box_clip::make_frame<Rational>(box_, e_);
     R_ = abs(frame_->det);
   }
   const Mesh& mesh_;
   const Obb& box_;
+  int e_;
   std::optional<Frame<Rational>> frame_;
   Rational R_;
   int32_t signs_ = 0;
@@ -76,6 +78,12 @@ struct ExactVertexSigns {
     return exact->sign(p.origin, axis, side, bound);
   }
 };
+
+// x * 2^(3e), the OBV in the box's own units from its value in units of 2^e, enclosed.
+Interval unscaled(Interval x, int e) {
+  const Interval p(std::ldexp(1.0, e));  // exact: e lies within [-1022, 242]
+  return x * p * p * p;
+}
 
 PolyObv exact_result(const Rational& q, int32_t faces, std::string why) {
   PolyObv r;
@@ -108,8 +116,9 @@ PolyObv PolyObvSolver::evaluate_as(const box_clip::Column& column) const {
   const ColumnFilter filter(box);
   if (filter.flat()) return PolyObv{};  // no volume: [0, 0]
   Interval::Protector upward;
-  const Frame<Interval> frame = box_clip::make_frame<Interval>(box);
-  const Interval R = CGAL::abs(frame.det);
+  const int e = box_clip::frame_exponent(box);
+  const Frame<Interval> frame = box_clip::make_frame<Interval>(box, e);
+  const Interval R = CGAL::abs(frame.det);  // in units of 2^e, as every value below
   if (!(R.inf() > 0) || !in_range(R)) {
     const double vol = volume(box);
     return exact_result(exact(box), 0,
@@ -117,7 +126,7 @@ PolyObv PolyObvSolver::evaluate_as(const box_clip::Column& column) const {
                                     : "a nearly flat box: its volume's enclosure holds 0 (volume " +
                                           format_double(vol) + ")");
   }
-  ExactBox exact_box(mesh_, box);
+  ExactBox exact_box(mesh_, box, e);
   const ExactVertexSigns decide{&exact_box};
   Interval sum(0);
   int32_t visited = 0, exact_faces = 0;
@@ -153,15 +162,19 @@ PolyObv PolyObvSolver::evaluate_as(const box_clip::Column& column) const {
   }
   if (!range_ok)
     return exact_result(exact(box), visited, "coordinates beyond the intervals' safe range");
-  const Interval obv = box_clip::obv_from_sum6(sum, R);
-  const double vol = volume(box);
-  if (!CGAL::is_finite(obv) || !(obv.sup() - obv.inf() <= kMaxRelativeWidth * vol)) {
+  const Interval scaled_obv = box_clip::obv_from_sum6(sum, R);
+  // The box's volume in the same units: 8 times the scaled half extents, in [8, 256).
+  const double scaled_vol =
+      8 * std::ldexp(box.half[0], -e) * std::ldexp(box.half[1], -e) * std::ldexp(box.half[2], -e);
+  const double width = scaled_obv.sup() - scaled_obv.inf();
+  if (!CGAL::is_finite(scaled_obv) || !(width <= kMaxRelativeWidth * scaled_vol)) {
     PolyObv r = exact_result(exact(box), visited,
                              "an ill-conditioned box: the interval is wider than " +
                                  format_double(kMaxRelativeWidth) + " of its volume");
-    r.rejected_width = CGAL::is_finite(obv) ? obv.sup() - obv.inf() : INFINITY;
+    r.rejected_width = CGAL::is_finite(scaled_obv) ? std::ldexp(width, 3 * e) : INFINITY;
     return r;
   }
+  const Interval obv = unscaled(scaled_obv, e);
   PolyObv r;
   // The exact OBV lies in [0, vol(B)] too; vol(B)'s double is not an enclosure, so only 0 clips.
   r.lo = std::max(obv.inf(), 0.0);
@@ -178,7 +191,8 @@ double PolyObvSolver::estimate_as(const Obb& box) const {
   const ColumnFilter filter(box);
   if (filter.flat()) return 0;
   CGAL::Protect_FPU_rounding<true> nearest(CGAL_FE_TONEAREST);
-  const Frame<double> frame = box_clip::make_frame<double>(box);
+  const int e = box_clip::frame_exponent(box);
+  const Frame<double> frame = box_clip::make_frame<double>(box, e);  // in units of 2^e
   const double R = std::abs(frame.det);
   double sum = 0;
   if (R > 0) {
@@ -197,7 +211,7 @@ double PolyObvSolver::estimate_as(const Obb& box) const {
   const double obv = R > 0 ? box_clip::obv_from_sum6(sum, R) : 0.0;
   // Beyond double's range (or a nearly flat box): the certified evaluation's midpoint.
   if (!std::isfinite(obv)) return evaluate_as(box_clip::column_of(box, mesh_, faces_)).estimate;
-  return obv;
+  return std::ldexp(obv, 3 * e);
 }
 
 std::vector<PolyObv> PolyObvSolver::evaluate(const std::vector<Obb>& boxes) const {

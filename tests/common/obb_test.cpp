@@ -226,6 +226,46 @@ TEST(ExactBoxContainment, BoundaryIsInsideAndOneUlpBeyondIsOutside) {
   EXPECT_TRUE(inside.contains(b.center));
 }
 
+// The filter runs in units near the box's size: at 2^-300 (where the unscaled determinant is
+// far below the filter's floor) and at 2^200, a corner is inside and one ulp beyond a face is
+// out, and points near the faces of a rotated box agree with the rational test.
+TEST(ExactBoxContainment, DecidesAtEveryScale) {
+  for (const int k : {-300, 200, 0}) {
+    Obb e;
+    e.center = Vec3(std::ldexp(1, k), std::ldexp(2, k), std::ldexp(3, k));
+    e.half = Vec3(std::ldexp(0.5, k), std::ldexp(0.25, k), std::ldexp(1, k));
+    const ExactBoxContainment in_e(e);
+    const double x = std::ldexp(1.5, k), y = std::ldexp(2.25, k), z = std::ldexp(4, k);
+    EXPECT_TRUE(in_e.contains(Vec3(x, y, z))) << k;
+    EXPECT_FALSE(in_e.contains(Vec3(std::nextafter(x, 2 * x), y, z))) << k;
+    EXPECT_FALSE(in_e.contains(Vec3(x, std::nextafter(y, 2 * y), z))) << k;
+    Obb r = rotated_box(e.center, e.half, 0.7, Vec3(1, 2, 3));
+    const ExactBoxContainment in_r(r);
+    const ExactBoxFrame f(r);
+    std::mt19937 rng(k + 1000);
+    std::uniform_real_distribution<double> t(-1.0, 1.0);
+    int in = 0, out = 0;
+    for (int i = 0; i < 400; ++i) {
+      Vec3 p = r.center;
+      const int face = i % 3;
+      for (int j = 0; j < 3; ++j) {
+        const double tj = j == face ? (i % 2 ? 1.0 : -1.0) * (1 + std::ldexp(t(rng), -45)) : t(rng);
+        p += tj * r.half[j] * r.axes[j];
+      }
+      bool exact_in = true;
+      for (int j = 0; j < 3; ++j) {
+        Rational dot = 0;
+        for (int a = 0; a < 3; ++a) dot += (Rational(p[a]) - f.c[a]) * f.w[j][a];
+        exact_in = exact_in && abs(dot) <= abs(f.det);
+      }
+      EXPECT_EQ(in_r.contains(p), exact_in) << k << " point " << i;
+      (exact_in ? in : out)++;
+    }
+    EXPECT_GT(in, 50);
+    EXPECT_GT(out, 50);
+  }
+}
+
 // A box with zero half extents is the closed parallelepiped all the same (DESIGN §1): a
 // rectangle, a segment or a point, boundary included, and nothing one ulp off it.
 TEST(ExactBoxContainment, FlatBoxesAreClosedRectanglesSegmentsAndPoints) {

@@ -249,13 +249,20 @@ TEST(PolySolver, DegenerateAndOutOfRangeBoxes) {
   EXPECT_EQ(f.hi, 0.0);
   EXPECT_EQ(poly.estimate(flat), 0.0);
   EXPECT_TRUE(poly.exact(flat) == Rational(0));
-  // Half extents of 2^110: R = |det U| = 2^330 lies beyond the safe range 2^300.
+  // Half extents of 2^110 (R = 2^330 unscaled): in units of 2^110 an ordinary box, enclosed by
+  // the intervals.
   const Obb huge = rotated_box(Vec3(0.5, 0.5, 0.5), Vec3(0x1p110, 0x1p110, 0x1p110), 0.4);
   const PolyObv h = poly.evaluate(huge);
-  EXPECT_TRUE(h.exact_box);
-  EXPECT_NE(h.why.find("range"), std::string::npos) << h.why;
+  EXPECT_FALSE(h.exact_box) << h.why;
   EXPECT_TRUE(encloses(h, poly.exact(huge)));
   EXPECT_TRUE(std::isfinite(poly.estimate(huge)));
+  // Half extents of 2^-310 below the cube's top face: in the box's units that face lies about
+  // 2^310 away, beyond the safe range 2^300, so the box goes to rationals and says so.
+  const Obb needle_far = rotated_box(Vec3(0.5, 0.5, 0.5), Vec3(0x1p-310, 0x1p-310, 0x1p-310), 0.4);
+  const PolyObv n = poly.evaluate(needle_far);
+  EXPECT_TRUE(n.exact_box);
+  EXPECT_NE(n.why.find("range"), std::string::npos) << n.why;
+  EXPECT_TRUE(encloses(n, poly.exact(needle_far)));
   // Tiny: half extents of 2^-60 about a point inside: no outer volume; and about a point
   // outside: all of it outside.
   for (const Vec3& c : {Vec3(0.5, 0.5, 0.5), Vec3(7, 7, 7)}) {
@@ -265,6 +272,37 @@ TEST(PolySolver, DegenerateAndOutOfRangeBoxes) {
     const Rational expected = c[0] < 2 ? Rational(0) : exact_volume(tiny);
     EXPECT_EQ(poly.exact(tiny), expected);
     EXPECT_TRUE(encloses(t, expected));
+  }
+}
+
+// A box's evaluation runs in units of 2^e near its own size, so the mesh and the boxes scaled
+// by 2^k give the same numbers times 2^3k, bit for bit (box_frame_clip.h, Frame), and no box
+// leaves the intervals: at 2^200 the unscaled R would lie beyond the safe range and the
+// estimate's sum overflow; at 2^-200 the terms (lengths to the 9th power) underflow.
+TEST(PolySolver, ScalingByAPowerOfTwoScalesTheResultsExactly) {
+  const AnalyticMesh torus = analytic::polygonal_torus();
+  const std::vector<Obb> boxes = random_boxes(torus.mesh, 30, 5);
+  const PolyObvSolver poly(torus.mesh);
+  for (const int k : {200, -200, 230}) {
+    Mesh scaled = torus.mesh;
+    for (Vec3& v : scaled.vertices)
+      for (int i = 0; i < 3; ++i) v[i] = std::ldexp(v[i], k);
+    const PolyObvSolver spoly(scaled);
+    int checked_exactly = 0;
+    for (const Obb& b : boxes) {
+      Obb sb = b;
+      for (int i = 0; i < 3; ++i) {
+        sb.center[i] = std::ldexp(b.center[i], k);
+        sb.half[i] = std::ldexp(b.half[i], k);
+      }
+      const PolyObv r = poly.evaluate(b), sr = spoly.evaluate(sb);
+      ASSERT_FALSE(r.exact_box) << r.why;
+      EXPECT_FALSE(sr.exact_box) << "k " << k << ": " << sr.why;
+      EXPECT_EQ(sr.lo, std::ldexp(r.lo, 3 * k)) << "k " << k;
+      EXPECT_EQ(sr.hi, std::ldexp(r.hi, 3 * k)) << "k " << k;
+      EXPECT_EQ(spoly.estimate(sb), std::ldexp(poly.estimate(b), 3 * k)) << "k " << k;
+      if (checked_exactly++ < 3) EXPECT_TRUE(encloses(sr, spoly.exact(sb))) << "k " << k;
+    }
   }
 }
 
