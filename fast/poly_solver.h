@@ -14,6 +14,9 @@
 //    rationals, enclosed; a box whose enclosure cannot be made tight (coordinates beyond
 //    the doubles' safe range, a nearly flat box, a width above kMaxRelativeWidth of the box's
 //    volume) is evaluated wholly in rationals, and says so. No interval is ever widened.
+//  - Both run in units near the box's size (box_clip::frame_exponent), so a mesh and its boxes
+//    scaled by 2^k give the results times 2^3k, bit for bit, while those stay normal; the
+//    safe range bounds the mesh's reach beyond the box relative to its size, not its size.
 //  - estimate(): the same formula in plain double, for the builder's loop (ObvEstimate), with
 //    no enclosure: off the exact value by round-off, a median of at most 1e-12 of the box's
 //    volume over boxes in general position (measured: about 1e-16, docs/BENCHMARKS.md). What a
