@@ -4,6 +4,7 @@
 #include "builder/subtree_swaps.h"
 
 #include <gtest/gtest.h>
+#include <tbb/info.h>
 #include <tbb/task_arena.h>
 
 #include <atomic>
@@ -12,6 +13,7 @@
 #include <string_view>
 #include <tuple>
 
+#include "arena_threads.h"
 #include "builder/exact_drop.h"
 #include "builder/obbtree_builder.h"
 #include "common/tree_io.h"
@@ -96,12 +98,18 @@ TEST(SubtreeSwaps, TheSameTreeOnAnyNumberOfThreads) {
   });
   for (int threads : {2, 4}) {
     std::string got;
-    tbb::task_arena(threads).execute([&] {
+    tbb::task_arena arena(threads);
+    test::ArenaThreads joined(arena);
+    arena.execute([&] {
       Tree t = baseline_torus(mesh);
       swap_subtrees(mesh, solvers.options(), &t);
       got = tree_to_json(t);
     });
     EXPECT_EQ(got, one) << threads << " threads";
+    // Where a second CPU is there, a second thread must have taken part.
+    if (test::check_runs(tbb::info::default_concurrency() >= 2, "a second CPU")) {
+      EXPECT_GE(joined.workers(), 1u) << threads << " threads: the swaps ran on one";
+    }
   }
   EXPECT_NE(one, tree_to_json(baseline_torus(mesh)));  // it did change the tree
 }

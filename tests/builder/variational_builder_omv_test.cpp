@@ -2,11 +2,13 @@
 // polyhedral shares (fast/poly_overlap.h): a conservative tree that certifies, the same bytes
 // for any thread count and after a resume, and an objective that reaches the tree.
 #include <gtest/gtest.h>
+#include <tbb/info.h>
 #include <tbb/task_arena.h>
 
 #include <cmath>
 #include <string>
 
+#include "arena_threads.h"
 #include "builder/exact_drop.h"
 #include "builder/measured_tree.h"
 #include "builder/variational_builder.h"
@@ -52,14 +54,19 @@ TEST(VariationalBuilderOmv, ConservativeCertifiedAndTheSameForAnyThreads) {
   const exact::Certificate cert = exact::certify(mesh, tree, co);
   EXPECT_TRUE(cert.ok());
   // Searches at once (the nodes of a level, a sweep's regroupings) on 2 and 4 threads: each
-  // must be the serial build, byte for byte.
+  // must be the serial build, byte for byte, and (where a second CPU is there) a second thread
+  // must have taken part.
   for (int threads : {2, 4}) {
     VariationalOptions c = o;
     c.concurrent_estimates = true;
     std::string got;
-    tbb::task_arena(threads).execute(
-        [&] { got = tree_to_json(build_variational(mesh, c, cpu_at(cpu, 8))); });
+    tbb::task_arena arena(threads);
+    test::ArenaThreads joined(arena);
+    arena.execute([&] { got = tree_to_json(build_variational(mesh, c, cpu_at(cpu, 8))); });
     EXPECT_EQ(got, one) << "threads " << threads;
+    if (test::check_runs(tbb::info::default_concurrency() >= 2, "a second CPU")) {
+      EXPECT_GE(joined.workers(), 1u) << "threads " << threads << ": the build ran on one";
+    }
   }
 }
 

@@ -12,6 +12,7 @@
 
 #include "data/analytic_meshes.h"
 #include "fast/cubemap.h"
+#include "fast/cubemap_bound.h"
 #include "fast/estimator_test_util.h"
 #include "fast/texel_plan.h"
 
@@ -64,9 +65,10 @@ TEST(CpuEstimator, CubeCentredInAnAlignedBoxIsExact) {
 // Off centre, the cube's faces cross cubemap faces at an angle: the error must shrink as m grows.
 // The error falls about as m^-2 but often changes sign between m and 2m (DESIGN §4), so one
 // box's error at 8 or 16 is compared with 4x its error at 64 (m^-2 predicts 16x from 16 to
-// 64). At every m the error lies within the estimator's own a-priori bound, resolution_bound
-// (plus round-off). Both centres lie outside the cube, so that some texels miss the surface
-// and the bound says something: it must stay below the box's volume.
+// 64). At every m the error lies within the CPU twin's rigorous bound (cubemap_bound.h:
+// resolution_bound, which holds the plan's rounding of the faces, plus the evaluation's and the
+// volume scale's round-off). Both centres lie outside the cube, so that some texels miss the
+// surface and the bound says something: it must stay below the box's volume.
 TEST(CpuEstimator, OffCentreErrorShrinksWithResolution) {
   const Mesh m = analytic::cube().mesh;
   const CpuObvEstimator est(m);
@@ -77,11 +79,9 @@ TEST(CpuEstimator, OffCentreErrorShrinksWithResolution) {
     int i = 0;
     for (int res : {8, 16, 64}) {
       e[i] = std::abs(est.estimate(b, res) - 26);
-      const BoxPlan plan = planner.plan(b, res);
-      const double bound = resolution_bound(plan, res);
+      const double bound = cubemap_bounds(planner, b, res).cpu_rigorous();
       EXPECT_LT(bound, volume(b)) << c.transpose() << " m " << res;
-      EXPECT_LE(e[i], bound + cpu_rounding_bound(plan, res) + test::aligned_plan_round_off(m, 6, b))
-          << c.transpose() << " m " << res;
+      EXPECT_LE(e[i], bound) << c.transpose() << " m " << res;
       ++i;
     }
     EXPECT_LT(4 * e[2], std::max(e[0], e[1])) << c.transpose();

@@ -14,6 +14,7 @@
 #include "common/io/mesh_report.h"
 #include "data/analytic_meshes.h"
 #include "fast/cpu_estimator.h"
+#include "fast/cubemap_bound.h"
 #include "fast/estimator_test_util.h"
 #include "fast/gl_test_util.h"
 #include "test_common.h"
@@ -209,7 +210,7 @@ TEST(GlEstimator, WholeMeshBoxIsBoxVolumeMinusMeshVolume) {
     // of the diagonal's components), so half extents of 1.5 diagonals hold the mesh in any
     // orientation of the box.
     b.half = Vec3::Constant(1.5 * (bounds.hi - bounds.lo).norm());
-    const double exact = volume(b) - to_double_nearest(a.volume);
+    const Rational exact = exact_volume(b) - a.volume;  // the box holds the whole solid
     for (int res : {8, 32}) {
       const BoxPlan plan = est->planner().plan(b, res);
       const double v = est->estimate(b, res);
@@ -221,8 +222,9 @@ TEST(GlEstimator, WholeMeshBoxIsBoxVolumeMinusMeshVolume) {
       // all at m = 8 and 32, well under half. (Centred in cube_with_cavity's cavity, as this
       // test first was, every texel sees the surface and the bound is the whole box.)
       EXPECT_LT(resolution_bound(plan, res), volume(b) / 2) << a.name << " m " << res;
-      EXPECT_NEAR(v, exact, resolution_bound(plan, res) + gl_deviation_bound(plan, res))
-          << a.name << " m " << res;
+      // The GL estimate's rigorous bound (cubemap_bound.h), decided in rationals.
+      const double bound = cubemap_bounds(est->planner(), b, res).rigorous();
+      EXPECT_LE(abs(Rational(v) - exact), Rational(bound)) << a.name << " m " << res;
     }
   }
 }

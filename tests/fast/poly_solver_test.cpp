@@ -8,6 +8,7 @@
 #include <cmath>
 #include <random>
 
+#include "common/box_frame_clip.h"
 #include "common/io/mesh_report.h"
 #include "data/analytic_meshes.h"
 #include "exact/outer_volume.h"
@@ -85,7 +86,8 @@ void check_all(const Mesh& mesh, const std::vector<Obb>& boxes, Tally* tally,
     if (r.exact_box) {
       ++tally->exact_boxes;
       // A box goes to rationals for its width only where that width was above the solver's
-      // threshold, and still within its derived bound: wider, the intervals lost accuracy.
+      // threshold, and still within its derived bound: wider, the intervals lost accuracy
+      // (AWideIntervalSendsTheBoxToRationals makes such boxes; these seeded ones need none).
       if (r.why.find("wider than") != std::string::npos) {
         EXPECT_GT(r.rejected_width, kMaxRelativeWidth * volume(boxes[i])) << r.why;
         EXPECT_LE(r.rejected_width, bound) << r.why;
@@ -301,7 +303,9 @@ TEST(PolySolver, ScalingByAPowerOfTwoScalesTheResultsExactly) {
       EXPECT_EQ(sr.lo, std::ldexp(r.lo, 3 * k)) << "k " << k;
       EXPECT_EQ(sr.hi, std::ldexp(r.hi, 3 * k)) << "k " << k;
       EXPECT_EQ(spoly.estimate(sb), std::ldexp(poly.estimate(b), 3 * k)) << "k " << k;
-      if (checked_exactly++ < 3) EXPECT_TRUE(encloses(sr, spoly.exact(sb))) << "k " << k;
+      if (checked_exactly++ < 3) {
+        EXPECT_TRUE(encloses(sr, spoly.exact(sb))) << "k " << k;
+      }
     }
   }
 }
@@ -326,6 +330,43 @@ TEST(PolySolver, BrokenEvaluatorIsCaught) {
     }
     EXPECT_GT(caught, 0);
   }
+}
+
+// An interval wider than kMaxRelativeWidth of the box's volume sends the box to rationals. One
+// face in seven is given a term a unit wider each way. In the box's units R = h0 h1 h2 (about)
+// lies in [1, 32) (docs/derivations.md, "Interval range"), so each such face widens the OBV by
+// at least 2 / (6 R^2) > 3e-4, far above 1e-9 of the volume 8 R < 256. A box goes to rationals
+// only where its column (the faces evaluate visits) holds such a face; it says so, gives the
+// width it rejected, and returns the rational value's enclosure. The others are still enclosed
+// by intervals (these boxes need no rationals undamaged: EnclosesTheExactValueOnAnalyticMeshes).
+TEST(PolySolver, AWideIntervalSendsTheBoxToRationals) {
+  const AnalyticMesh torus = analytic::polygonal_torus();
+  const std::vector<Obb> boxes = random_boxes(torus.mesh, 40, 12);
+  PolyObvSolver poly(torus.mesh);
+  poly.set_damage_for_tests([](double* lo, double* hi, int32_t f) {
+    if (f % 7 == 3) *lo -= 1, *hi += 1;
+  });
+  const AabbTree tree = AabbTree::over_faces(torus.mesh);
+  int wide = 0;
+  for (const Obb& b : boxes) {
+    const PolyObv r = poly.evaluate(b);
+    const Rational exact = poly.exact(b);
+    EXPECT_TRUE(encloses(r, exact));
+    const box_clip::Column column = box_clip::fewest_faces_column(b, torus.mesh, tree);
+    const bool damaged =
+        std::any_of(column.faces.begin(), column.faces.end(), [](int32_t f) { return f % 7 == 3; });
+    if (!r.exact_box) continue;
+    EXPECT_TRUE(damaged) << "no damaged face, yet " << r.why;
+    ASSERT_NE(r.why.find("wider than"), std::string::npos) << r.why;
+    ++wide;
+    EXPECT_GT(r.rejected_width, kMaxRelativeWidth * volume(b)) << r.why;
+    EXPECT_EQ(r.estimate, to_double_nearest(exact));
+    double lo, hi;
+    enclose(exact, &lo, &hi);
+    EXPECT_EQ(r.lo, lo);
+    EXPECT_EQ(r.hi, hi);
+  }
+  EXPECT_GT(wide, 0);
 }
 
 }  // namespace

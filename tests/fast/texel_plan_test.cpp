@@ -57,16 +57,10 @@ TEST(TexelPlan, ThinBoxesDoNotTakeFarFacesAsNearTheCentre) {
   }
 }
 
-// A plan written into a BoxPlan that held other plans equals a fresh one, field by field:
-// the CPU twin and the GL estimator plan every box into one reused BoxPlan (for its vectors'
-// capacity), so anything a plan left behind would change the next box's value. The boxes
-// alternate between large and small plans and the early exits: the whole mesh, a small box at
-// a rim vertex, a flat box, a thin box whose faces lie beyond 2^300 box units (unresolved), a
-// box across the rim. (Which order-keeping path a box takes is
-// CulledPlansKeepTheFacesInMeshOrder's.) A box centred on a mesh vertex, on the midpoint of a
-// face's diagonal, or on an edge's midpoint has edges whose line passes through the centre (E* = 0
-// exactly). plan() marks exactly those, as a rational evaluation of E* says, and an edge test on a
-// marked edge gives 0 for every texel, as the full rational test does.
+// A box centred on a mesh vertex, on the midpoint of a face's diagonal, or on an edge's midpoint
+// has edges whose line passes through the centre (E* = 0 exactly). plan() marks exactly those,
+// as a rational evaluation of E* says, and an edge test on a marked edge gives 0 for every
+// texel, as the full rational test does.
 TEST(TexelPlan, EdgesThroughTheCentreAreMarkedExactly) {
   Mesh cube;
   for (int i = 0; i < 8; ++i) cube.vertices.emplace_back(i & 1, (i >> 1) & 1, (i >> 2) & 1);
@@ -250,6 +244,13 @@ TEST(TexelPlan, ExactEdgeSidesByExpansionAreTheRationalOnes) {
 #endif
 }
 
+// A plan written into a BoxPlan that held other plans equals a fresh one, field by field:
+// the CPU twin and the GL estimator plan every box into one reused BoxPlan (for its vectors'
+// capacity), so anything a plan left behind would change the next box's value. The boxes
+// alternate between large and small plans and the early exits: the whole mesh, a small box at
+// a rim vertex, a flat box, a thin box whose faces lie beyond 2^300 box units (unresolved), a
+// box across the rim. (Which order-keeping path a box takes is
+// CulledPlansKeepTheFacesInMeshOrder's.)
 TEST(TexelPlan, APlanReusedAfterOthersEqualsAFreshOne) {
   const Vec3 d(4.0, 1.2, 0.8);
   const Mesh mesh = test::bipyramid_on_ray(d, 2000, 7);
@@ -310,7 +311,7 @@ TEST(TexelPlan, APlanReusedAfterOthersEqualsAFreshOne) {
       }
     }
   }
-  // Each path was taken (2 resolutions x 2 boxes of each kind).
+  // Each early exit was taken: the thin box twice and the flat box once, at 2 resolutions each.
   EXPECT_EQ(seen_unresolved, 4);
   EXPECT_EQ(seen_flat, 2);
 }

@@ -1,0 +1,41 @@
+// A test helper for claims of the form "the same result on any number of threads": it counts
+// the TBB worker threads that joined an arena while it was observed, so that such a test can
+// assert that a second thread did take part (on one CPU, an arena of four runs serially and
+// the claim holds by construction).
+#pragma once
+
+#include <tbb/task_arena.h>
+#include <tbb/task_scheduler_observer.h>
+
+#include <mutex>
+#include <set>
+#include <thread>
+
+namespace vobb::test {
+
+// Observes `arena` from construction to destruction. A worker joins an arena only when the
+// arena holds work that is waiting for a thread, so workers() > 0 means that the code run in
+// it offered work in parallel and another thread came for it.
+class ArenaThreads : public tbb::task_scheduler_observer {
+ public:
+  explicit ArenaThreads(tbb::task_arena& arena) : tbb::task_scheduler_observer(arena) {
+    observe(true);
+  }
+  ~ArenaThreads() override { observe(false); }
+  void on_scheduler_entry(bool is_worker) override {
+    if (!is_worker) return;
+    const std::lock_guard<std::mutex> lock(mutex_);
+    workers_.insert(std::this_thread::get_id());
+  }
+  // The distinct worker threads that joined so far.
+  size_t workers() const {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    return workers_.size();
+  }
+
+ private:
+  mutable std::mutex mutex_;
+  std::set<std::thread::id> workers_;
+};
+
+}  // namespace vobb::test
