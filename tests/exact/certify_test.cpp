@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 #include <sys/stat.h>
+#include <tbb/info.h>
 #include <tbb/task_arena.h>
 #include <unistd.h>
 
@@ -18,6 +19,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "arena_threads.h"
 #include "builder/obbtree_builder.h"
 #include "builder/variational_builder.h"
 #include "common/io/mesh_io.h"
@@ -142,9 +144,10 @@ TEST(Certify, VariationalTreeCertifiesAndBeatsTheBaselineExactly) {
 
 // Layers and OBVs are computed on several threads, each with its own Nef(X); the certificate
 // must be the same rationals whatever the number. The torus tree overlaps on most layers, so
-// unions (both paths) run, on whichever threads take their layers. (Which thread takes what is
-// up to the scheduler, so this cannot prove that two ran at once; a ThreadSanitizer check of
-// the same pattern with std::thread is noted in docs/BENCHMARKS.md.)
+// unions (both paths) run, on whichever threads take their layers. Where a second CPU is there,
+// a second thread must have joined. (Which thread takes what is up to the scheduler, so this
+// cannot prove that two ran at once; a ThreadSanitizer check of the same pattern with
+// std::thread is noted in docs/BENCHMARKS.md.)
 // The polygonal torus and its depth-4 baseline tree, whose layers overlap on most levels,
 // certified by both exact paths.
 class CertifyTorus : public ::testing::Test {
@@ -166,7 +169,12 @@ TEST_F(CertifyTorus, SameRationalsForAnyThreadCount) {
   const CertifyOptions co = both_paths();
   Certificate one, four;
   tbb::task_arena(1).execute([&] { one = certify(m, t, co); });
-  tbb::task_arena(4).execute([&] { four = certify(m, t, co); });
+  tbb::task_arena arena(4);
+  test::ArenaThreads joined(arena);
+  arena.execute([&] { four = certify(m, t, co); });
+  if (test::check_runs(tbb::info::default_concurrency() >= 2, "a second CPU")) {
+    EXPECT_GE(joined.workers(), 1u) << "the certificate was computed on one thread";
+  }
   ASSERT_EQ(one.layers.size(), 5u);
   ASSERT_EQ(four.layers.size(), one.layers.size());
   size_t unions = 0;

@@ -1,6 +1,7 @@
 #include "fast/cpu_estimator.h"
 
 #include <gtest/gtest.h>
+#include <tbb/info.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
@@ -10,11 +11,13 @@
 #include <utility>
 #include <vector>
 
+#include "arena_threads.h"
 #include "data/analytic_meshes.h"
 #include "fast/cubemap.h"
 #include "fast/cubemap_bound.h"
 #include "fast/estimator_test_util.h"
 #include "fast/texel_plan.h"
+#include "test_common.h"
 
 namespace vobb {
 namespace {
@@ -306,8 +309,12 @@ TEST(CpuEstimator, BatchEqualsSingleBoxesForAnyThreadCount) {
   ASSERT_GT(used, 0u);  // the boxes meet the surface: not a batch of trivial boxes
   for (int threads : {1, 2, 4}) {
     tbb::task_arena arena(threads);
+    test::ArenaThreads joined(arena);
     std::vector<double> batch;
     arena.execute([&] { batch = est.estimate(boxes, 16); });
+    if (threads > 1 && test::check_runs(tbb::info::default_concurrency() >= 2, "a second CPU")) {
+      EXPECT_GE(joined.workers(), 1u) << threads << " threads: the batch ran on one";
+    }
     ASSERT_EQ(batch.size(), single.size());
     for (size_t i = 0; i < boxes.size(); ++i)
       EXPECT_EQ(batch[i], single[i]) << threads << " threads, box " << i;

@@ -1,6 +1,7 @@
 #include "fast/gl_estimator.h"
 
 #include <gtest/gtest.h>
+#include <tbb/info.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
@@ -11,6 +12,7 @@
 #include <string>
 #include <thread>
 
+#include "arena_threads.h"
 #include "common/io/mesh_report.h"
 #include "data/analytic_meshes.h"
 #include "fast/cpu_estimator.h"
@@ -304,7 +306,12 @@ TEST(GlEstimator, ThreadsChangeNothing) {
     for (int threads : {1, 3, 8}) {
       std::vector<double> batch;
       before = gl->cpu_fallbacks();
-      tbb::task_arena(threads).execute([&] { batch = gl->estimate(boxes, res); });
+      tbb::task_arena arena(threads);
+      test::ArenaThreads joined(arena);
+      arena.execute([&] { batch = gl->estimate(boxes, res); });
+      if (threads > 1 && test::check_runs(tbb::info::default_concurrency() >= 2, "a second CPU")) {
+        EXPECT_GE(joined.workers(), 1u) << threads << " threads: the batch was planned on one";
+      }
       EXPECT_EQ(batch, alone) << "m " << res << ", " << threads << " threads";
       EXPECT_EQ(gl->cpu_fallbacks() - before, alone_fallbacks) << res;
     }
