@@ -269,12 +269,17 @@ inline std::vector<int> split_counts(const std::string& s) {
 inline CLI::Validator count_list(int lo, int hi) {
   return CLI::Validator(
       [lo, hi](std::string& s) -> std::string {
+        std::vector<int> seen;
         for (std::string item : split_commas(s)) {
           if (item.empty()) return "'" + s + "' has an empty element";
           if (const std::string bad = kCount(item); !bad.empty()) return bad;
           if (item.size() > 9 || std::stoi(item) < lo || std::stoi(item) > hi)
             return "'" + item + "' is not in [" + std::to_string(lo) + ", " + std::to_string(hi) +
                    "]";
+          // A count given twice would be computed twice.
+          if (std::find(seen.begin(), seen.end(), std::stoi(item)) != seen.end())
+            return "'" + s + "' lists " + std::to_string(std::stoi(item)) + " twice";
+          seen.push_back(std::stoi(item));
         }
         return "";
       },

@@ -187,6 +187,8 @@ Status make_checkpoint_folder(const std::string& what, const std::string& folder
   if (parent.empty()) parent = ".";
   if (!fs::is_directory(folder, ec) && !fs::is_directory(parent, ec))
     return Status::error(what + ": " + not_a_folder(parent.string()));
+  if (fs::exists(folder, ec) && !fs::is_directory(folder, ec))
+    return Status::error(what + ": " + folder + " is not a folder");
   fs::create_directory(folder, ec);
   if (ec) return Status::error(what + ": cannot make the checkpoint folder: " + ec.message());
   // A folder such as /sys/kernel exists and takes no file.

@@ -38,4 +38,18 @@ class ArenaThreads : public tbb::task_scheduler_observer {
   std::set<std::thread::id> workers_;
 };
 
+// Runs f in an arena of `threads` (more than 1) until a worker has joined, at most `attempts`
+// times; whether one did. A short run may end before a woken worker arrives, more so on a
+// loaded machine, so a single run would be a flaky check; the runs follow each other in the
+// same arena, so a worker late for one joins a later one. Each run's results are f's to check.
+template <class F>
+bool runs_until_a_worker_joins(int threads, int attempts, const F& f) {
+  tbb::task_arena arena(threads);
+  ArenaThreads joined(arena);
+  arena.execute([&] {
+    for (int i = 0; i < attempts && joined.workers() == 0; ++i) f();
+  });
+  return joined.workers() > 0;
+}
+
 }  // namespace vobb::test

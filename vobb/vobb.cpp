@@ -236,6 +236,12 @@ Status build_variational_tree(const Mesh& mesh, const BuildOptions& o, const Est
     s = read_variational_state(path, fingerprint, mesh.faces.size(), o.arity, o.depth, &resume,
                                &resuming);
     if (!s) return s;
+    // A state whose time budget ran out holds baseline splits where the search was cut short: a
+    // build without a budget would write that tree, not its own.
+    if (resuming && resume.budget_spent && !(o.time_budget > 0))
+      return Status::error(path +
+                           ": saved by a build whose --time-budget ran out, so a build without "
+                           "one cannot resume it (remove the folder to start again)");
     if (resuming)
       say(o.note, "resuming from " + path + " (" + std::to_string(resume.split_levels) +
                       " levels split, " + std::to_string(resume.sweeps) + " sweeps done)");

@@ -199,6 +199,22 @@ TEST(CliBadInput, OutputThatIsAnInputIsRefused) {
   EXPECT_EQ(slurp(tree), tree_bytes);
 }
 
+// The mesh and the tree given the other way round: the JSON file is said to be no mesh, in one
+// line, whichever command takes a mesh first.
+TEST(CliBadInput, AJsonFileGivenAsTheMeshIsSaidToBeNone) {
+  const std::string mesh = write_cube("swapped_cube.off", 1);
+  const std::string tree = test::temp_path("swapped_tree.json");
+  ASSERT_EQ(vobb_cli("build " + mesh + " -o " + tree + " --method obbtree --depth 1").code, 0);
+  for (const std::string& args : {"certify " + tree + " " + mesh, "info " + tree,
+                                  "build " + tree + " -o " + tree + ".out.json --depth 1"}) {
+    const CliRun r = vobb_cli(args);
+    EXPECT_EQ(r.code, 2) << args << ": " << r.err;
+    EXPECT_EQ(line_count(r.err), 1u) << args << ": " << r.err;
+    EXPECT_NE(r.err.find("a JSON file, not a mesh"), std::string::npos) << args << ": " << r.err;
+  }
+  EXPECT_FALSE(std::filesystem::exists(tree + ".out.json"));
+}
+
 // An output that cannot be written is refused before the run: the mesh given here is open,
 // and the message is still about the output, so it was checked first. A folder is no output,
 // nor a name longer than the folder takes. The check leaves nothing in the folder, and a pipe
@@ -220,6 +236,10 @@ TEST(CliBadInput, UnwritableOutputIsRefusedBeforeTheRun) {
         Case{"build " + open_mesh + " -o " + mesh + "/t.json --backend cpu",
              mesh + " is not a folder"},
         Case{"certify " + mesh + " " + tree + " --checkpoint " + mesh + "/ck",
+             mesh + " is not a folder"},
+        // A checkpoint that names a file: said so, not "cannot make the folder: File exists".
+        Case{"certify " + mesh + " " + tree + " --checkpoint " + tree, tree + " is not a folder"},
+        Case{"build " + mesh + " -o " + dir + "/t.json --backend cpu --checkpoint " + mesh,
              mesh + " is not a folder"},
         Case{"export " + tree + " --level 1 -o /nonexistent/b.obj", "no such folder /nonexistent"},
         Case{"collide " + open_mesh + " " + tree + " --static --colliders 5 -o /nonexistent/c.json",
@@ -896,12 +916,14 @@ TEST_F(CliOnCube, FlagsThatWouldChangeNothingAreRefused) {
 }
 
 // obv's list of resolutions: one list, every element a count in [1, 4096]; an empty element
-// is refused, not skipped, a second --m is refused, and a leading zero is decimal.
+// is refused, not skipped, as are a count listed twice and a second --m; a leading zero is
+// decimal.
 TEST_F(CliOnCube, ResolutionListsHaveNoEmptyElements) {
   const std::string boxes = test::temp_path("resolution_list_boxes.json");
   ASSERT_TRUE(write_root_box(boxes));
   const std::string obv = "obv " + mesh_ + " --boxes " + boxes + " --backend cpu --m ";
-  for (const char* value : {"8,,16", ",8", "8,", "''", "8,0", "8,4097", "8,0x10", "8 --m 16"}) {
+  for (const char* value :
+       {"8,,16", ",8", "8,", "''", "8,0", "8,4097", "8,0x10", "8 --m 16", "8,16,8", "8,08"}) {
     const CliRun r = vobb_cli(obv + value);
     EXPECT_EQ(r.code, 2) << value;
     EXPECT_EQ(line_count(r.err), 1u) << r.err;

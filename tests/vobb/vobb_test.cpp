@@ -232,6 +232,33 @@ TEST(BuildTree, ResumesFromItsCheckpoint) {
   std::filesystem::remove_all(folder);
 }
 
+// A state saved after the time budget ran out holds baseline splits where the search was cut:
+// a build without a budget refuses it (it would write that tree as its own) and leaves it as it
+// was; a build with a budget resumes it, as spent.
+TEST(BuildTree, RefusesToResumeASpentBudgetWithoutOne) {
+  const Mesh mesh = analytic::polygonal_torus().mesh;
+  BuildOptions o = small_build();
+  const std::string folder = test::temp_path("spent_checkpoint");
+  std::filesystem::remove_all(folder);
+  o.checkpoint = folder;
+  o.time_budget = 1e-3;  // the least accepted: spent before the first level is searched
+  Tree spent;
+  ASSERT_TRUE(build_tree(mesh, o, &spent).is_ok());
+  const std::string state = folder + "/state.json";
+  const std::string saved = test::slurp(state);
+  ASSERT_NE(saved.find("\"budget_spent\":true"), std::string::npos) << "no spent state to resume";
+  o.time_budget = 0;
+  Tree tree;
+  const Status s = build_tree(mesh, o, &tree);
+  EXPECT_FALSE(s.is_ok());
+  EXPECT_NE(s.message().find("--time-budget"), std::string::npos) << s.message();
+  EXPECT_EQ(test::slurp(state), saved);
+  o.time_budget = 1e-3;
+  ASSERT_TRUE(build_tree(mesh, o, &tree).is_ok());
+  EXPECT_EQ(tree_to_json(tree), tree_to_json(spent));
+  std::filesystem::remove_all(folder);
+}
+
 // tree_error weighs layer l of a depth-D tree by D - l + 1 (DESIGN §1), written out here, and
 // as the certificate does: equal as rationals.
 TEST(Certify, TreeErrorIsTheCertificatesE) {
