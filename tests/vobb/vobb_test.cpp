@@ -254,7 +254,11 @@ TEST(BuildTree, RefusesToResumeASpentBudgetWithoutOne) {
   EXPECT_NE(s.message().find("--time-budget"), std::string::npos) << s.message();
   EXPECT_EQ(test::slurp(state), saved);
   o.time_budget = 1e-3;
+  std::vector<std::string> notes;
+  o.note = [&](const std::string& line) { notes.push_back(line); };
   ASSERT_TRUE(build_tree(mesh, o, &tree).is_ok());
+  ASSERT_EQ(notes.size(), 1u);  // resumed, not built again (which gives the same tree here)
+  EXPECT_EQ(notes[0].rfind("resuming from ", 0), 0u) << notes[0];
   EXPECT_EQ(tree_to_json(tree), tree_to_json(spent));
   std::filesystem::remove_all(folder);
 }
