@@ -213,10 +213,13 @@ BuildOptions build_options(const BuildFlags& f) {
   auto line = std::make_shared<ProgressLine>();
   line->flags = f;
   line->objective = search_objective(o);
-  if (!f.quiet) {
-    o.progress = [line](const VariationalProgress& p) { (*line)(p); };
-    o.note = [](const std::string& s) { std::fprintf(stderr, "vobb: %s\n", one_line(s).c_str()); };
-  }
+  if (!f.quiet) o.progress = [line](const VariationalProgress& p) { (*line)(p); };
+  // Under --quiet only the resume notice, which says where the result came from (certify says
+  // it too).
+  o.note = [quiet = f.quiet](const std::string& s) {
+    if (quiet && s.rfind("resuming from ", 0) != 0) return;
+    std::fprintf(stderr, "vobb: %s\n", one_line(s).c_str());
+  };
   // A warning is said even with --quiet; on a terminal the progress line is still open: end it
   // first.
   o.warning = [line](const std::string& s) {

@@ -22,7 +22,9 @@ class ObvCommand final : public Command {
  public:
   CLI::App* add(CLI::App& app) override {
     CLI::App* c = app.add_subcommand(
-        "obv", "OBV of boxes: cubemap estimates at several m, and the exact value");
+        "obv",
+        "OBV of boxes by --backend: cubemap estimates at several m (gl, cpu), the polyhedral "
+        "solver's interval (poly), the exact value (exact), or all of them (all)");
     c->add_option("MESH", mesh_, "Solid mesh")->required();
     c->add_option("--boxes", boxes_path_, "Box file {\"boxes\":[{center, axes, half_extents}]}")
         ->required();

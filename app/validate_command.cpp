@@ -24,7 +24,8 @@ CLI::App* add_validate_command(CLI::App& app, ValidateFlags* f) {
   CLI::App* v = app.add_subcommand("validate",
                                    "Validation suite: error against m, error against time, sum OBV "
                                    ">= OMV, stiff cases; CSV, PNG, summary.md");
-  v->add_option("--suite", f->suite, "quick (CI, minutes) or full (under an hour)")
+  v->add_option("--suite", f->suite,
+                "quick (for CI, about 30 s on 2 cores) or full (under an hour)")
       ->capture_default_str()
       ->check(CLI::IsMember({"quick", "full"}));
   v->add_option("--out", f->out, "Output folder (default: validation-<suite>)")->check(app::kPath);

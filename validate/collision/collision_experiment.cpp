@@ -514,12 +514,11 @@ Status run_collision_experiment(const Mesh& mesh, const std::vector<NamedTree>& 
   // Colliders start 0.2 R to 4.2 R above the model, a fall of at least 0.45 s: a shorter run
   // asks nothing, and "every answer agrees" would say nothing.
   if (report->queries == 0) {
-    char why[160];
-    std::snprintf(
-        why, sizeof why,
-        "collide: no collider reached the model in %g simulated seconds (the first arrive after "
-        "about 0.45 s); simulate longer",
-        report->simulated_seconds);
+    char why[200];
+    std::snprintf(why, sizeof why,
+                  "collide: no collider reached the model in %g simulated seconds (--seconds %g, "
+                  "in whole steps of %g s; the first arrive after about 0.45 s); simulate longer",
+                  report->simulated_seconds, options.seconds, options.step);
     return Status::error(why);
   }
   return Status::ok();
