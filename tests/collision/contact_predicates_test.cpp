@@ -23,8 +23,10 @@ Collider unit_box_at(const Vec3& c) {
 // does not. Both cases sit inside the interval filter's doubt, so the rational path decides.
 TEST(ContactPredicates, BoxTouchingATriangleExactlyOnItsPlane) {
   const Vec3 p0(-1, -1, 1), p1(1, -1, 1), p2(0, 1, 1);
-  const uint64_t before = exact_fallbacks();
+  uint64_t before = exact_fallbacks();
   EXPECT_TRUE(touches_triangle(prepare_collider(unit_box_at(Vec3(0, 0, 0.5)), 2), p0, p1, p2));
+  EXPECT_GT(exact_fallbacks(), before);  // each case decided in rationals
+  before = exact_fallbacks();
   const double below = std::nextafter(0.5, 0.0);
   EXPECT_FALSE(touches_triangle(prepare_collider(unit_box_at(Vec3(0, 0, below)), 2), p0, p1, p2));
   EXPECT_GT(exact_fallbacks(), before);

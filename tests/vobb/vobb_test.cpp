@@ -203,6 +203,7 @@ TEST(BuildTree, RefusesOptionsThatContradictEachOther) {
     const Status s = build_tree(mesh, o, &tree);
     ASSERT_FALSE(s.is_ok()) << c.names;
     EXPECT_NE(s.message().find(c.names), std::string::npos) << s.message();
+    EXPECT_TRUE(tree.nodes.empty()) << c.names;
   }
 }
 
