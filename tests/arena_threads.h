@@ -4,12 +4,16 @@
 // the claim holds by construction).
 #pragma once
 
+#include <tbb/info.h>
 #include <tbb/task_arena.h>
 #include <tbb/task_scheduler_observer.h>
 
 #include <mutex>
 #include <set>
+#include <string>
 #include <thread>
+
+#include "test_common.h"
 
 namespace vobb::test {
 
@@ -50,6 +54,21 @@ bool runs_until_a_worker_joins(int threads, int attempts, const F& f) {
     for (int i = 0; i < attempts && joined.workers() == 0; ++i) f();
   });
   return joined.workers() > 0;
+}
+
+// Runs check on `threads` threads: once in an arena of one, or, for more, until a worker joins
+// (runs_until_a_worker_joins); where a second CPU is there (test_common.h, check_runs), a run
+// on more than one thread that no worker joined fails the test, naming `what` ran.
+template <class F>
+void expect_on_threads(int threads, int attempts, const F& check, const std::string& what) {
+  if (threads == 1) {
+    tbb::task_arena(1).execute(check);
+    return;
+  }
+  const bool joined = runs_until_a_worker_joins(threads, attempts, check);
+  if (check_runs(tbb::info::default_concurrency() >= 2, "a second CPU")) {
+    EXPECT_TRUE(joined) << threads << " threads: " << what << " ran on one";
+  }
 }
 
 }  // namespace vobb::test

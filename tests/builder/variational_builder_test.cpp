@@ -82,13 +82,13 @@ TEST(VariationalBuilder, SameTreeForAnyThreadCount) {
   std::string one, four;
   tbb::task_arena(1).execute(
       [&] { one = tree_to_json(build_variational(mesh, o, cpu_at(cpu, 8))); });
-  const bool joined = test::runs_until_a_worker_joins(4, 3, [&] {
-    four = tree_to_json(build_variational(mesh, o, cpu_at(cpu, 8)));
-    EXPECT_EQ(one, four);
-  });
-  if (test::check_runs(tbb::info::default_concurrency() >= 2, "a second CPU")) {
-    EXPECT_TRUE(joined) << "the estimates ran on one thread";
-  }
+  test::expect_on_threads(
+      4, 3,
+      [&] {
+        four = tree_to_json(build_variational(mesh, o, cpu_at(cpu, 8)));
+        EXPECT_EQ(one, four);
+      },
+      "the estimates");
 }
 
 // With concurrent_estimates the nodes of a level are split, and a sweep's regroupings run, at

@@ -309,15 +309,8 @@ TEST(GlEstimator, ThreadsChangeNothing) {
         EXPECT_EQ(gl->estimate(boxes, res), alone) << "m " << res << ", " << threads << " threads";
         EXPECT_EQ(gl->cpu_fallbacks() - start, alone_fallbacks) << res;
       };
-      if (threads == 1) {
-        tbb::task_arena(1).execute(check);
-        continue;
-      }
       // Short batches: runs are repeated until a worker joins one.
-      const bool joined = test::runs_until_a_worker_joins(threads, 20, check);
-      if (test::check_runs(tbb::info::default_concurrency() >= 2, "a second CPU")) {
-        EXPECT_TRUE(joined) << threads << " threads: the batch was planned on one";
-      }
+      test::expect_on_threads(threads, 20, check, "the batch's planning");
     }
     const size_t trips = gl->round_trips();
     EXPECT_EQ(gl->estimate(boxes, res), alone) << "m " << res << ", the default arena";
