@@ -175,8 +175,8 @@ void add_build_flags(CLI::App* cmd, BuildFlags* f, bool compare) {
                "same flags make the same build: either command resumes the other's), and for each "
                "tree's certification as for certify (certify-obbtree/, certify-variational/)"
              : "Folder for the build state after each level and sweep; a build started again with "
-               "it "
-               "resumes and gives the same tree")
+               "it resumes and gives the same tree (a state whose --time-budget ran out only with "
+               "a --time-budget)")
       ->check(kPath);
   cmd->add_option("--time-budget", o.time_budget,
                   "Seconds, for the search and then --subtree-swaps; the search stops and the "

@@ -1,7 +1,9 @@
 // A test helper for claims of the form "the same result on any number of threads": it counts
 // the TBB worker threads that joined an arena while it was observed, so that such a test can
-// assert that a second thread did take part (on one CPU, an arena of four runs serially and
-// the claim holds by construction).
+// assert that the code offered work in parallel (on one CPU, an arena of four runs serially
+// and the claim holds by construction). A worker that joins may still arrive after the work it
+// was called for is done: this shows that the code is parallel, not that two threads ran at
+// once.
 #pragma once
 
 #include <tbb/info.h>

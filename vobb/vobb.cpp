@@ -156,6 +156,16 @@ std::string build_fingerprint(const Mesh& mesh, const BuildOptions& o,
          (search_objective(o) == Objective::kOmv ? "; objective omv" : "");
 }
 
+// A resumed state whose time budget ran out holds baseline splits where the search was cut
+// short: a build without a budget would write that tree, not its own, so it is refused.
+Status check_spent_budget(const VariationalState& state, const BuildOptions& o,
+                          const std::string& path) {
+  if (!state.budget_spent || o.time_budget > 0) return Status::ok();
+  return Status::error(path +
+                       ": saved by a build whose --time-budget ran out, so a build without one "
+                       "cannot resume it (remove the folder to start again)");
+}
+
 // The OBB-Tree baseline at the options' depth and arity.
 Tree baseline_tree(const Mesh& mesh, const BuildOptions& o) {
   ObbTreeOptions opt;
@@ -236,12 +246,7 @@ Status build_variational_tree(const Mesh& mesh, const BuildOptions& o, const Est
     s = read_variational_state(path, fingerprint, mesh.faces.size(), o.arity, o.depth, &resume,
                                &resuming);
     if (!s) return s;
-    // A state whose time budget ran out holds baseline splits where the search was cut short: a
-    // build without a budget would write that tree, not its own.
-    if (resuming && resume.budget_spent && !(o.time_budget > 0))
-      return Status::error(path +
-                           ": saved by a build whose --time-budget ran out, so a build without "
-                           "one cannot resume it (remove the folder to start again)");
+    if (resuming && !(s = check_spent_budget(resume, o, path))) return s;
     if (resuming)
       say(o.note, "resuming from " + path + " (" + std::to_string(resume.split_levels) +
                       " levels split, " + std::to_string(resume.sweeps) + " sweeps done)");
@@ -350,7 +355,7 @@ std::string certify_folder(const std::string& checkpoint, const std::string& met
 }
 
 // compare's checkpoint, checked before its long work: the variational build's state against
-// these options, and each certification's files as files.
+// these options (check_spent_budget too), and each certification's files as files.
 Status check_compare_checkpoint(const Mesh& mesh, const BuildOptions& o,
                                 const std::string& estimator) {
   Status s = make_checkpoint_folder("--checkpoint " + o.checkpoint, o.checkpoint);
@@ -360,6 +365,7 @@ Status check_compare_checkpoint(const Mesh& mesh, const BuildOptions& o,
   s = read_variational_state(state_path(o.checkpoint), build_fingerprint(mesh, o, estimator),
                              mesh.faces.size(), o.arity, o.depth, &state, &found);
   if (!s) return s;
+  if (found && !(s = check_spent_budget(state, o, state_path(o.checkpoint)))) return s;
   for (const char* method : {"obbtree", "variational"}) {
     const std::string folder = certify_folder(o.checkpoint, method);
     s = make_checkpoint_folder("--checkpoint " + folder, folder);

@@ -83,7 +83,9 @@ struct BuildOptions {
   // When not empty, the search minimises the recorded queries that hit each box instead of
   // OBV (collision/query_objective.h), and no OBV estimator is made.
   std::vector<collision::Collider> queries;
-  std::string checkpoint;  // a folder; empty: none. A build started again with it resumes.
+  // A folder; empty: none. A build started again with it resumes, but for a state whose
+  // time_budget ran out, which a build without one refuses.
+  std::string checkpoint;
   // Seconds, 0: none; for the search and then the subtree swaps. The search's nodes not yet
   // split get the baseline split; the swaps keep the rounds they finished.
   double time_budget = 0;

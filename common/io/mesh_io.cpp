@@ -925,15 +925,14 @@ Status load_mesh(const std::string& path, LoadedMesh* out) {
   const std::string display = basename_of(path);
   const std::string ext = extension_of(path);
   const bool native = ext == "off" || ext == "obj" || ext == "ply" || ext == "stl";
-  // vobb's own files are JSON: one given as the mesh is most likely an argument out of place.
-  if (ext == "json")
-    return Status::error(display +
-                         ": a JSON file, not a mesh (tree, box and query files are JSON; the "
-                         "mesh comes first on the command line)");
   if (!native) {
     uint64_t size = 0;
     const Status regular = check_regular_file(path, display, "mesh file", &size);
     if (!regular) return regular;
+    // vobb's own files are JSON: one given as a mesh is most likely an argument out of place.
+    if (ext == "json")
+      return Status::error(display +
+                           ": a JSON file, not a mesh (vobb's tree, box and query files are JSON)");
     const ForeignMeshReader reader = foreign_reader;
     if (reader == nullptr)
       return Status::error(display + ": unknown mesh format '" + ext +

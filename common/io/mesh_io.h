@@ -32,7 +32,8 @@ struct LoadedMesh {
 };
 
 // Reads `path`. On failure the Status message is one line: "<file>: <reason>" or
-// "<file>:<line>: <reason>". Never throws, never aborts on bad bytes.
+// "<file>:<line>: <reason>". Never throws, never aborts on bad bytes. A regular file named
+// *.json is refused as no mesh (vobb's own files are JSON).
 Status load_mesh(const std::string& path, LoadedMesh* out);
 
 // The reader of the formats vobb does not parse itself, for a regular file of `bytes` bytes

@@ -97,7 +97,7 @@ TEST(SubtreeSwaps, TheSameTreeOnAnyNumberOfThreads) {
     one = tree_to_json(t);
   });
   for (int threads : {2, 4}) {
-    // Where a second CPU is there, a second thread must have taken part.
+    // Where a second CPU is there, a worker must have joined: the swaps offered work in parallel.
     test::expect_on_threads(
         threads, 3,
         [&] {

@@ -54,8 +54,8 @@ TEST(VariationalBuilderOmv, ConservativeCertifiedAndTheSameForAnyThreads) {
   const exact::Certificate cert = exact::certify(mesh, tree, co);
   EXPECT_TRUE(cert.ok());
   // Searches at once (the nodes of a level, a sweep's regroupings) on 2 and 4 threads: each
-  // must be the serial build, byte for byte, and (where a second CPU is there) a second thread
-  // must have taken part.
+  // must be the serial build, byte for byte, and (where a second CPU is there) a worker must have
+  // joined: the build offered work in parallel.
   for (int threads : {2, 4}) {
     VariationalOptions c = o;
     c.concurrent_estimates = true;

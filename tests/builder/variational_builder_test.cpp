@@ -73,7 +73,8 @@ TEST(VariationalBuilder, WritesAValidConservativeTree) {
 
 // The CPU twin estimates batches in parallel; the builder must not depend on the thread count
 // (the same tree, byte for byte, under one thread and under four). Where a second CPU is there,
-// a second thread must have joined the four-thread build, or the comparison proves nothing.
+// a worker must have joined the four-thread build (it offered work in parallel; a serial one
+// would make the comparison hold by construction).
 TEST(VariationalBuilder, SameTreeForAnyThreadCount) {
   const Mesh mesh = analytic::polygonal_torus().mesh;
   const CpuObvEstimator cpu(mesh);

@@ -145,7 +145,8 @@ TEST(Certify, VariationalTreeCertifiesAndBeatsTheBaselineExactly) {
 // Layers and OBVs are computed on several threads, each with its own Nef(X); the certificate
 // must be the same rationals whatever the number. The torus tree overlaps on most layers, so
 // unions (both paths) run, on whichever threads take their layers. Where a second CPU is there,
-// a second thread must have joined. (Which thread takes what is up to the scheduler, so this
+// a worker must have joined: certify offered work in parallel. (Which thread takes what is up
+// to the scheduler, so this
 // cannot prove that two ran at once; a ThreadSanitizer check of the same pattern with
 // std::thread is noted in docs/BENCHMARKS.md.)
 // The polygonal torus and its depth-4 baseline tree, whose layers overlap on most levels,

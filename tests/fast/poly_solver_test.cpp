@@ -334,11 +334,12 @@ TEST(PolySolver, BrokenEvaluatorIsCaught) {
 
 // An interval wider than kMaxRelativeWidth of the box's volume sends the box to rationals. One
 // face in seven is given a term a unit wider each way. In the box's units R = h0 h1 h2 (about)
-// lies in [1, 32) (docs/derivations.md, "Interval range"), so each such face widens the OBV by
-// at least 2 / (6 R^2) > 3e-4, far above 1e-9 of the volume 8 R < 256. A box goes to rationals
-// only where its column (the faces evaluate visits) holds such a face; it says so, gives the
-// width it rejected, and returns the rational value's enclosure. The others are still enclosed
-// by intervals (these boxes need no rationals undamaged: EnclosesTheExactValueOnAnalyticMeshes).
+// lies in [1, 32) (docs/derivations.md, "Interval range"), so each such face whose term is added
+// (a face the clip leaves nothing of adds none) widens the OBV by at least 2 / (6 R^2) > 3e-4, far
+// above 1e-9 of the volume 8 R < 256. A box goes to rationals only where its column (the faces
+// evaluate visits) holds such a face; it says so, gives the width it rejected, and returns the
+// rational value's enclosure. The others are still enclosed by intervals (these boxes need no
+// rationals undamaged: EnclosesTheExactValueOnAnalyticMeshes).
 TEST(PolySolver, AWideIntervalSendsTheBoxToRationals) {
   const AnalyticMesh torus = analytic::polygonal_torus();
   const std::vector<Obb> boxes = random_boxes(torus.mesh, 40, 12);
