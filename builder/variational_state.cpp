@@ -61,8 +61,10 @@ Status read_variational_state(const std::string& path, const std::string& finger
   // A state's deepest values are at depth 4 (file, nodes, node, axes, an axis); 8 leaves room.
   nlohmann::json j;
   bool too_deep = false;
-  if (!parse_json_within(text, 8, &j, &too_deep) || !j.is_object())
-    return bad(too_deep ? "nested deeper than a checkpoint can be" : "not JSON");
+  std::string twice;
+  if (!parse_json_within(text, 8, &j, &too_deep, &twice))
+    return bad(json_refusal(too_deep, twice, "a checkpoint"));
+  if (!j.is_object()) return bad("not a JSON object");
   try {
     if (j.value("format", "") != kCheckpointFormat || j.value("version", 0) != 1)
       return bad("not a vobb checkpoint");

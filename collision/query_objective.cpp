@@ -81,8 +81,9 @@ Status read_query_stream(const std::string& path, QueryStream* stream) {
   // The deepest values are at depth 2 (file, colliders, a collider); 4 leaves room.
   Json j;
   bool too_deep = false;
-  if (!parse_json_within(text, 4, &j, &too_deep))
-    return fail(too_deep ? "nested deeper than a query file can be" : "not valid JSON");
+  std::string twice;
+  if (!parse_json_within(text, 4, &j, &too_deep, &twice))
+    return fail(json_refusal(too_deep, twice, "a query file"));
   if (!j.is_object() || !j.contains("format") || j["format"] != "vobb-queries")
     return fail("not a vobb query file (\"format\" is not \"vobb-queries\")");
   if (!j.contains("version") || !j["version"].is_number_integer() || j["version"] != 1)

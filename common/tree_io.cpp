@@ -104,8 +104,9 @@ Status parse_tree(const std::string& text, const std::string& display, Tree* tre
   // A tree's deepest values are at depth 4 (file, nodes, node, axes, a row); 8 leaves room.
   Json j;
   bool too_deep = false;
-  if (!parse_json_within(text, 8, &j, &too_deep))
-    return fail(too_deep ? "nested deeper than a tree file can be" : "not valid JSON");
+  std::string twice;
+  if (!parse_json_within(text, 8, &j, &too_deep, &twice))
+    return fail(json_refusal(too_deep, twice, "a tree file"));
   if (!j.is_object() || !j.contains("format") || j["format"] != "vobb-tree")
     return fail("not a vobb tree file (\"format\" is not \"vobb-tree\")");
   long long version, arity, depth, triangles;
@@ -215,9 +216,9 @@ Status read_boxes(const std::string& path, std::vector<Obb>* boxes) {
   // A box file's deepest values are at depth 4 (file, boxes, box, axes, a row); 8 leaves room.
   Json j;
   bool too_deep = false;
-  if (!parse_json_within(text, 8, &j, &too_deep))
-    return Status::error(
-        display + (too_deep ? ": nested deeper than a box file can be" : ": not valid JSON"));
+  std::string twice;
+  if (!parse_json_within(text, 8, &j, &too_deep, &twice))
+    return Status::error(display + ": " + json_refusal(too_deep, twice, "a box file"));
   if (!j.is_object() || !j.contains("boxes") || !j["boxes"].is_array())
     return Status::error(display + ": no \"boxes\" array");
   boxes->clear();

@@ -706,8 +706,10 @@ Status read_checkpoint_file(const std::string& path, const char* format,
   };
   // The deepest values are at depth 2 (layers.json: file, layers, a layer); 8 leaves room.
   bool too_deep = false;
-  if (!parse_json_within(*text, 8, j, &too_deep) || !j->is_object())
-    return bad(too_deep ? "nested deeper than a checkpoint can be" : "not JSON");
+  std::string twice;
+  if (!parse_json_within(*text, 8, j, &too_deep, &twice))
+    return bad(json_refusal(too_deep, twice, "a checkpoint"));
+  if (!j->is_object()) return bad("not a JSON object");
   // Types first: value() throws on a field of another type ("format": 5).
   const bool format_ok = j->contains("format") && (*j)["format"].is_string() &&
                          (*j)["format"].get<std::string>() == format;

@@ -33,6 +33,35 @@ TEST(JsonParse, NotJsonIsRefused) {
   EXPECT_TRUE(parse_json_within("5", 0, &j));
 }
 
+// A key twice in one object is refused, whichever object, and the key is named; the same key
+// in different objects, or in an object and one nested in it, is not a repeat.
+TEST(JsonParse, AKeyTwiceInOneObjectIsRefused) {
+  nlohmann::json j;
+  bool too_deep = true;
+  std::string twice;
+  EXPECT_FALSE(parse_json_within(R"({"depth":7,"a":1,"depth":2})", 8, &j, &too_deep, &twice));
+  EXPECT_EQ(twice, "depth");
+  EXPECT_FALSE(too_deep);
+  EXPECT_TRUE(j.is_null()) << "reset";
+  EXPECT_EQ(json_refusal(too_deep, twice, "a tree file"), "the key \"depth\" twice in one object");
+  EXPECT_FALSE(
+      parse_json_within(R"({"n":[{"x":1},{"x":2,"y":[],"x":3}]})", 8, &j, &too_deep, &twice));
+  EXPECT_EQ(twice, "x");
+  EXPECT_TRUE(
+      parse_json_within(R"({"x":{"x":{"x":1}},"n":[{"x":1},{"x":2}]})", 8, &j, &too_deep, &twice));
+  EXPECT_TRUE(twice.empty());
+  EXPECT_EQ(j["n"][1]["x"], 2);
+  // A long or odd key stays on one line in the refusal.
+  const std::string odd = std::string(100, 'k') + "\n";
+  EXPECT_FALSE(parse_json_within(
+      "{\"" + std::string(100, 'k') + "\\n\":1,\"" + std::string(100, 'k') + "\\n\":2}", 8, &j,
+      &too_deep, &twice));
+  EXPECT_EQ(twice, odd);
+  const std::string why = json_refusal(false, twice, "a box file");
+  EXPECT_EQ(why.find('\n'), std::string::npos) << why;
+  EXPECT_LT(why.size(), 100u) << why;
+}
+
 // Nested 10^6 deep: refused as too deep, with *out reset, so copying and writing it out (which
 // recurse once per level) are safe. Unlimited, the copy would overflow the stack.
 TEST(JsonParse, VeryDeepDocumentIsRefusedWithoutDeepRecursion) {

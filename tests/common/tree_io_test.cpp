@@ -86,6 +86,8 @@ TEST(TreeIo, RefusesBrokenTreesWithOneLine) {
   refused("", "not valid JSON");
   refused(good.substr(0, good.size() / 2), "not valid JSON");
   refused("{\"format\":\"other\"}", "not a vobb tree");
+  // A key given twice (which value a reader takes is up to it): refused, not read one way.
+  refused(edit("\"depth\":", "\"depth\":7,\"depth\":"), "the key \"depth\" twice in one object");
   refused(edit("\"version\":1", "\"version\":2"), "version");
   refused(edit("\"faces\":[4,5,6,7]", "\"faces\":[3,5,6,7]"), "two leaves");
   refused(edit("\"faces\":[4,5,6,7]", "\"faces\":[5,6,7]"), "union");
