@@ -99,7 +99,7 @@ TEST(SubtreeSwaps, TheSameTreeOnAnyNumberOfThreads) {
   for (int threads : {2, 4}) {
     // Where a second CPU is there, a worker must have joined: the swaps offered work in parallel.
     test::expect_on_threads(
-        threads, 3,
+        threads,
         [&] {
           Tree t = baseline_torus(mesh);
           swap_subtrees(mesh, solvers.options(), &t);

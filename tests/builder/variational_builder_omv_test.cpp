@@ -60,7 +60,7 @@ TEST(VariationalBuilderOmv, ConservativeCertifiedAndTheSameForAnyThreads) {
     VariationalOptions c = o;
     c.concurrent_estimates = true;
     test::expect_on_threads(
-        threads, 3,
+        threads,
         [&] {
           EXPECT_EQ(tree_to_json(build_variational(mesh, c, cpu_at(cpu, 8))), one)
               << "threads " << threads;

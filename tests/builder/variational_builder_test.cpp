@@ -84,7 +84,7 @@ TEST(VariationalBuilder, SameTreeForAnyThreadCount) {
   tbb::task_arena(1).execute(
       [&] { one = tree_to_json(build_variational(mesh, o, cpu_at(cpu, 8))); });
   test::expect_on_threads(
-      4, 3,
+      4,
       [&] {
         four = tree_to_json(build_variational(mesh, o, cpu_at(cpu, 8)));
         EXPECT_EQ(one, four);

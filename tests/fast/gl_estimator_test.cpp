@@ -310,7 +310,7 @@ TEST(GlEstimator, ThreadsChangeNothing) {
         EXPECT_EQ(gl->cpu_fallbacks() - start, alone_fallbacks) << res;
       };
       // Short batches: runs are repeated until a worker joins one.
-      test::expect_on_threads(threads, 20, check, "the batch's planning");
+      test::expect_on_threads(threads, check, "the batch's planning");
     }
     const size_t trips = gl->round_trips();
     EXPECT_EQ(gl->estimate(boxes, res), alone) << "m " << res << ", the default arena";
