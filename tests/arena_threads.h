@@ -33,16 +33,38 @@ class ArenaThreads : public tbb::task_scheduler_observer {
     if (!is_worker) return;
     const std::lock_guard<std::mutex> lock(mutex_);
     workers_.insert(std::this_thread::get_id());
+    ++inside_;
+  }
+  void on_scheduler_exit(bool is_worker) override {
+    if (!is_worker) return;
+    const std::lock_guard<std::mutex> lock(mutex_);
+    --inside_;
   }
   // The distinct worker threads that joined so far.
   size_t workers() const {
     const std::lock_guard<std::mutex> lock(mutex_);
     return workers_.size();
   }
+  // Waits, at most `patience`, until every worker that joined has left the arena (an idle worker
+  // leaves within milliseconds). TBB keeps its record of this observer while a worker that it
+  // notified is inside; one still inside when the process ends keeps it for good, and
+  // LeakSanitizer reports the record as a leak.
+  void wait_until_workers_left(std::chrono::seconds patience) const {
+    const auto until = std::chrono::steady_clock::now() + patience;
+    for (;;) {
+      {
+        const std::lock_guard<std::mutex> lock(mutex_);
+        if (inside_ == 0) return;
+      }
+      if (std::chrono::steady_clock::now() >= until) return;
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+  }
 
  private:
   mutable std::mutex mutex_;
   std::set<std::thread::id> workers_;
+  int inside_ = 0;  // workers in the arena now
 };
 
 // Runs f in an arena of `threads` (more than 1), again and again until a worker has joined or
@@ -60,6 +82,7 @@ bool runs_until_a_worker_joins(int threads, std::chrono::seconds patience, const
     do f();
     while (joined.workers() == 0 && std::chrono::steady_clock::now() < until);
   });
+  joined.wait_until_workers_left(std::chrono::seconds(10));
   return joined.workers() > 0;
 }
 

@@ -62,9 +62,14 @@ TEST(AssimpReader, ImporterCrashesBecomeOneLineRefusals) {
     LoadedMesh lm;
     const Status s = load_mesh(path, &lm);
     EXPECT_FALSE(s) << c.name;
-    EXPECT_NE(s.message().find(std::string(c.name) + ": cannot read: assimp's importer crashed"),
-              std::string::npos)
-        << s.message();
+    std::string said = ": cannot read: assimp's importer crashed";
+#if defined(__SANITIZE_ADDRESS__)
+    // AddressSanitizer's SIGSEGV handler reports the null dereference and exits with status 1,
+    // so the child does not die by the signal: the parent sees an importer that ended without a
+    // result. Its handler leaves SIGABRT alone (NFF's failed assertion still dies by it).
+    if (std::string(c.name) == "crash.ase") said = ": cannot read: assimp's importer ended";
+#endif
+    EXPECT_NE(s.message().find(std::string(c.name) + said), std::string::npos) << s.message();
     EXPECT_EQ(s.message().find('\n'), std::string::npos);
     std::remove(path.c_str());
   }
