@@ -54,7 +54,7 @@ class ArenaThreads : public tbb::task_scheduler_observer {
     for (;;) {
       {
         const std::lock_guard<std::mutex> lock(mutex_);
-        if (inside_ == 0) return;
+        if (inside_ <= 0) return;
       }
       if (std::chrono::steady_clock::now() >= until) return;
       std::this_thread::sleep_for(std::chrono::milliseconds(1));
@@ -70,9 +70,9 @@ class ArenaThreads : public tbb::task_scheduler_observer {
 // Runs f in an arena of `threads` (more than 1), again and again until a worker has joined or
 // `patience` has passed (f runs at least once); whether one joined. A woken worker needs a CPU
 // before it can join, and on a loaded machine (ctest -j2 beside a two-thread test) it may get
-// none for the length of many short runs: a count of runs was a flaky check (a 1 ms batch, 100
-// runs, failed once). The runs follow each other in the same arena, so a worker late for one
-// joins a later one. Each run's results are f's to check.
+// none for the length of many short runs, so a fixed count of runs would be a flaky check. The
+// runs follow each other in the same arena, so a worker late for one joins a later one. Each
+// run's results are f's to check.
 template <class F>
 bool runs_until_a_worker_joins(int threads, std::chrono::seconds patience, const F& f) {
   tbb::task_arena arena(threads);
